@@ -1,0 +1,44 @@
+# sim_tactile: `make demo` and `make test` work on a fresh machine with Python 3.11.
+PYTHON ?= python3.11
+VENV := .venv
+BIN := $(VENV)/bin
+# torch is an optional extra; this pin takes the CPU wheel that this machine keeps on disk
+# (an unpinned torch pulls a CUDA build of several GB).
+TORCH_PIN := torch==2.13.0
+STAMP_RUN := $(VENV)/.installed-run
+STAMP_TEST := $(VENV)/.installed-test
+
+.PHONY: demo test lint format bench clean
+
+$(BIN)/python:
+	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "make: $(PYTHON) not found; set PYTHON=..." >&2; exit 1; }
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+
+$(STAMP_RUN): pyproject.toml | $(BIN)/python
+	$(BIN)/pip install -q -e .
+	touch $@
+
+$(STAMP_TEST): pyproject.toml | $(BIN)/python
+	$(BIN)/pip install -q -e '.[test]'
+	touch $@ $(STAMP_RUN)
+
+demo: $(STAMP_RUN)
+	$(BIN)/sim-tactile demo
+
+test: $(STAMP_TEST)
+	$(BIN)/ruff check sim_tactile tests benchmarks docs
+	$(BIN)/ruff format --check sim_tactile tests benchmarks docs
+	$(BIN)/python -m pytest -q
+
+format: $(STAMP_TEST)
+	$(BIN)/ruff format sim_tactile tests benchmarks docs
+	$(BIN)/ruff check --fix sim_tactile tests benchmarks docs
+
+bench: $(STAMP_TEST)
+	$(BIN)/python benchmarks/bench_plates.py
+	$(BIN)/python benchmarks/plate_views.py
+	$(BIN)/python benchmarks/bench_spikes.py
+
+clean:
+	rm -rf $(VENV) build demo-out .pytest_cache .ruff_cache

@@ -1,0 +1,78 @@
+"""Input checks that name the parameter, the value and the valid range.
+
+Never ``assert``: these run under ``python -O`` too.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+from .errors import ConfigError
+
+
+def _fmt(value: object) -> str:
+    return repr(value) if isinstance(value, str) else f"{value}"
+
+
+def finite(name: str, value: float) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be a number, got {_fmt(value)}") from None
+    if not math.isfinite(v):
+        raise ConfigError(f"{name} must be finite, got {_fmt(value)}")
+    return v
+
+
+def in_range(
+    name: str,
+    value: float,
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_open: bool = False,
+    hi_open: bool = False,
+    unit: str = "",
+) -> float:
+    """Return ``float(value)`` if it lies in the interval, else raise a ConfigError."""
+    v = finite(name, value)
+    bad = (lo is not None and (v <= lo if lo_open else v < lo)) or (
+        hi is not None and (v >= hi if hi_open else v > hi)
+    )
+    if bad:
+        left = "(" if lo_open else "["
+        right = ")" if hi_open else "]"
+        lo_s = "-inf" if lo is None else f"{lo:g}"
+        hi_s = "inf" if hi is None else f"{hi:g}"
+        u = f" {unit}" if unit else ""
+        raise ConfigError(
+            f"{name} = {v:g}{u} is out of range; valid: {left}{lo_s}, {hi_s}{right}{u}"
+        )
+    return v
+
+
+def positive(name: str, value: float, *, unit: str = "") -> float:
+    return in_range(name, value, 0.0, None, lo_open=True, unit=unit)
+
+
+def non_negative(name: str, value: float, *, unit: str = "") -> float:
+    return in_range(name, value, 0.0, None, unit=unit)
+
+
+def integer(name: str, value: object, lo: int | None = None, hi: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | float) or int(value) != value:
+        raise ConfigError(f"{name} must be an integer, got {_fmt(value)}")
+    v = int(value)
+    if (lo is not None and v < lo) or (hi is not None and v > hi):
+        lo_s = "-inf" if lo is None else str(lo)
+        hi_s = "inf" if hi is None else str(hi)
+        raise ConfigError(f"{name} = {v} is out of range; valid: [{lo_s}, {hi_s}]")
+    return v
+
+
+def one_of(name: str, value: object, allowed: Iterable[str]) -> str:
+    allowed = list(allowed)
+    if value not in allowed:
+        raise ConfigError(f"{name} = {_fmt(value)} is not valid; valid: {', '.join(allowed)}")
+    return str(value)

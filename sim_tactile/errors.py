@@ -1,0 +1,52 @@
+"""The one exception hierarchy of sim_tactile.
+
+Every error the package raises on purpose derives from :class:`SimTactileError`, so a caller
+can catch them all at once; the command line turns them into a one-line reason on stderr and
+a non-zero exit code.
+"""
+
+from __future__ import annotations
+
+
+class SimTactileError(Exception):
+    """Base class of every error raised on purpose by sim_tactile."""
+
+
+class ConfigError(SimTactileError, ValueError):
+    """A parameter, configuration or name is invalid. The message names the parameter, the
+    value that was given and what would be valid."""
+
+
+class UnknownNameError(ConfigError, KeyError):
+    """A preset, layout or task name is not known."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+class GeometryError(SimTactileError):
+    """Generated geometry failed a check (not convex, not watertight, wrong height...)."""
+
+
+class PhysicsError(SimTactileError):
+    """The simulation produced a warning, a NaN, a divergence or a penetration."""
+
+
+class MissingDependencyError(SimTactileError, ImportError):
+    """An optional dependency is missing; the message gives the exact install command."""
+
+
+class CacheError(SimTactileError):
+    """The artefact cache is unreadable or corrupted."""
+
+
+def require(name: str, extra: str):
+    """Import an optional module or raise with the exact install command."""
+    import importlib
+
+    try:
+        return importlib.import_module(name)
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise MissingDependencyError(
+            f"{name} is needed for this feature: pip install 'sim-tactile[{extra}]'"
+        ) from exc

@@ -1,0 +1,30 @@
+"""Parametric textured plates: definitions, presets, CAD, MuJoCo geometry and previews.
+
+Importing this package never imports cadquery; only a cache miss on an STL or STEP does.
+"""
+
+from __future__ import annotations
+
+from .build import KINDS, BuildResult, build, load_heightmap
+from .features import Feature, features, height_at, roughness_profile
+from .presets import get_plate, preset_names
+from .spec import Bumps, Flat, Grating, Plate, Ridges, Roughness
+
+__all__ = [
+    "KINDS",
+    "BuildResult",
+    "Bumps",
+    "Feature",
+    "Flat",
+    "Grating",
+    "Plate",
+    "Ridges",
+    "Roughness",
+    "build",
+    "features",
+    "get_plate",
+    "height_at",
+    "load_heightmap",
+    "preset_names",
+    "roughness_profile",
+]
