@@ -1,0 +1,77 @@
+"""Closed-form linear elasticity of the skin, modelled as an elastic half-space.
+
+- :func:`compliance_matrix`: surface deflection at node i per unit pressure on the square
+  patch of node j (Love 1929; Johnson, *Contact Mechanics*, eq. 3.25). ``u = C @ p``.
+- :func:`subsurface_weights`: the share of a node's load that reaches a taxel of given size
+  at depth d under the surface (Boussinesq's vertical stress integrated over the taxel's
+  rectangle; Holl / Newmark's corner formula). At depth 0 it is the overlap of the node's
+  patch with the taxel.
+
+This is the skin's elastic coupling: a load on one patch deflects its neighbours (``C`` is
+dense), and a taxel under the surface feels loads spread from around it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _F(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """Antiderivative of 1/sqrt(X^2 + Y^2) in X and Y, up to terms in X or Y alone (which
+    cancel in a four-corner difference): X asinh(Y/|X|) + Y asinh(X/|Y|)."""
+    ax, ay = np.abs(X), np.abs(Y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(ax == 0, 0.0, X * np.arcsinh(Y / np.where(ax == 0, 1.0, ax)))
+        b = np.where(ay == 0, 0.0, Y * np.arcsinh(X / np.where(ay == 0, 1.0, ay)))
+    return a + b
+
+
+def rect_integral(x: np.ndarray, y: np.ndarray, half_x: float, half_y: float) -> np.ndarray:
+    """Integral of 1/r over the rectangle [-hx, hx] x [-hy, hy] seen from (x, y) [m]."""
+    return (_F(x + half_x, y + half_y) - _F(x - half_x, y + half_y)
+            - _F(x + half_x, y - half_y) + _F(x - half_x, y - half_y))
+
+
+def compliance_matrix(xy: np.ndarray, pitch_m: float, e_star_pa: float) -> np.ndarray:
+    """(N, N) surface compliance [m/Pa] of square patches of side ``pitch_m`` centred at
+    ``xy`` (N, 2), for a half-space of plane-strain modulus ``E* = E / (1 - nu^2)``."""
+    d = xy[:, None, :] - xy[None, :, :]
+    h = pitch_m / 2
+    return rect_integral(d[..., 0], d[..., 1], h, h) / (np.pi * e_star_pa)
+
+
+def _corner(X: np.ndarray, Y: np.ndarray, z: float) -> np.ndarray:
+    """Vertical stress factor at depth z under the corner of a uniformly loaded X x Y
+    rectangle (signed X, Y), in units of the surface pressure (Holl 1940)."""
+    R = np.sqrt(X * X + Y * Y + z * z)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.arctan2(X * Y, z * R) + X * Y * z / R * (1 / (X * X + z * z) + 1 / (Y * Y + z * z))
+    return np.nan_to_num(t) / (2 * np.pi)
+
+
+def subsurface_weights(node_xy: np.ndarray, pitch_m: float, taxel_xy: np.ndarray,
+                       taxel_size: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+    """(M, N) weights W so that taxel loads [N] = W @ node loads [N].
+
+    Taxel m is a rectangle of size ``taxel_size[m]`` (sx, sy) centred at ``taxel_xy[m]`` at
+    depth ``depth_m[m]`` >= 0 under the surface; its reading is the vertical stress integrated
+    over its area. By reciprocity this equals the stress a taxel-shaped load would put at the
+    node, so a point load at the node is spread with Boussinesq's kernel. Node loads act as
+    point loads at depth > 0 and as uniform patches (exact overlap) at depth 0.
+    """
+    M, N = len(taxel_xy), len(node_xy)
+    W = np.zeros((M, N))
+    h = pitch_m / 2
+    for m in range(M):
+        sx, sy = taxel_size[m] / 2
+        d = float(depth_m[m])
+        X = node_xy[:, 0] - taxel_xy[m, 0]
+        Y = node_xy[:, 1] - taxel_xy[m, 1]
+        if d <= 0:
+            ox = np.clip(np.minimum(X + h, sx) - np.maximum(X - h, -sx), 0, None)
+            oy = np.clip(np.minimum(Y + h, sy) - np.maximum(Y - h, -sy), 0, None)
+            W[m] = ox * oy / (pitch_m * pitch_m)
+        else:
+            W[m] = (_corner(sx - X, sy - Y, d) + _corner(sx + X, sy + Y, d)
+                    + _corner(sx - X, sy + Y, d) + _corner(sx + X, sy - Y, d))
+    return W

@@ -1,0 +1,134 @@
+"""The finger: a rigid bone carrying a soft pad, in physical units.
+
+The pad's undeformed surface is ``z = surface(x, y) >= 0`` above its lowest point, in the pad
+frame (x along the slide, y across, z out of the skin, i.e. up from the plate). Shapes:
+
+- ``flat``: a flat ``size_m`` rectangle whose edges roll off with radius ``edge_radius_m``
+  (a fillet, so a feature entering the pad meets a slope, not a step);
+- ``sphere``: a spherical cap of radius ``radius_m``;
+- ``ellipsoid``: an ellipsoidal cap of semi-axes ``radii_m`` (x, y, z).
+
+The skin is an elastic half-space of Young's modulus ``young_pa`` and Poisson ratio
+``poisson`` (0.5: incompressible silicone), ``thickness_m`` thick over the bone: pressing
+deeper than that bottoms out and stops the run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from .. import _validate as v
+from ..errors import ConfigError
+
+PadShape = Literal["flat", "sphere", "ellipsoid"]
+PAD_SHAPES = ("flat", "sphere", "ellipsoid")
+
+
+@dataclass(frozen=True)
+class Finger:
+    """A soft finger. Lengths in m, modulus in Pa, mass in kg."""
+
+    shape: PadShape = "flat"
+    size_m: tuple[float, float] = (0.012, 0.012)
+    edge_radius_m: float = 0.002
+    radius_m: float = 0.008
+    radii_m: tuple[float, float, float] = (0.010, 0.008, 0.006)
+    thickness_m: float = 0.004
+    young_pa: float = 0.3e6
+    poisson: float = 0.5
+    bone_mass_kg: float = 0.5
+    friction: float = 0.8
+
+    def __post_init__(self) -> None:
+        v.one_of("finger.shape", self.shape, PAD_SHAPES)
+        if len(self.size_m) != 2:
+            raise ConfigError(f"finger.size_m must be (x, y), got {self.size_m!r}")
+        for i, s in enumerate(self.size_m):
+            v.in_range(f"finger.size_m[{i}]", s, 1e-3, 0.1, unit="m")
+        v.in_range("finger.edge_radius_m", self.edge_radius_m, 0.0, 0.02, unit="m")
+        v.in_range("finger.radius_m", self.radius_m, 1e-3, 0.1, unit="m")
+        for i, r in enumerate(self.radii_m):
+            v.in_range(f"finger.radii_m[{i}]", r, 1e-3, 0.1, unit="m")
+        v.in_range("finger.thickness_m", self.thickness_m, 0.2e-3, 0.05, unit="m")
+        v.in_range("finger.young_pa", self.young_pa, 1e3, 1e9, unit="Pa")
+        v.in_range("finger.poisson", self.poisson, 0.0, 0.5, unit="")
+        v.in_range("finger.bone_mass_kg", self.bone_mass_kg, 1e-3, 10.0, unit="kg")
+        v.in_range("finger.friction", self.friction, 0.0, 3.0, unit="")
+        if self.shape == "sphere" and max(self.size_m) > 2 * self.radius_m:
+            raise ConfigError(
+                f"finger.size_m = {self.size_m} is wider than the sphere (radius_m = "
+                f"{self.radius_m:g} m); valid: size_m <= 2 * radius_m"
+            )
+
+    @property
+    def e_star_pa(self) -> float:
+        """Plane-strain modulus E / (1 - nu^2) [Pa]."""
+        return self.young_pa / (1.0 - self.poisson**2)
+
+    @property
+    def patch_m(self) -> tuple[float, float]:
+        """Extent of the skin nodes (x, y) [m]: the flat pad plus its edge roll-off."""
+        if self.shape == "flat":
+            return (self.size_m[0] + 2 * self.edge_radius_m, self.size_m[1] + 2 * self.edge_radius_m)
+        return self.size_m
+
+    def surface(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Undeformed skin height above the pad's lowest point [m] at pad coordinates."""
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        if self.shape == "flat":
+            hx, hy = self.size_m[0] / 2, self.size_m[1] / 2
+            r = self.edge_radius_m
+            ex = np.clip(np.abs(x) - hx, 0, None)
+            ey = np.clip(np.abs(y) - hy, 0, None)
+            e = np.minimum(np.hypot(ex, ey), r)
+            return r - np.sqrt(np.maximum(r * r - e * e, 0.0)) if r > 0 else np.zeros(np.broadcast(x, y).shape)
+        if self.shape == "sphere":
+            R = self.radius_m
+            return R - np.sqrt(np.maximum(R * R - x * x - y * y, 0.0))
+        rx, ry, rz = self.radii_m
+        return rz * (1 - np.sqrt(np.maximum(1 - (x / rx) ** 2 - (y / ry) ** 2, 0.0)))
+
+    def to_json(self) -> dict:
+        from dataclasses import asdict
+
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class SkinGrid:
+    """Skin nodes: square patches of side ``pitch_m`` tiling the pad's patch.
+
+    xy: (N, 2) node centres [m] in the pad frame; z: (N,) undeformed surface height [m].
+    """
+
+    pitch_m: float
+    xy: np.ndarray
+    z: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return len(self.z)
+
+    @property
+    def area_m2(self) -> float:
+        return self.pitch_m**2
+
+
+def skin_grid(finger: Finger, pitch_m: float) -> SkinGrid:
+    """Nodes at ``pitch_m`` over the finger's patch (an odd count per side, so a node sits at
+    the pad's centre)."""
+    v.in_range("skin pitch_m", pitch_m, 20e-6, 5e-3, unit="m")
+    px, py = finger.patch_m
+    nx = 2 * int(np.floor(px / pitch_m / 2)) + 1
+    ny = 2 * int(np.floor(py / pitch_m / 2)) + 1
+    if nx * ny > 20_000:
+        raise ConfigError(f"skin pitch_m = {pitch_m:g} m gives {nx * ny} nodes; valid: at most 20000 "
+                          f"(pitch_m >= {max(px, py) / 141:g} m for this pad)")
+    xs = (np.arange(nx) - (nx - 1) / 2) * pitch_m
+    ys = (np.arange(ny) - (ny - 1) / 2) * pitch_m
+    X, Y = np.meshgrid(xs, ys, indexing="xy")
+    xy = np.column_stack([X.ravel(), Y.ravel()])
+    return SkinGrid(pitch_m, xy, finger.surface(xy[:, 0], xy[:, 1]))

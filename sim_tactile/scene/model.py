@@ -1,0 +1,111 @@
+"""The MuJoCo scene: a plate and a finger whose skin nodes probe it.
+
+Built with ``mujoco.MjSpec`` from the plate's standalone MJCF. The finger's bone slides on
+two joints (``slide_x`` along the slide, driven by a velocity actuator; ``press_z`` normal to
+the plate, force-controlled). Each skin node is a small sphere on the bone at the pad's
+undeformed surface; MuJoCo's collider reports each node's signed distance to the plate (its
+penetration-depth map). The skin's elastic response is computed from that map
+(:mod:`sim_tactile.sim.contact`) and applied back to the bone, so MuJoCo integrates the
+finger while the skin is quasi-static (its own resonance, above 1 kHz for a few grams of
+silicone, lies far above the texture frequencies).
+
+Two models are compiled from the one spec: ``m_col`` with contacts, used only for collision
+queries, and ``m_dyn`` with contacts disabled, which MuJoCo steps. (Inactive "gap" contacts
+would still be solved as constraints in MuJoCo 4.0, and static bodies do not collide.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from ..plates import Plate
+from ..plates import build as build_plate
+from .elastic import compliance_matrix, subsurface_weights
+from .finger import Finger, SkinGrid
+from .layouts import Layout
+
+_T = mujoco.mjtGeom
+#: Collision bit of the skin nodes (plates keep bit 1 for other uses).
+NODE_BIT = 2
+#: Velocity actuator gain of the slide [N s/m]: stiff enough that friction drag changes the
+#: speed by well under 1%.
+SLIDE_KV = 2000.0
+
+
+@dataclass
+class Scene:
+    """Everything the simulation loop needs, built once per configuration."""
+
+    plate: Plate
+    finger: Finger
+    grid: SkinGrid
+    layout: Layout
+    m_col: mujoco.MjModel
+    m_dyn: mujoco.MjModel
+    node_of_geom: np.ndarray  # (ngeom,) node index of each geom in m_col, -1 if none
+    W: np.ndarray  # (M, N) taxel weights of node loads
+    C: np.ndarray | None  # (N, N) compliance [m/Pa] or None for Winkler
+    K: np.ndarray | None  # inv(C) [Pa/m]
+    jx: int  # dof index of slide_x
+    jz: int  # dof index of press_z
+
+    @property
+    def n_nodes(self) -> int:
+        return self.grid.n
+
+
+def build_scene(
+    plate: Plate,
+    finger: Finger,
+    grid: SkinGrid,
+    layout: Layout,
+    *,
+    dt_s: float,
+    x0_m: float,
+    z0_m: float,
+    z_damping: float,
+    coupled: bool,
+    inverse: bool = True,
+    cache=None,
+) -> Scene:
+    """Compose the plate's MJCF with the finger; x0, z0 place the pad's lowest point."""
+    xml = build_plate(plate, kinds=("mjcf",), cache=cache).files["mjcf"].read_text()
+    spec = mujoco.MjSpec.from_string(xml)
+    spec.modelname = f"sim_tactile {plate.name or plate.hash}"
+    spec.option.timestep = dt_s
+    spec.option.gravity = (0.0, 0.0, 0.0)  # the press force is the applied normal force
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    for g in spec.geoms:  # the plate: collide with skin nodes only
+        g.contype = 0
+        g.conaffinity = NODE_BIT
+    bone = spec.worldbody.add_body(name="bone", pos=(x0_m, 0.0, z0_m))
+    bone.add_joint(name="slide_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=(1, 0, 0))
+    bone.add_joint(name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=(0, 0, 1), damping=z_damping)
+    px, py = finger.patch_m
+    bone.add_geom(name="bone", type=_T.mjGEOM_BOX, size=(px / 2, py / 2, finger.thickness_m / 2),
+                  pos=(0, 0, finger.thickness_m * 1.5), mass=finger.bone_mass_kg, contype=0, conaffinity=0,
+                  rgba=(0.85, 0.75, 0.65, 1))
+    r = 0.25 * grid.pitch_m
+    first = None
+    for i, ((x, y), z) in enumerate(zip(grid.xy, grid.z, strict=True)):
+        g = bone.add_geom(name=f"node{i}", type=_T.mjGEOM_SPHERE, size=(r, 0, 0), pos=(x, y, z + r),
+                          contype=NODE_BIT, conaffinity=0, density=0.0, group=3)
+        first = first if first is not None else g
+    spec.add_actuator(name="slide", target="slide_x", trntype=mujoco.mjtTrn.mjTRN_JOINT,
+                      gaintype=mujoco.mjtGain.mjGAIN_FIXED, biastype=mujoco.mjtBias.mjBIAS_AFFINE,
+                      gainprm=[SLIDE_KV] + [0] * 9, biasprm=[0, 0, -SLIDE_KV] + [0] * 7)
+    m_col = spec.compile()
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+    m_dyn = spec.compile()
+    node_of_geom = np.full(m_col.ngeom, -1, dtype=np.int64)
+    g0 = mujoco.mj_name2id(m_col, mujoco.mjtObj.mjOBJ_GEOM, "node0")
+    node_of_geom[g0 : g0 + grid.n] = np.arange(grid.n)
+    W = subsurface_weights(grid.xy, grid.pitch_m, layout.positions[:, :2], layout.sizes, layout.depth_m)
+    C = compliance_matrix(grid.xy, grid.pitch_m, finger.e_star_pa) if coupled else None
+    K = np.linalg.inv(C) if coupled and inverse else None  # for large contact sets
+    jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]
+    jz = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "press_z")]
+    return Scene(plate, finger, grid, layout, m_col, m_dyn, node_of_geom, W, C, K, int(jx), int(jz))

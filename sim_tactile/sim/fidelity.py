@@ -1,0 +1,131 @@
+"""Fidelity levels of the skin, and ``auto``: the cheapest setting that resolves the scene.
+
+| level | skin model | node pitch | time step |
+|---|---|---|---|
+| L0 | rigid pad + penetration-depth map, local (Winkler) foundation k = E* / h | auto | auto |
+| L1 | elastic half-space, exact contact set (coupled: a load deflects the neighbours) | auto | auto |
+| L2 | L1 at half the node pitch and a quarter of the time step: the reference | auto/2 | auto/4 |
+
+``auto`` (default) picks L1 with the coarsest node pitch and time step that resolve the
+scene: the pitch is at most 1/2.5 of the smallest feature width or gap and half the smallest
+taxel; the time step lets each feature take at least 20 steps to cross and stays within the
+skin-bone coupling's stability limit. It warns when the taxels are coarser than the texture,
+when a forced pitch or time step is too coarse, and when the plate's roughness lies below what
+any node grid resolves (the micro-roughness model of the sensors handles that).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+from ..errors import ConfigError
+from ..plates import Plate, features
+from ..plates.spec import Roughness
+
+LEVELS = ("L0", "L1", "L2")
+#: Coarsest and finest node pitch auto may pick [m].
+PITCH_MAX_M = 1.0e-3
+PITCH_MIN_M = 0.25e-3
+#: Steps to cross the smallest feature, at least.
+STEPS_PER_FEATURE = 20
+#: Longest time step auto may pick [s].
+DT_MAX_S = 2e-3
+
+
+@dataclass(frozen=True)
+class Fidelity:
+    level: str
+    coupled: bool
+    pitch_m: float
+    steps_per_sample: int
+    dt_s: float
+    winkler_k_pa_per_m: float
+    reason: str = ""
+    warnings: tuple[str, ...] = field(default=())
+
+    def to_json(self) -> dict:
+        d = asdict(self)
+        d["warnings"] = list(self.warnings)
+        return d
+
+
+def feature_scale_m(plate: Plate) -> float | None:
+    """Smallest feature width or gap of the plate [m]; None for flat or rough plates."""
+    fs = features(plate)
+    if not fs:
+        return None
+    widths = [2 * f.hx for f in fs] + [2 * f.hy for f in fs]
+    xs = sorted({round(f.x, 9) for f in fs})
+    gaps = [b - a - 2 * fs[0].hx for a, b in zip(xs, xs[1:], strict=False)]
+    ys = sorted({round(f.y, 9) for f in fs})
+    if len(ys) > 1:
+        gaps += [b - a - 2 * fs[0].hy for a, b in zip(ys, ys[1:], strict=False)]
+    return max(min(widths + [g for g in gaps if g > 0]), 1e-6)
+
+
+def choose_fidelity(plate: Plate, layout, finger, protocol, fidelity: str | Fidelity = "auto",
+                    *, pitch_m: float | None = None, dt_s: float | None = None) -> Fidelity:
+    """Resolve ``fidelity`` ('auto', 'L0', 'L1', 'L2' or a Fidelity) for this scene."""
+    if isinstance(fidelity, Fidelity):
+        return fidelity
+    if fidelity not in ("auto", *LEVELS):
+        raise ConfigError(f"fidelity = {fidelity!r} is not valid; valid: auto, {', '.join(LEVELS)}")
+    warnings: list[str] = []
+    scale = feature_scale_m(plate)
+    taxel = float(layout.sizes.min())
+    need = min([taxel / 2] + ([scale / 2.5] if scale else []))
+    auto_pitch = min(PITCH_MAX_M, max(PITCH_MIN_M, need))
+    if scale is not None and auto_pitch > scale / 2:
+        warnings.append(f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
+                        f"({auto_pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes")
+    if isinstance(plate.texture, Roughness):
+        warnings.append("micro-roughness (Ra {:.3g} um) is below the node grid: the finger simulation sees "
+                        "it only as far as its MuJoCo height field resolves it".format(plate.texture.ra_m * 1e6))
+    period = _texture_period(plate)
+    if period is not None and layout.min_pitch_m > period / 2 and layout.n > 1:
+        warnings.append(f"taxel pitch {layout.min_pitch_m * 1e3:.3g} mm is coarser than half the texture "
+                        f"period ({period * 1e3:.3g} mm): the taxel array aliases the texture")
+    if period is not None and taxel > period:
+        warnings.append(f"taxels ({taxel * 1e3:.3g} mm) are larger than the texture period "
+                        f"({period * 1e3:.3g} mm): each taxel averages over several features")
+    v = max(protocol.speed_m_s, 1e-6)
+    dt_need = DT_MAX_S if scale is None else min(DT_MAX_S, scale / (v * STEPS_PER_FEATURE))
+    level = "L1" if fidelity == "auto" else fidelity
+    k_w = finger.e_star_pa / finger.thickness_m
+    # the skin-bone coupling is explicit: keep omega * dt at half its limit (1.0)
+    omega = math.sqrt(flat_stiffness(finger, level != "L0", k_w) / finger.bone_mass_kg)
+    dt_need = min(dt_need, 0.5 / omega)
+    pitch = pitch_m or auto_pitch
+    dt_target = dt_s or dt_need
+    if level == "L2":
+        pitch, dt_target = (pitch_m or auto_pitch / 2), (dt_s or dt_need / 4)
+    if dt_s is not None and scale is not None and dt_s > scale / (v * 10):
+        warnings.append(f"time step {dt_s:g} s is too coarse for {v:g} m/s: a {scale * 1e3:.3g} mm feature "
+                        f"takes {scale / (v * dt_s):.1f} steps to cross (want >= 10)")
+    if pitch_m is not None and scale is not None and pitch_m > scale / 2:
+        warnings.append(f"node pitch {pitch_m * 1e3:.3g} mm is too coarse for {scale * 1e3:.3g} mm features")
+    sample = 1.0 / protocol.rate_hz
+    n_sub = max(1, math.ceil(sample / dt_target - 1e-9))
+    reason = (f"{level}: node pitch {pitch * 1e3:.3g} mm (smallest feature "
+              f"{'-' if scale is None else f'{scale * 1e3:.3g} mm'}, taxel {taxel * 1e3:.3g} mm), "
+              f"dt {sample / n_sub * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample)")
+    return Fidelity(level, level != "L0", float(pitch), n_sub, sample / n_sub, k_w, reason, tuple(warnings))
+
+
+def flat_stiffness(finger, coupled: bool, k_w: float) -> float:
+    """Stiffness of the whole pad pressed flat on a plate [N/m]: the largest contact stiffness
+    the bone meets. Winkler: k_w times the area; half-space: a flat circular punch of the same
+    area, 2 a E*."""
+    px, py = finger.patch_m
+    if not coupled:
+        return k_w * px * py
+    return 2 * math.sqrt(px * py / math.pi) * finger.e_star_pa
+
+
+def _texture_period(plate: Plate) -> float | None:
+    fs = features(plate)
+    xs = sorted({round(f.x, 9) for f in fs})
+    if len(xs) < 2:
+        return None
+    return min(b - a for a, b in zip(xs, xs[1:], strict=False))

@@ -1,0 +1,326 @@
+"""The press-and-slide protocol: approach, press under force control, settle, slide, record.
+
+:func:`simulate` runs one slide and returns a :class:`~sim_tactile.records.Recording` of the
+normal load on each taxel [N], averaged over each sample period (anti-aliasing from the full
+simulation rate). Every step checks for NaN, runaway and a skin pressed to the bottom; every
+sample checks MuJoCo's warnings; the coupling of the quasi-static skin to the bone is checked
+against its stability limit. Any of these stops the run with a PhysicsError naming the cause.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field, replace
+
+import mujoco
+import numpy as np
+
+from .. import __version__
+from .. import _validate as v
+from ..errors import ConfigError, PhysicsError
+from ..plates import Plate, get_plate
+from ..records import Recording
+from ..scene.finger import Finger, skin_grid
+from ..scene.layouts import Layout, get_layout
+from ..scene.model import build_scene
+from . import contact
+from .fidelity import Fidelity, choose_fidelity, flat_stiffness
+
+#: Largest omega * dt of the explicit skin-to-bone coupling before the run is refused; the
+#: semi-implicit scheme is stable below 2, this keeps a margin of 2.
+MAX_OMEGA_DT = 1.0
+#: Approach speed [m/s] and the clearance the pad starts at above the plate [m].
+APPROACH_SPEED = 0.01
+APPROACH_CLEARANCE_M = 0.3e-3
+#: Velocity of the friction regularisation [m/s]: Coulomb drag mu*N*tanh(v / V_STICK).
+V_STICK = 1e-3
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """The slide protocol, SI units. ``duration_s`` None: cross the whole textured area,
+    starting and ending with the pad on flat ground."""
+
+    speed_m_s: float = 0.06
+    force_n: float = 1.0
+    duration_s: float | None = None
+    rate_hz: float = 100.0
+    press_s: float = 0.1
+    settle_s: float = 0.2
+    passes: int = 1
+    return_stroke: bool = False
+    offset_y_m: float = 0.0
+    speed_jitter: float = 0.0  # relative standard deviation, per repetition
+    force_jitter: float = 0.0
+    offset_jitter_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        v.in_range("speed_m_s", self.speed_m_s, 0.0, 1.0, unit="m/s")
+        v.in_range("force_n", self.force_n, 1e-3, 50.0, lo_open=False, unit="N")
+        if self.duration_s is not None:
+            v.in_range("duration_s", self.duration_s, 1e-3, 600.0, unit="s")
+        v.in_range("rate_hz", self.rate_hz, 1.0, 100_000.0, unit="Hz")
+        v.in_range("press_s", self.press_s, 0.0, 10.0, unit="s")
+        v.in_range("settle_s", self.settle_s, 0.0, 10.0, unit="s")
+        v.integer("passes", self.passes, 1, 100)
+        v.in_range("offset_y_m", self.offset_y_m, -0.05, 0.05, unit="m")
+        v.in_range("speed_jitter", self.speed_jitter, 0.0, 0.5)
+        v.in_range("force_jitter", self.force_jitter, 0.0, 0.5)
+        v.in_range("offset_jitter_m", self.offset_jitter_m, 0.0, 0.01, unit="m")
+
+    def varied(self, rng: np.random.Generator) -> Protocol:
+        """This protocol with speed, force and offset drawn around their nominal values."""
+        return replace(
+            self,
+            speed_m_s=self.speed_m_s * float(np.clip(1 + self.speed_jitter * rng.standard_normal(), 0.2, 2)),
+            force_n=self.force_n * float(np.clip(1 + self.force_jitter * rng.standard_normal(), 0.2, 2)),
+            offset_y_m=self.offset_y_m + self.offset_jitter_m * float(rng.standard_normal()),
+            speed_jitter=0.0, force_jitter=0.0, offset_jitter_m=0.0,
+        )
+
+
+@dataclass
+class SimResult:
+    recording: Recording
+    fidelity: Fidelity
+    sim_s: float
+    wall_s: float
+    warnings: list[str] = field(default_factory=list)
+
+
+def _skin_pressure(scene, fid: Fidelity, pen: np.ndarray, active):
+    if scene.C is None:
+        p = contact.winkler(pen, fid.winkler_k_pa_per_m)
+        return p, None
+    return contact.halfspace(pen, scene.C, active, scene.K)
+
+
+def _contact_stiffness(scene, fid: Fidelity, p: np.ndarray, active) -> float:
+    """dF/dz of the skin at the current contact set [N/m]."""
+    A = scene.grid.area_m2
+    if scene.C is None:
+        return fid.winkler_k_pa_per_m * A * float(np.count_nonzero(p))
+    if active is None or not active.any():
+        return 0.0
+    S = np.flatnonzero(active)
+    return A * float(contact._solve_subset(scene.C, scene.K, S, np.ones(S.size)).sum())
+
+
+def simulate(
+    plate: Plate | str,
+    layout: Layout | str = "grid3x3",
+    *,
+    protocol: Protocol | None = None,
+    finger: Finger | None = None,
+    fidelity: str | Fidelity = "auto",
+    seed: int = 0,
+    cache=None,
+) -> SimResult:
+    """Run one press-and-slide and record the ideal normal load on each taxel [N].
+
+    BLAS runs single-threaded inside: the skin's systems are small, and threads only contend.
+    """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _simulate(plate, layout, protocol=protocol, finger=finger, fidelity=fidelity, seed=seed, cache=cache)
+
+
+def _simulate(plate, layout, *, protocol, finger, fidelity, seed, cache) -> SimResult:
+    t_wall = time.perf_counter()
+    plate = get_plate(plate) if isinstance(plate, str) else plate
+    layout = get_layout(layout) if isinstance(layout, str) else layout
+    finger = finger or Finger()
+    protocol = protocol or Protocol(rate_hz=layout.rate_hz)
+    v.integer("seed", seed, 0, 2**63 - 1)
+    rng = np.random.default_rng(seed)
+    proto = protocol.varied(rng)
+    ex, ey = layout.extent_m
+    px, py = finger.patch_m
+    if ex > px / 2 + 1e-9 or ey > py / 2 + 1e-9:
+        raise ConfigError(f"layout {layout.name!r} spans +-({ex:g}, {ey:g}) m, beyond the pad's "
+                          f"+-({px / 2:g}, {py / 2:g}) m; valid: taxels on the pad")
+    fid = choose_fidelity(plate, layout, finger, proto, fidelity)
+    warnings = list(fid.warnings)
+    grid = skin_grid(finger, fid.pitch_m)
+    n_sub = fid.steps_per_sample
+    dt = 1.0 / (proto.rate_hz * n_sub)
+
+    # where the slide starts and ends: pad on flat ground on both sides of the texture
+    margin = 2e-3
+    x_start = -(plate.area_length_m / 2 + px / 2 + margin)
+    x_end = -x_start
+    if plate.length_m / 2 < x_end + 1e-9:
+        raise ConfigError(f"plate {plate.name or plate.hash} ({plate.length_m:g} m long) is too short for a "
+                          f"{px:g} m pad to enter and leave the textured area on flat ground")
+    z0 = APPROACH_CLEARANCE_M + max(0.0, float(np.nanmax(_plate_heights(plate, grid, x_start, proto.offset_y_m))))
+    omega_guess = math.sqrt(flat_stiffness(finger, fid.coupled, fid.winkler_k_pa_per_m) / finger.bone_mass_kg)
+    z_damp = 2.0 * 1.0 * omega_guess * finger.bone_mass_kg  # critical at the flat-pad stiffness
+    scene = build_scene(plate, finger, grid, layout, dt_s=dt, x0_m=x_start, z0_m=z0,
+                        z_damping=z_damp, coupled=fid.coupled, cache=cache)
+    scene.m_col.body("bone")  # validate name
+    d_col = mujoco.MjData(scene.m_col)
+    d_dyn = mujoco.MjData(scene.m_dyn)
+    d_dyn.qpos[:] = 0.0
+    d_dyn.qpos[scene.jz] = 0.0
+    bone_y = proto.offset_y_m
+    scene.m_dyn.body_pos[scene.m_dyn.body("bone").id, 1] = bone_y
+    scene.m_col.body_pos[scene.m_col.body("bone").id, 1] = bone_y
+
+    runner = _Runner(scene, fid, finger, d_col, d_dyn, dt)
+    # --- approach (kinematic descent) and press (force ramp), then settle
+    F = proto.force_n
+    t = 0.0
+    while True:
+        Fs = runner.step(z_vel=-APPROACH_SPEED, force_cmd=0.0, slide_v=0.0)
+        t += dt
+        if Fs >= 0.2 * F:
+            break
+        if t > 2.0:
+            raise PhysicsError("the pad did not reach the plate within 2 s of approach")
+    t_press = 0.0
+    n_press = max(1, round(proto.press_s / dt))
+    for k in range(n_press):
+        runner.step(force_cmd=F * (0.2 + 0.8 * (k + 1) / n_press))
+        t_press += dt
+    settle_steps = max(1, round(proto.settle_s / dt))
+    for _ in range(settle_steps):
+        Fs = runner.step(force_cmd=F)
+    for _ in range(round(2.0 / dt)):  # extra settling if needed
+        if abs(Fs - F) <= 0.01 * F and abs(d_dyn.qvel[scene.jz]) < 1e-4:
+            break
+        Fs = runner.step(force_cmd=F)
+    else:
+        warnings.append(f"press force did not settle within 1% of {F:g} N (now {Fs:.4g} N)")
+
+    # --- strokes
+    strokes = []
+    for _ in range(proto.passes):
+        strokes.append((x_start, x_end, 1.0))
+        if proto.return_stroke:
+            strokes.append((x_end, x_start, -1.0))
+    if proto.duration_s is not None:
+        n_samples = max(1, round(proto.duration_s * proto.rate_hz))
+    else:
+        length = sum(abs(b - a) for a, b, _ in strokes)
+        n_samples = max(1, math.ceil(length / max(proto.speed_m_s, 1e-9) * proto.rate_hz))
+        if proto.speed_m_s == 0:
+            raise ConfigError("speed_m_s = 0 needs a duration_s")
+    out = np.empty((n_samples, layout.n), dtype=np.float64)
+    forces = np.empty(n_samples)
+    acc = np.zeros(layout.n)
+    stroke_i, (xa, xb, sgn) = 0, strokes[0]
+    v_slide = proto.speed_m_s
+    t_ramp = 0.02  # speed ramp at the start of each stroke [s]
+    t_stroke = 0.0
+    for s in range(n_samples):
+        acc[:] = 0.0
+        fsum = 0.0
+        for _ in range(n_sub):
+            x = x_start + d_dyn.qpos[scene.jx]
+            if sgn * (x - xb) >= 0 and stroke_i + 1 < len(strokes):
+                stroke_i += 1
+                xa, xb, sgn = strokes[stroke_i]
+                t_stroke = 0.0
+            vcmd = sgn * v_slide * min(1.0, t_stroke / t_ramp)
+            fsum += runner.step(force_cmd=F, slide_v=vcmd, taxel_acc=acc)
+            t_stroke += dt
+        out[s] = acc / n_sub
+        forces[s] = fsum / n_sub
+        runner.check_warnings()
+    times = (np.arange(n_samples) + 0.5) / proto.rate_hz
+    wall = time.perf_counter() - t_wall
+    sim_s = n_samples / proto.rate_hz
+    meta = {
+        "plate": plate.name or plate.hash, "plate_hash": plate.hash, "plate_params": plate.params(),
+        "layout": layout.name, "finger": finger.to_json(), "protocol": asdict(proto),
+        "protocol_nominal": asdict(protocol), "seed": seed, "fidelity": fid.to_json(),
+        "rate_hz": proto.rate_hz, "dt_s": dt, "transducer": "ideal", "normal_force_n": forces.tolist(),
+        "mean_drag_n": runner.drag_sum / max(runner.n_slide_steps, 1),
+        "versions": {"sim_tactile": __version__, "mujoco": mujoco.__version__, "numpy": np.__version__},
+        "warnings": warnings, "sim_s": sim_s, "wall_s": wall, "x_start_m": x_start,
+    }
+    rec = Recording(out.astype(np.float32), times, layout.positions, units="N", meta=meta)
+    return SimResult(rec, fid, sim_s, wall, warnings)
+
+
+def _plate_heights(plate: Plate, grid, x: float, y: float) -> np.ndarray:
+    from ..plates import height_at
+
+    return height_at(plate, grid.xy[:, 0] + x, grid.xy[:, 1] + y) - grid.z
+
+
+class _Runner:
+    """One simulation step: collision query, skin solve, forces on the bone, MuJoCo step."""
+
+    def __init__(self, scene, fid: Fidelity, finger: Finger, d_col, d_dyn, dt: float):
+        self.s, self.fid, self.finger = scene, fid, finger
+        self.d_col, self.d_dyn, self.dt = d_col, d_dyn, dt
+        self.pen = np.zeros(scene.n_nodes)
+        self.active = None
+        self.loads = np.zeros(scene.n_nodes)
+        self.drag_sum = 0.0
+        self.n_slide_steps = 0
+        self.z_ref = None
+        self.max_pen_allowed = finger.thickness_m
+        self._stiff_check = 0
+
+    def step(self, *, force_cmd: float, slide_v: float = 0.0, z_vel: float | None = None,
+             taxel_acc: np.ndarray | None = None) -> float:
+        s, dc, dd = self.s, self.d_col, self.d_dyn
+        if z_vel is not None:  # kinematic approach
+            dd.qpos[s.jz] += z_vel * self.dt
+            dd.qvel[s.jz] = 0.0
+        dc.qpos[:] = dd.qpos
+        mujoco.mj_kinematics(s.m_col, dc)
+        mujoco.mj_collision(s.m_col, dc)
+        pen = self.pen
+        pen[:] = -np.inf
+        n = dc.ncon
+        if n:
+            con = dc.contact
+            geoms = con.geom[:n]
+            node = s.node_of_geom[geoms[:, 0]]
+            node = np.where(node >= 0, node, s.node_of_geom[geoms[:, 1]])
+            np.maximum.at(pen, node, -con.dist[:n])
+        p, self.active = _skin_pressure(s, self.fid, pen, self.active)
+        loads = self.loads
+        np.multiply(p, s.grid.area_m2, out=loads)
+        Fs = float(loads.sum())
+        if not math.isfinite(Fs):
+            raise PhysicsError("the skin load is not finite (NaN or infinity)")
+        if n and pen.max() > self.max_pen_allowed:
+            raise PhysicsError(
+                f"skin pressed to the bottom: a node is {pen.max() * 1e3:.3g} mm deep, beyond the "
+                f"skin thickness {self.max_pen_allowed * 1e3:.3g} mm (lower the force or use a thicker skin)")
+        self._stiff_check -= 1
+        if self._stiff_check <= 0 and Fs > 0:
+            k = _contact_stiffness(s, self.fid, p, self.active)
+            w_dt = math.sqrt(k / self.finger.bone_mass_kg) * self.dt
+            if w_dt > MAX_OMEGA_DT:
+                raise PhysicsError(
+                    f"time step too coarse: the skin-bone coupling has omega*dt = {w_dt:.2f} "
+                    f"(contact stiffness {k:.3g} N/m, dt {self.dt:g} s); valid: omega*dt <= {MAX_OMEGA_DT} "
+                    f"(dt <= {self.dt * MAX_OMEGA_DT / w_dt:.3g} s)")
+            self._stiff_check = 10
+        drag = 0.0
+        if slide_v != 0.0:
+            drag = -self.finger.friction * Fs * math.tanh(dd.qvel[s.jx] / V_STICK)
+            self.drag_sum += abs(drag)
+            self.n_slide_steps += 1
+        dd.qfrc_applied[s.jz] = 0.0 if z_vel is not None else Fs - force_cmd
+        dd.qfrc_applied[s.jx] = drag
+        dd.ctrl[0] = slide_v
+        mujoco.mj_step(s.m_dyn, dd)
+        if not (math.isfinite(dd.qpos[s.jz]) and abs(dd.qpos[s.jz]) < 0.05):
+            raise PhysicsError(f"the finger ran away (z = {dd.qpos[s.jz]:.3g} m): the simulation diverged")
+        if taxel_acc is not None:
+            taxel_acc += s.W @ loads
+        return Fs
+
+    def check_warnings(self) -> None:
+        for d in (self.d_dyn, self.d_col):
+            bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
+            if bad:
+                raise PhysicsError(f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy")
