@@ -86,6 +86,98 @@ def cmd_plates_build(args: argparse.Namespace) -> int:
     return 0
 
 
+# ---------------------------------------------------------------- simulate / press
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from .errors import ConfigError
+    from .sim.plots import plot_heatmap, plot_traces
+    from .sim.simulate import Protocol, simulate
+
+    out = Path(args.out)
+    if out.suffix != ".npz":
+        raise ConfigError(f"--out {args.out!r} must end in .npz")
+    from .scene.layouts import get_layout
+
+    layout = get_layout(args.sensor)
+    proto = Protocol(
+        speed_m_s=args.speed,
+        force_n=args.force,
+        duration_s=args.duration,
+        rate_hz=args.rate or layout.rate_hz,
+    )
+    res = simulate(args.plate, layout, protocol=proto, fidelity=args.fidelity, seed=args.seed)
+    for w in res.warnings:
+        _log(f"warning: {w}")
+    _log(f"fidelity: {res.fidelity.reason}")
+    rec = res.recording
+    rec.save(out)
+    figs = [
+        str(plot_traces(rec, out.with_suffix(".traces.png"))),
+        str(plot_heatmap(rec, out.with_suffix(".heatmap.png"))),
+    ]
+    payload = {
+        "out": str(out),
+        "n_taxels": rec.n_taxels,
+        "n_samples": int(rec.data.shape[0]),
+        "rate_hz": proto.rate_hz,
+        "sim_s": res.sim_s,
+        "wall_s": round(res.wall_s, 4),
+        "fidelity": res.fidelity.level,
+        "dt_s": res.fidelity.dt_s,
+        "warnings": res.warnings,
+        "node_pitch_m": res.fidelity.pitch_m,
+        "transducer": rec.meta["transducer"],
+        "figures": figs,
+    }
+    _emit(args, payload, lambda: "\n".join(f"{k}: {v}" for k, v in payload.items()))
+    return 0
+
+
+def cmd_press(args: argparse.Namespace) -> int:
+    from .scene.finger import Finger
+    from .sim.press import hertz, press
+
+    r = args.radius
+    if args.finger == "sphere":
+        size = min(
+            2 * r,
+            max(
+                12e-3,
+                3 * (3 * args.force * r / (4 * args.young / (1 - args.poisson**2))) ** (1 / 3),
+            ),
+        )
+        finger = Finger(
+            shape="sphere",
+            radius_m=r,
+            size_m=(size, size),
+            young_pa=args.young,
+            poisson=args.poisson,
+            thickness_m=args.thickness,
+        )
+    else:
+        finger = Finger(
+            shape="flat",
+            size_m=(args.size, args.size),
+            young_pa=args.young,
+            poisson=args.poisson,
+            thickness_m=args.thickness,
+        )
+    res = press(
+        finger, args.force, pitch_m=args.pitch, plate=args.plate, coupled=args.fidelity != "L0"
+    )
+    payload = res.to_json()
+    if args.finger == "sphere":
+        payload["hertz"] = hertz(r, finger.e_star_pa, args.force)
+    _emit(
+        args,
+        payload,
+        lambda: (
+            f"total force {res.total_force_n:.4g} N, contact radius "
+            f"{res.contact_radius_m * 1e3:.4g} mm, peak {res.peak_pressure_pa / 1e3:.4g} kPa"
+        ),
+    )
+    return 0
+
+
 # ---------------------------------------------------------------- demo
 def cmd_demo(args: argparse.Namespace) -> int:
     """The most complete job that exists so far: build every preset plate."""
@@ -132,6 +224,43 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("name", nargs="?", help="preset name, e.g. finger7/ridges-4")
     b.add_argument("--all", action="store_true", help="build every preset")
     b.add_argument("--out", required=True, help="output directory")
+
+    sm = add(
+        sub, "simulate", cmd_simulate, "press a finger on a plate, slide it, record the taxels"
+    )
+    sm.add_argument("--plate", required=True, help="preset plate name")
+    sm.add_argument("--sensor", default="grid3x3", help="taxel layout (grid3x3, dense-<pitch>mm)")
+    sm.add_argument("--speed", type=float, default=0.06, help="slide speed [m/s]")
+    sm.add_argument("--force", type=float, default=1.0, help="normal force [N]")
+    sm.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        help="slide duration [s] (default: cross the texture)",
+    )
+    sm.add_argument(
+        "--rate", type=float, default=None, help="sample rate [Hz] (default: the layout's)"
+    )
+    sm.add_argument("--fidelity", default="auto", choices=["auto", "L0", "L1", "L2"])
+    sm.add_argument("--seed", type=int, default=0)
+    sm.add_argument("--ideal", action="store_true", help="record the noise-free normal load [N]")
+    sm.add_argument("--out", required=True, help="output .npz")
+
+    pr = add(
+        sub, "press", cmd_press, "static indentation of a pad on a plate, read by a dense grid"
+    )
+    pr.add_argument("--finger", default="sphere", choices=["sphere", "flat"])
+    pr.add_argument("--radius", type=float, default=8e-3, help="sphere radius [m]")
+    pr.add_argument("--size", type=float, default=12e-3, help="flat pad side [m]")
+    pr.add_argument("--young", type=float, default=0.3e6, help="Young's modulus [Pa]")
+    pr.add_argument("--poisson", type=float, default=0.5)
+    pr.add_argument("--thickness", type=float, default=5e-3, help="skin thickness [m]")
+    pr.add_argument("--force", type=float, default=1.0, help="normal force [N]")
+    pr.add_argument(
+        "--pitch", type=float, default=0.25e-3, help="taxel pitch of the dense grid [m]"
+    )
+    pr.add_argument("--plate", default="finger7/flat")
+    pr.add_argument("--fidelity", default="L1", choices=["L0", "L1"])
 
     d = add(sub, "demo", cmd_demo, "run the main demo job")
     d.add_argument("--out", default="demo-out", help="output directory (default: demo-out)")

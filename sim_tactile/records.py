@@ -46,13 +46,21 @@ class Recording:
                 f"recording shapes do not agree: data {data.shape}, times {times.shape}, "
                 f"taxels {taxels.shape}; valid: (T, N), (T,), (N, 3)"
             )
+        try:  # metadata is JSON data; normalise it (tuples -> lists) so a round trip is exact
+            object.__setattr__(self, "meta", json.loads(json.dumps(self.meta)))
+        except (TypeError, ValueError) as exc:
+            raise ConfigError(f"recording metadata must be JSON data: {exc}") from None
         for name, arr in (("data", data), ("times", times), ("taxels", taxels)):
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
 
     @property
     def rate_hz(self) -> float:
-        return float(self.meta.get("rate_hz", 1.0 / np.median(np.diff(self.times)) if len(self.times) > 1 else 0.0))
+        return float(
+            self.meta.get(
+                "rate_hz", 1.0 / np.median(np.diff(self.times)) if len(self.times) > 1 else 0.0
+            )
+        )
 
     @property
     def n_taxels(self) -> int:
@@ -66,8 +74,13 @@ class Recording:
 
         buf = io.BytesIO()
         meta = dict(self.meta, units=self.units)
-        np.savez(buf, data=self.data, times=self.times, taxels=self.taxels,
-                 meta_json=np.array(json.dumps(meta, sort_keys=True)))
+        np.savez(
+            buf,
+            data=self.data,
+            times=self.times,
+            taxels=self.taxels,
+            meta_json=np.array(json.dumps(meta, sort_keys=True)),
+        )
         path = Path(path)
         atomic_write(path, buf.getvalue())
         return path

@@ -28,8 +28,12 @@ def _F(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
 
 def rect_integral(x: np.ndarray, y: np.ndarray, half_x: float, half_y: float) -> np.ndarray:
     """Integral of 1/r over the rectangle [-hx, hx] x [-hy, hy] seen from (x, y) [m]."""
-    return (_F(x + half_x, y + half_y) - _F(x - half_x, y + half_y)
-            - _F(x + half_x, y - half_y) + _F(x - half_x, y - half_y))
+    return (
+        _F(x + half_x, y + half_y)
+        - _F(x - half_x, y + half_y)
+        - _F(x + half_x, y - half_y)
+        + _F(x - half_x, y - half_y)
+    )
 
 
 def compliance_matrix(xy: np.ndarray, pitch_m: float, e_star_pa: float) -> np.ndarray:
@@ -49,8 +53,13 @@ def _corner(X: np.ndarray, Y: np.ndarray, z: float) -> np.ndarray:
     return np.nan_to_num(t) / (2 * np.pi)
 
 
-def subsurface_weights(node_xy: np.ndarray, pitch_m: float, taxel_xy: np.ndarray,
-                       taxel_size: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+def subsurface_weights(
+    node_xy: np.ndarray,
+    pitch_m: float,
+    taxel_xy: np.ndarray,
+    taxel_size: np.ndarray,
+    depth_m: np.ndarray,
+) -> np.ndarray:
     """(M, N) weights W so that taxel loads [N] = W @ node loads [N].
 
     Taxel m is a rectangle of size ``taxel_size[m]`` (sx, sy) centred at ``taxel_xy[m]`` at
@@ -72,6 +81,10 @@ def subsurface_weights(node_xy: np.ndarray, pitch_m: float, taxel_xy: np.ndarray
             oy = np.clip(np.minimum(Y + h, sy) - np.maximum(Y - h, -sy), 0, None)
             W[m] = ox * oy / (pitch_m * pitch_m)
         else:
-            W[m] = (_corner(sx - X, sy - Y, d) + _corner(sx + X, sy + Y, d)
-                    + _corner(sx - X, sy + Y, d) + _corner(sx + X, sy - Y, d))
+            W[m] = (
+                _corner(sx - X, sy - Y, d)
+                + _corner(sx + X, sy + Y, d)
+                + _corner(sx - X, sy + Y, d)
+                + _corner(sx + X, sy - Y, d)
+            )
     return W

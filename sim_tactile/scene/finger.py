@@ -39,7 +39,7 @@ class Finger:
     thickness_m: float = 0.004
     young_pa: float = 0.3e6
     poisson: float = 0.5
-    bone_mass_kg: float = 0.5
+    bone_mass_kg: float = 0.1
     friction: float = 0.8
 
     def __post_init__(self) -> None:
@@ -72,7 +72,10 @@ class Finger:
     def patch_m(self) -> tuple[float, float]:
         """Extent of the skin nodes (x, y) [m]: the flat pad plus its edge roll-off."""
         if self.shape == "flat":
-            return (self.size_m[0] + 2 * self.edge_radius_m, self.size_m[1] + 2 * self.edge_radius_m)
+            return (
+                self.size_m[0] + 2 * self.edge_radius_m,
+                self.size_m[1] + 2 * self.edge_radius_m,
+            )
         return self.size_m
 
     def surface(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -84,7 +87,11 @@ class Finger:
             ex = np.clip(np.abs(x) - hx, 0, None)
             ey = np.clip(np.abs(y) - hy, 0, None)
             e = np.minimum(np.hypot(ex, ey), r)
-            return r - np.sqrt(np.maximum(r * r - e * e, 0.0)) if r > 0 else np.zeros(np.broadcast(x, y).shape)
+            return (
+                r - np.sqrt(np.maximum(r * r - e * e, 0.0))
+                if r > 0
+                else np.zeros(np.broadcast(x, y).shape)
+            )
         if self.shape == "sphere":
             R = self.radius_m
             return R - np.sqrt(np.maximum(R * R - x * x - y * y, 0.0))
@@ -125,8 +132,10 @@ def skin_grid(finger: Finger, pitch_m: float) -> SkinGrid:
     nx = 2 * int(np.floor(px / pitch_m / 2)) + 1
     ny = 2 * int(np.floor(py / pitch_m / 2)) + 1
     if nx * ny > 20_000:
-        raise ConfigError(f"skin pitch_m = {pitch_m:g} m gives {nx * ny} nodes; valid: at most 20000 "
-                          f"(pitch_m >= {max(px, py) / 141:g} m for this pad)")
+        raise ConfigError(
+            f"skin pitch_m = {pitch_m:g} m gives {nx * ny} nodes; valid: at most 20000 "
+            f"(pitch_m >= {max(px, py) / 141:g} m for this pad)"
+        )
     xs = (np.arange(nx) - (nx - 1) / 2) * pitch_m
     ys = (np.arange(ny) - (ny - 1) / 2) * pitch_m
     X, Y = np.meshgrid(xs, ys, indexing="xy")

@@ -33,12 +33,16 @@ class Layout:
         layer = np.asarray(self.layer, int)
         n = len(pos)
         if pos.shape != (n, 3) or sizes.shape != (n, 2) or layer.shape != (n,) or n == 0:
-            raise ConfigError(f"layout {self.name!r}: positions (N, 3), sizes (N, 2) and layer (N,) "
-                              f"must agree, got {pos.shape}, {sizes.shape}, {layer.shape}")
+            raise ConfigError(
+                f"layout {self.name!r}: positions (N, 3), sizes (N, 2) and layer (N,) "
+                f"must agree, got {pos.shape}, {sizes.shape}, {layer.shape}"
+            )
         if (sizes <= 0).any():
             raise ConfigError(f"layout {self.name!r}: taxel sizes must be > 0")
         if (pos[:, 2] > 1e-12).any():
-            raise ConfigError(f"layout {self.name!r}: taxels must sit at or under the surface (z <= 0)")
+            raise ConfigError(
+                f"layout {self.name!r}: taxels must sit at or under the surface (z <= 0)"
+            )
         v.positive("layout.rate_hz", self.rate_hz, unit="Hz")
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "sizes", sizes)
@@ -73,13 +77,26 @@ class Layout:
         return best if np.isfinite(best) else float(self.sizes.min())
 
     def to_json(self) -> dict:
-        return {"name": self.name, "n": self.n, "rate_hz": self.rate_hz,
-                "positions_m": self.positions.tolist(), "sizes_m": self.sizes.tolist(),
-                "layer": self.layer.tolist()}
+        return {
+            "name": self.name,
+            "n": self.n,
+            "rate_hz": self.rate_hz,
+            "positions_m": self.positions.tolist(),
+            "sizes_m": self.sizes.tolist(),
+            "layer": self.layer.tolist(),
+        }
 
 
-def grid_layout(name: str, nx: int, ny: int, pitch_m: float, size_m: float, *,
-                depth_m: float = 0.0, rate_hz: float = 100.0) -> Layout:
+def grid_layout(
+    name: str,
+    nx: int,
+    ny: int,
+    pitch_m: float,
+    size_m: float,
+    *,
+    depth_m: float = 0.0,
+    rate_hz: float = 100.0,
+) -> Layout:
     """An nx (along x) by ny grid of square taxels centred on the pad."""
     v.integer("nx", nx, 1, 1000)
     v.integer("ny", ny, 1, 1000)
@@ -94,12 +111,16 @@ def grid_layout(name: str, nx: int, ny: int, pitch_m: float, size_m: float, *,
     return Layout(name, pos, np.full((X.size, 2), size_m), np.zeros(X.size, int), rate_hz, names)
 
 
-def dense_layout(pitch_m: float, extent_m: tuple[float, float], *, rate_hz: float = 100.0) -> Layout:
+def dense_layout(
+    pitch_m: float, extent_m: tuple[float, float], *, rate_hz: float = 100.0
+) -> Layout:
     """A dense grid of contiguous surface taxels of side ``pitch_m`` covering +-extent."""
     nx = 2 * int(np.floor(extent_m[0] / pitch_m)) + 1
     ny = 2 * int(np.floor(extent_m[1] / pitch_m)) + 1
     if nx * ny > 40_000:
-        raise ConfigError(f"a dense grid of pitch {pitch_m:g} m has {nx * ny} taxels; valid: at most 40000")
+        raise ConfigError(
+            f"a dense grid of pitch {pitch_m:g} m has {nx * ny} taxels; valid: at most 40000"
+        )
     return grid_layout(f"dense-{pitch_m * 1e3:g}mm", nx, ny, pitch_m, pitch_m, rate_hz=rate_hz)
 
 

@@ -83,27 +83,52 @@ def build_scene(
         g.conaffinity = NODE_BIT
     bone = spec.worldbody.add_body(name="bone", pos=(x0_m, 0.0, z0_m))
     bone.add_joint(name="slide_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=(1, 0, 0))
-    bone.add_joint(name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=(0, 0, 1), damping=z_damping)
+    bone.add_joint(
+        name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=(0, 0, 1), damping=z_damping
+    )
     px, py = finger.patch_m
-    bone.add_geom(name="bone", type=_T.mjGEOM_BOX, size=(px / 2, py / 2, finger.thickness_m / 2),
-                  pos=(0, 0, finger.thickness_m * 1.5), mass=finger.bone_mass_kg, contype=0, conaffinity=0,
-                  rgba=(0.85, 0.75, 0.65, 1))
+    bone.add_geom(
+        name="bone",
+        type=_T.mjGEOM_BOX,
+        size=(px / 2, py / 2, finger.thickness_m / 2),
+        pos=(0, 0, finger.thickness_m * 1.5),
+        mass=finger.bone_mass_kg,
+        contype=0,
+        conaffinity=0,
+        rgba=(0.85, 0.75, 0.65, 1),
+    )
     r = 0.25 * grid.pitch_m
     first = None
     for i, ((x, y), z) in enumerate(zip(grid.xy, grid.z, strict=True)):
-        g = bone.add_geom(name=f"node{i}", type=_T.mjGEOM_SPHERE, size=(r, 0, 0), pos=(x, y, z + r),
-                          contype=NODE_BIT, conaffinity=0, density=0.0, group=3)
+        g = bone.add_geom(
+            name=f"node{i}",
+            type=_T.mjGEOM_SPHERE,
+            size=(r, 0, 0),
+            pos=(x, y, z + r),
+            contype=NODE_BIT,
+            conaffinity=0,
+            density=0.0,
+            group=3,
+        )
         first = first if first is not None else g
-    spec.add_actuator(name="slide", target="slide_x", trntype=mujoco.mjtTrn.mjTRN_JOINT,
-                      gaintype=mujoco.mjtGain.mjGAIN_FIXED, biastype=mujoco.mjtBias.mjBIAS_AFFINE,
-                      gainprm=[SLIDE_KV] + [0] * 9, biasprm=[0, 0, -SLIDE_KV] + [0] * 7)
+    spec.add_actuator(
+        name="slide",
+        target="slide_x",
+        trntype=mujoco.mjtTrn.mjTRN_JOINT,
+        gaintype=mujoco.mjtGain.mjGAIN_FIXED,
+        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
+        gainprm=[SLIDE_KV] + [0] * 9,
+        biasprm=[0, 0, -SLIDE_KV] + [0] * 7,
+    )
     m_col = spec.compile()
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
     m_dyn = spec.compile()
     node_of_geom = np.full(m_col.ngeom, -1, dtype=np.int64)
     g0 = mujoco.mj_name2id(m_col, mujoco.mjtObj.mjOBJ_GEOM, "node0")
     node_of_geom[g0 : g0 + grid.n] = np.arange(grid.n)
-    W = subsurface_weights(grid.xy, grid.pitch_m, layout.positions[:, :2], layout.sizes, layout.depth_m)
+    W = subsurface_weights(
+        grid.xy, grid.pitch_m, layout.positions[:, :2], layout.sizes, layout.depth_m
+    )
     C = compliance_matrix(grid.xy, grid.pitch_m, finger.e_star_pa) if coupled else None
     K = np.linalg.inv(C) if coupled and inverse else None  # for large contact sets
     jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]

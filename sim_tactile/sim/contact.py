@@ -28,7 +28,9 @@ def winkler(pen_m: np.ndarray, k_pa_per_m: float) -> np.ndarray:
     return k_pa_per_m * np.maximum(pen_m, 0.0)
 
 
-def _solve_subset(C: np.ndarray, K: np.ndarray | None, S: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+def _solve_subset(
+    C: np.ndarray, K: np.ndarray | None, S: np.ndarray, rhs: np.ndarray
+) -> np.ndarray:
     """Solve C[S, S] x = rhs. With K = inv(C), a large S is solved through its small
     complement T instead: inv(C_SS) = K_SS - K_ST inv(K_TT) K_TS (a Schur complement), so the
     cost is min(|S|, |T|)^3 rather than |S|^3."""
@@ -44,8 +46,9 @@ def _solve_subset(C: np.ndarray, K: np.ndarray | None, S: np.ndarray, rhs: np.nd
     return x
 
 
-def halfspace(pen_m: np.ndarray, C: np.ndarray, active: np.ndarray | None = None,
-              K: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def halfspace(
+    pen_m: np.ndarray, C: np.ndarray, active: np.ndarray | None = None, K: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Exact half-space contact pressures [Pa] for node penetrations ``pen_m`` (N,).
 
     ``C`` (N, N) compliance [m/Pa]; ``active`` an optional boolean warm start (the previous
@@ -83,4 +86,6 @@ def halfspace(pen_m: np.ndarray, C: np.ndarray, active: np.ndarray | None = None
         return p, mask
     if S.size == 0:
         return p, np.zeros(pen_m.shape, bool)
-    raise PhysicsError(f"half-space contact solve did not converge in {_MAX_ITER} iterations ({cand.size} nodes)")
+    raise PhysicsError(
+        f"half-space contact solve did not converge in {_MAX_ITER} iterations ({cand.size} nodes)"
+    )

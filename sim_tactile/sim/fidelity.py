@@ -27,6 +27,8 @@ LEVELS = ("L0", "L1", "L2")
 #: Coarsest and finest node pitch auto may pick [m].
 PITCH_MAX_M = 1.0e-3
 PITCH_MIN_M = 0.25e-3
+#: Most skin nodes auto may use per level (the dense half-space solve grows as nodes^3).
+MAX_NODES = {"L0": 2500, "L1": 700, "L2": 2800}
 #: Steps to cross the smallest feature, at least.
 STEPS_PER_FEATURE = 20
 #: Longest time step auto may pick [s].
@@ -64,8 +66,16 @@ def feature_scale_m(plate: Plate) -> float | None:
     return max(min(widths + [g for g in gaps if g > 0]), 1e-6)
 
 
-def choose_fidelity(plate: Plate, layout, finger, protocol, fidelity: str | Fidelity = "auto",
-                    *, pitch_m: float | None = None, dt_s: float | None = None) -> Fidelity:
+def choose_fidelity(
+    plate: Plate,
+    layout,
+    finger,
+    protocol,
+    fidelity: str | Fidelity = "auto",
+    *,
+    pitch_m: float | None = None,
+    dt_s: float | None = None,
+) -> Fidelity:
     """Resolve ``fidelity`` ('auto', 'L0', 'L1', 'L2' or a Fidelity) for this scene."""
     if isinstance(fidelity, Fidelity):
         return fidelity
@@ -77,18 +87,26 @@ def choose_fidelity(plate: Plate, layout, finger, protocol, fidelity: str | Fide
     need = min([taxel / 2] + ([scale / 2.5] if scale else []))
     auto_pitch = min(PITCH_MAX_M, max(PITCH_MIN_M, need))
     if scale is not None and auto_pitch > scale / 2:
-        warnings.append(f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
-                        f"({auto_pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes")
+        warnings.append(
+            f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
+            f"({auto_pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes"
+        )
     if isinstance(plate.texture, Roughness):
-        warnings.append("micro-roughness (Ra {:.3g} um) is below the node grid: the finger simulation sees "
-                        "it only as far as its MuJoCo height field resolves it".format(plate.texture.ra_m * 1e6))
+        warnings.append(
+            "micro-roughness (Ra {:.3g} um) is below the node grid: the finger simulation sees "
+            "it only as far as its MuJoCo height field resolves it".format(plate.texture.ra_m * 1e6)
+        )
     period = _texture_period(plate)
     if period is not None and layout.min_pitch_m > period / 2 and layout.n > 1:
-        warnings.append(f"taxel pitch {layout.min_pitch_m * 1e3:.3g} mm is coarser than half the texture "
-                        f"period ({period * 1e3:.3g} mm): the taxel array aliases the texture")
+        warnings.append(
+            f"taxel pitch {layout.min_pitch_m * 1e3:.3g} mm is coarser than half the texture "
+            f"period ({period * 1e3:.3g} mm): the taxel array aliases the texture"
+        )
     if period is not None and taxel > period:
-        warnings.append(f"taxels ({taxel * 1e3:.3g} mm) are larger than the texture period "
-                        f"({period * 1e3:.3g} mm): each taxel averages over several features")
+        warnings.append(
+            f"taxels ({taxel * 1e3:.3g} mm) are larger than the texture period "
+            f"({period * 1e3:.3g} mm): each taxel averages over several features"
+        )
     v = max(protocol.speed_m_s, 1e-6)
     dt_need = DT_MAX_S if scale is None else min(DT_MAX_S, scale / (v * STEPS_PER_FEATURE))
     level = "L1" if fidelity == "auto" else fidelity
@@ -96,21 +114,37 @@ def choose_fidelity(plate: Plate, layout, finger, protocol, fidelity: str | Fide
     # the skin-bone coupling is explicit: keep omega * dt at half its limit (1.0)
     omega = math.sqrt(flat_stiffness(finger, level != "L0", k_w) / finger.bone_mass_kg)
     dt_need = min(dt_need, 0.5 / omega)
+    px, py = finger.patch_m
+    floor = math.sqrt(px * py / MAX_NODES["L1" if level == "L2" else level])
+    if auto_pitch < floor:
+        warnings.append(
+            f"node pitch raised from {auto_pitch * 1e3:.3g} to {floor * 1e3:.3g} mm to keep the skin "
+            f"under {MAX_NODES[level]} nodes: features below {2 * floor * 1e3:.3g} mm are smeared"
+        )
+        auto_pitch = floor
     pitch = pitch_m or auto_pitch
     dt_target = dt_s or dt_need
     if level == "L2":
         pitch, dt_target = (pitch_m or auto_pitch / 2), (dt_s or dt_need / 4)
     if dt_s is not None and scale is not None and dt_s > scale / (v * 10):
-        warnings.append(f"time step {dt_s:g} s is too coarse for {v:g} m/s: a {scale * 1e3:.3g} mm feature "
-                        f"takes {scale / (v * dt_s):.1f} steps to cross (want >= 10)")
+        warnings.append(
+            f"time step {dt_s:g} s is too coarse for {v:g} m/s: a {scale * 1e3:.3g} mm feature "
+            f"takes {scale / (v * dt_s):.1f} steps to cross (want >= 10)"
+        )
     if pitch_m is not None and scale is not None and pitch_m > scale / 2:
-        warnings.append(f"node pitch {pitch_m * 1e3:.3g} mm is too coarse for {scale * 1e3:.3g} mm features")
+        warnings.append(
+            f"node pitch {pitch_m * 1e3:.3g} mm is too coarse for {scale * 1e3:.3g} mm features"
+        )
     sample = 1.0 / protocol.rate_hz
     n_sub = max(1, math.ceil(sample / dt_target - 1e-9))
-    reason = (f"{level}: node pitch {pitch * 1e3:.3g} mm (smallest feature "
-              f"{'-' if scale is None else f'{scale * 1e3:.3g} mm'}, taxel {taxel * 1e3:.3g} mm), "
-              f"dt {sample / n_sub * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample)")
-    return Fidelity(level, level != "L0", float(pitch), n_sub, sample / n_sub, k_w, reason, tuple(warnings))
+    reason = (
+        f"{level}: node pitch {pitch * 1e3:.3g} mm (smallest feature "
+        f"{'-' if scale is None else f'{scale * 1e3:.3g} mm'}, taxel {taxel * 1e3:.3g} mm), "
+        f"dt {sample / n_sub * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample)"
+    )
+    return Fidelity(
+        level, level != "L0", float(pitch), n_sub, sample / n_sub, k_w, reason, tuple(warnings)
+    )
 
 
 def flat_stiffness(finger, coupled: bool, k_w: float) -> float:

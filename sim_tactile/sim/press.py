@@ -48,8 +48,11 @@ class PressResult:
 def hertz(radius_m: float, e_star_pa: float, force_n: float) -> dict:
     """Hertz's sphere-on-flat solution: contact radius a, peak pressure p0, approach d."""
     a = (3 * force_n * radius_m / (4 * e_star_pa)) ** (1 / 3)
-    return {"contact_radius_m": a, "peak_pressure_pa": 3 * force_n / (2 * math.pi * a * a),
-            "approach_m": a * a / radius_m}
+    return {
+        "contact_radius_m": a,
+        "peak_pressure_pa": 3 * force_n / (2 * math.pi * a * a),
+        "approach_m": a * a / radius_m,
+    }
 
 
 def press(
@@ -74,8 +77,19 @@ def press(
     px, py = finger.patch_m
     layout = dense_layout(pitch_m, (px / 2 - pitch_m / 2, py / 2 - pitch_m / 2))
     top = 0.02
-    scene = build_scene(plate, finger, grid, layout, dt_s=1e-3, x0_m=0.0, z0_m=top, z_damping=0.0,
-                        coupled=coupled, inverse=False, cache=cache)
+    scene = build_scene(
+        plate,
+        finger,
+        grid,
+        layout,
+        dt_s=1e-3,
+        x0_m=0.0,
+        z0_m=top,
+        z_damping=0.0,
+        coupled=coupled,
+        inverse=False,
+        cache=cache,
+    )
     d = mujoco.MjData(scene.m_col)
     k_w = finger.e_star_pa / finger.thickness_m
 
@@ -110,7 +124,8 @@ def press(
         if f_lo < force_n:
             raise PhysicsError(
                 f"skin pressed to the bottom: {force_n:g} N needs more than the skin thickness "
-                f"{finger.thickness_m * 1e3:g} mm of indentation (lower the force or use a thicker skin)")
+                f"{finger.thickness_m * 1e3:g} mm of indentation (lower the force or use a thicker skin)"
+            )
         for _ in range(80):
             mid = 0.5 * (lo + hi)
             f = solve(mid)[0].sum() * grid.area_m2
@@ -127,5 +142,12 @@ def press(
     taxel = scene.W @ loads
     area = layout.sizes.prod(axis=1)
     n_contact = int(np.count_nonzero(p > 0))
-    return PressResult(layout, taxel, taxel / area, total, math.sqrt(n_contact * grid.area_m2 / math.pi),
-                       float(p.max()), float(-z))
+    return PressResult(
+        layout,
+        taxel,
+        taxel / area,
+        total,
+        math.sqrt(n_contact * grid.area_m2 / math.pi),
+        float(p.max()),
+        float(-z),
+    )

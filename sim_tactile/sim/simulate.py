@@ -73,10 +73,14 @@ class Protocol:
         """This protocol with speed, force and offset drawn around their nominal values."""
         return replace(
             self,
-            speed_m_s=self.speed_m_s * float(np.clip(1 + self.speed_jitter * rng.standard_normal(), 0.2, 2)),
-            force_n=self.force_n * float(np.clip(1 + self.force_jitter * rng.standard_normal(), 0.2, 2)),
+            speed_m_s=self.speed_m_s
+            * float(np.clip(1 + self.speed_jitter * rng.standard_normal(), 0.2, 2)),
+            force_n=self.force_n
+            * float(np.clip(1 + self.force_jitter * rng.standard_normal(), 0.2, 2)),
             offset_y_m=self.offset_y_m + self.offset_jitter_m * float(rng.standard_normal()),
-            speed_jitter=0.0, force_jitter=0.0, offset_jitter_m=0.0,
+            speed_jitter=0.0,
+            force_jitter=0.0,
+            offset_jitter_m=0.0,
         )
 
 
@@ -115,6 +119,8 @@ def simulate(
     finger: Finger | None = None,
     fidelity: str | Fidelity = "auto",
     seed: int = 0,
+    pitch_m: float | None = None,
+    dt_s: float | None = None,
     cache=None,
 ) -> SimResult:
     """Run one press-and-slide and record the ideal normal load on each taxel [N].
@@ -124,10 +130,22 @@ def simulate(
     from threadpoolctl import threadpool_limits
 
     with threadpool_limits(limits=1, user_api="blas"):
-        return _simulate(plate, layout, protocol=protocol, finger=finger, fidelity=fidelity, seed=seed, cache=cache)
+        return _simulate(
+            plate,
+            layout,
+            protocol=protocol,
+            finger=finger,
+            fidelity=fidelity,
+            seed=seed,
+            pitch_m=pitch_m,
+            dt_s=dt_s,
+            cache=cache,
+        )
 
 
-def _simulate(plate, layout, *, protocol, finger, fidelity, seed, cache) -> SimResult:
+def _simulate(
+    plate, layout, *, protocol, finger, fidelity, seed, pitch_m, dt_s, cache
+) -> SimResult:
     t_wall = time.perf_counter()
     plate = get_plate(plate) if isinstance(plate, str) else plate
     layout = get_layout(layout) if isinstance(layout, str) else layout
@@ -139,9 +157,11 @@ def _simulate(plate, layout, *, protocol, finger, fidelity, seed, cache) -> SimR
     ex, ey = layout.extent_m
     px, py = finger.patch_m
     if ex > px / 2 + 1e-9 or ey > py / 2 + 1e-9:
-        raise ConfigError(f"layout {layout.name!r} spans +-({ex:g}, {ey:g}) m, beyond the pad's "
-                          f"+-({px / 2:g}, {py / 2:g}) m; valid: taxels on the pad")
-    fid = choose_fidelity(plate, layout, finger, proto, fidelity)
+        raise ConfigError(
+            f"layout {layout.name!r} spans +-({ex:g}, {ey:g}) m, beyond the pad's "
+            f"+-({px / 2:g}, {py / 2:g}) m; valid: taxels on the pad"
+        )
+    fid = choose_fidelity(plate, layout, finger, proto, fidelity, pitch_m=pitch_m, dt_s=dt_s)
     warnings = list(fid.warnings)
     grid = skin_grid(finger, fid.pitch_m)
     n_sub = fid.steps_per_sample
@@ -152,13 +172,29 @@ def _simulate(plate, layout, *, protocol, finger, fidelity, seed, cache) -> SimR
     x_start = -(plate.area_length_m / 2 + px / 2 + margin)
     x_end = -x_start
     if plate.length_m / 2 < x_end + 1e-9:
-        raise ConfigError(f"plate {plate.name or plate.hash} ({plate.length_m:g} m long) is too short for a "
-                          f"{px:g} m pad to enter and leave the textured area on flat ground")
-    z0 = APPROACH_CLEARANCE_M + max(0.0, float(np.nanmax(_plate_heights(plate, grid, x_start, proto.offset_y_m))))
-    omega_guess = math.sqrt(flat_stiffness(finger, fid.coupled, fid.winkler_k_pa_per_m) / finger.bone_mass_kg)
+        raise ConfigError(
+            f"plate {plate.name or plate.hash} ({plate.length_m:g} m long) is too short for a "
+            f"{px:g} m pad to enter and leave the textured area on flat ground"
+        )
+    z0 = APPROACH_CLEARANCE_M + max(
+        0.0, float(np.nanmax(_plate_heights(plate, grid, x_start, proto.offset_y_m)))
+    )
+    omega_guess = math.sqrt(
+        flat_stiffness(finger, fid.coupled, fid.winkler_k_pa_per_m) / finger.bone_mass_kg
+    )
     z_damp = 2.0 * 1.0 * omega_guess * finger.bone_mass_kg  # critical at the flat-pad stiffness
-    scene = build_scene(plate, finger, grid, layout, dt_s=dt, x0_m=x_start, z0_m=z0,
-                        z_damping=z_damp, coupled=fid.coupled, cache=cache)
+    scene = build_scene(
+        plate,
+        finger,
+        grid,
+        layout,
+        dt_s=dt,
+        x0_m=x_start,
+        z0_m=z0,
+        z_damping=z_damp,
+        coupled=fid.coupled,
+        cache=cache,
+    )
     scene.m_col.body("bone")  # validate name
     d_col = mujoco.MjData(scene.m_col)
     d_dyn = mujoco.MjData(scene.m_dyn)
@@ -233,13 +269,29 @@ def _simulate(plate, layout, *, protocol, finger, fidelity, seed, cache) -> SimR
     wall = time.perf_counter() - t_wall
     sim_s = n_samples / proto.rate_hz
     meta = {
-        "plate": plate.name or plate.hash, "plate_hash": plate.hash, "plate_params": plate.params(),
-        "layout": layout.name, "finger": finger.to_json(), "protocol": asdict(proto),
-        "protocol_nominal": asdict(protocol), "seed": seed, "fidelity": fid.to_json(),
-        "rate_hz": proto.rate_hz, "dt_s": dt, "transducer": "ideal", "normal_force_n": forces.tolist(),
+        "plate": plate.name or plate.hash,
+        "plate_hash": plate.hash,
+        "plate_params": plate.params(),
+        "layout": layout.name,
+        "finger": finger.to_json(),
+        "protocol": asdict(proto),
+        "protocol_nominal": asdict(protocol),
+        "seed": seed,
+        "fidelity": fid.to_json(),
+        "rate_hz": proto.rate_hz,
+        "dt_s": dt,
+        "transducer": "ideal",
+        "normal_force_n": forces.tolist(),
         "mean_drag_n": runner.drag_sum / max(runner.n_slide_steps, 1),
-        "versions": {"sim_tactile": __version__, "mujoco": mujoco.__version__, "numpy": np.__version__},
-        "warnings": warnings, "sim_s": sim_s, "wall_s": wall, "x_start_m": x_start,
+        "versions": {
+            "sim_tactile": __version__,
+            "mujoco": mujoco.__version__,
+            "numpy": np.__version__,
+        },
+        "warnings": warnings,
+        "sim_s": sim_s,
+        "wall_s": wall,
+        "x_start_m": x_start,
     }
     rec = Recording(out.astype(np.float32), times, layout.positions, units="N", meta=meta)
     return SimResult(rec, fid, sim_s, wall, warnings)
@@ -266,8 +318,14 @@ class _Runner:
         self.max_pen_allowed = finger.thickness_m
         self._stiff_check = 0
 
-    def step(self, *, force_cmd: float, slide_v: float = 0.0, z_vel: float | None = None,
-             taxel_acc: np.ndarray | None = None) -> float:
+    def step(
+        self,
+        *,
+        force_cmd: float,
+        slide_v: float = 0.0,
+        z_vel: float | None = None,
+        taxel_acc: np.ndarray | None = None,
+    ) -> float:
         s, dc, dd = self.s, self.d_col, self.d_dyn
         if z_vel is not None:  # kinematic approach
             dd.qpos[s.jz] += z_vel * self.dt
@@ -293,7 +351,8 @@ class _Runner:
         if n and pen.max() > self.max_pen_allowed:
             raise PhysicsError(
                 f"skin pressed to the bottom: a node is {pen.max() * 1e3:.3g} mm deep, beyond the "
-                f"skin thickness {self.max_pen_allowed * 1e3:.3g} mm (lower the force or use a thicker skin)")
+                f"skin thickness {self.max_pen_allowed * 1e3:.3g} mm (lower the force or use a thicker skin)"
+            )
         self._stiff_check -= 1
         if self._stiff_check <= 0 and Fs > 0:
             k = _contact_stiffness(s, self.fid, p, self.active)
@@ -302,7 +361,8 @@ class _Runner:
                 raise PhysicsError(
                     f"time step too coarse: the skin-bone coupling has omega*dt = {w_dt:.2f} "
                     f"(contact stiffness {k:.3g} N/m, dt {self.dt:g} s); valid: omega*dt <= {MAX_OMEGA_DT} "
-                    f"(dt <= {self.dt * MAX_OMEGA_DT / w_dt:.3g} s)")
+                    f"(dt <= {self.dt * MAX_OMEGA_DT / w_dt:.3g} s)"
+                )
             self._stiff_check = 10
         drag = 0.0
         if slide_v != 0.0:
@@ -314,7 +374,9 @@ class _Runner:
         dd.ctrl[0] = slide_v
         mujoco.mj_step(s.m_dyn, dd)
         if not (math.isfinite(dd.qpos[s.jz]) and abs(dd.qpos[s.jz]) < 0.05):
-            raise PhysicsError(f"the finger ran away (z = {dd.qpos[s.jz]:.3g} m): the simulation diverged")
+            raise PhysicsError(
+                f"the finger ran away (z = {dd.qpos[s.jz]:.3g} m): the simulation diverged"
+            )
         if taxel_acc is not None:
             taxel_acc += s.W @ loads
         return Fs
@@ -323,4 +385,6 @@ class _Runner:
         for d in (self.d_dyn, self.d_col):
             bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
             if bad:
-                raise PhysicsError(f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy")
+                raise PhysicsError(
+                    f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"
+                )

@@ -1,0 +1,93 @@
+"""The contract's simulate and press commands."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from test_cli import run
+
+
+def test_simulate_json_and_npz(cli_env, tmp_path):
+    out = tmp_path / "r.npz"
+    res = run(
+        [
+            "simulate",
+            "--plate",
+            "finger7/ridges-2",
+            "--sensor",
+            "grid3x3",
+            "--speed",
+            "0.06",
+            "--force",
+            "1",
+            "--duration",
+            "0.3",
+            "--ideal",
+            "--out",
+            str(out),
+            "--json",
+        ],
+        cli_env,
+    )
+    doc = json.loads(res.stdout)
+    assert {
+        "out",
+        "n_taxels",
+        "n_samples",
+        "rate_hz",
+        "sim_s",
+        "wall_s",
+        "fidelity",
+        "dt_s",
+        "warnings",
+    } <= set(doc)
+    assert doc["n_taxels"] == 9 and doc["n_samples"] == 30 and doc["rate_hz"] == 100.0
+    with np.load(out, allow_pickle=False) as z:
+        assert z["data"].shape == (30, 9) and z["data"].dtype == np.float32
+        assert z["times"].shape == (30,) and z["taxels"].shape == (9, 3)
+    for f in doc["figures"]:
+        assert open(f, "rb").read(4) == b"\x89PNG"
+
+
+def test_press_json(cli_env):
+    res = run(
+        [
+            "press",
+            "--finger",
+            "sphere",
+            "--radius",
+            "0.008",
+            "--young",
+            "3e5",
+            "--force",
+            "1",
+            "--pitch",
+            "0.0005",
+            "--json",
+        ],
+        cli_env,
+    )
+    doc = json.loads(res.stdout)
+    assert len(doc["taxels"]) == len(doc["pressure_pa"]) > 100
+    assert abs(doc["total_force_n"] - 1.0) < 0.01
+
+
+def test_simulate_bad_sensor_is_one_line(cli_env, tmp_path):
+    res = run(
+        [
+            "simulate",
+            "--plate",
+            "finger7/flat",
+            "--sensor",
+            "nope",
+            "--out",
+            str(tmp_path / "x.npz"),
+            "--json",
+        ],
+        cli_env,
+        check=False,
+    )
+    assert res.returncode != 0 and res.stdout == ""
+    assert len(res.stderr.strip().splitlines()) == 1 and "nope" in res.stderr

@@ -1,0 +1,68 @@
+"""Hard cases end in a measured result or a clear PhysicsError naming the cause; never a
+crash, a NaN or a silent auto-reset."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sim_tactile.errors import PhysicsError
+from sim_tactile.plates import Bumps, Plate
+from sim_tactile.scene.finger import Finger
+from sim_tactile.sim.simulate import Protocol, simulate
+
+
+def _ok(res):
+    d = res.recording.data
+    assert np.isfinite(d).all() and d.max() > 0
+    return res
+
+
+def test_fast_slide_200mm_s(cache):
+    res = _ok(
+        simulate("finger7/ridges-4", "grid3x3", protocol=Protocol(speed_m_s=0.2), cache=cache)
+    )
+    assert res.fidelity.dt_s <= 2.5e-3 / 0.2 / 20 + 1e-12  # 20 steps per ridge crossing
+
+
+def test_strong_press_5n(cache):
+    res = _ok(
+        simulate(
+            "finger7/ridges-4",
+            "grid3x3",
+            protocol=Protocol(force_n=5.0, duration_s=0.4),
+            cache=cache,
+        )
+    )
+    assert np.mean(res.recording.meta["normal_force_n"]) == pytest.approx(5.0, rel=0.05)
+
+
+def test_sharp_ridge_edges(cache):
+    _ok(simulate("finger7/ridges-4", "grid3x3", finger=Finger(edge_radius_m=0.0), cache=cache))
+
+
+def test_features_below_the_node_pitch_warn(cache):
+    plate = Plate(
+        texture=Bumps(
+            rows=30, cols=30, shape="box", size_m=0.3e-3, height_m=0.3e-3, spacing_m=1.2e-3
+        )
+    )
+    res = _ok(simulate(plate, "grid3x3", protocol=Protocol(duration_s=0.1), cache=cache))
+    assert any("smeared" in w for w in res.warnings)
+    assert any("aliases the texture" in w for w in res.warnings)
+
+
+def test_too_coarse_time_step_stops_with_the_limit(cache):
+    with pytest.raises(PhysicsError, match=r"time step too coarse.*omega\*dt.*dt <="):
+        simulate("finger7/ridges-4", "grid3x3", dt_s=0.01, cache=cache)
+
+
+def test_skin_pressed_to_the_bottom_stops(cache):
+    with pytest.raises(PhysicsError, match="pressed to the bottom"):
+        simulate(
+            "finger7/ridges-4",
+            "grid3x3",
+            finger=Finger(thickness_m=0.3e-3),
+            protocol=Protocol(force_n=5.0),
+            cache=cache,
+        )
