@@ -66,9 +66,9 @@ def srm_spikes_torch(torch, u, theta: float, d: float, c: float):
         return spikes.movedim(0, -1), refr.movedim(0, -1)
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True)
 def _srm_rows(u, theta, d, c, spikes, refr):  # pragma: no cover - compiled
-    for m in numba.prange(u.shape[0]):
+    for m in range(u.shape[0]):
         a = np.float32(0.0)
         b = np.float32(0.0)
         for n in range(u.shape[1]):

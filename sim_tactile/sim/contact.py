@@ -73,17 +73,17 @@ def halfspace(
                 S = cand[:0]
                 break
             continue
-        rest = np.setdiff1d(cand, S, assume_unique=True)
+        in_s = np.zeros(pen_m.shape, bool)
+        in_s[S] = True
+        rest = cand[~in_s[cand]]
         if rest.size:
             gap = pen_m[rest] - C[np.ix_(rest, S)] @ pS
             add = rest[gap > tol]
             if add.size:
-                S = np.union1d(S, add)
+                S = np.sort(np.concatenate([S, add]))
                 continue
         p[S] = pS
-        mask = np.zeros(pen_m.shape, bool)
-        mask[S] = True
-        return p, mask
+        return p, in_s
     if S.size == 0:
         return p, np.zeros(pen_m.shape, bool)
     raise PhysicsError(

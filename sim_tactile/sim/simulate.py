@@ -250,6 +250,7 @@ def _simulate(
     v_slide = proto.speed_m_s
     t_ramp = 0.02  # speed ramp at the start of each stroke [s]
     t_stroke = 0.0
+    t_slide = time.perf_counter()
     for s in range(n_samples):
         acc[:] = 0.0
         fsum = 0.0
@@ -265,6 +266,7 @@ def _simulate(
         out[s] = acc / n_sub
         forces[s] = fsum / n_sub
         runner.check_warnings()
+    slide_wall = time.perf_counter() - t_slide
     times = (np.arange(n_samples) + 0.5) / proto.rate_hz
     wall = time.perf_counter() - t_wall
     sim_s = n_samples / proto.rate_hz
@@ -292,6 +294,8 @@ def _simulate(
         "sim_s": sim_s,
         "wall_s": wall,
         "x_start_m": x_start,
+        "slide_wall_s": slide_wall,
+        "steps": n_samples * n_sub,
     }
     rec = Recording(out.astype(np.float32), times, layout.positions, units="N", meta=meta)
     return SimResult(rec, fid, sim_s, wall, warnings)
@@ -383,8 +387,8 @@ class _Runner:
 
     def check_warnings(self) -> None:
         for d in (self.d_dyn, self.d_col):
-            bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
-            if bad:
+            if d.warning.number.any():
+                bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
                 raise PhysicsError(
                     f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"
                 )
