@@ -148,6 +148,7 @@ def loop_overhead(repeats: int = 5) -> dict:
     def reset() -> None:  # every timed loop starts from the same settled, sliding state
         run.d_dyn.qpos[:], run.d_dyn.qvel[:] = q0, v0
         run.d_dyn.qfrc_applied[:] = 0.0
+
     with threadpool_limits(limits=1, user_api="blas"):
         for _ in range(repeats):
             reset()

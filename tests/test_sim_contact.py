@@ -63,3 +63,19 @@ def test_no_penetration_no_load_and_winkler_is_local():
     p, active = halfspace(-np.abs(pen), C)
     assert not p.any() and not active.any()
     np.testing.assert_array_equal(winkler(np.array([-1.0, 0.0, 2e-4]), 1e8), [0.0, 0.0, 2e4])
+
+
+def test_numba_readout_equals_numpy_reference():
+    from sim_tactile.sim._readout import penetration_map, penetration_map_reference
+
+    rng = np.random.default_rng(3)
+    node_of_geom = np.array([-1, -1, 0, 1, 2, 3, 4, -1])
+    # contacts between node geoms (2..6) and plate geoms (0, 1, 7), either order, duplicates
+    g_node = rng.integers(2, 7, 40)
+    g_plate = rng.choice([0, 1, 7], 40)
+    flip = rng.random(40) < 0.5
+    geom = np.where(flip[:, None], np.c_[g_plate, g_node], np.c_[g_node, g_plate]).astype(np.int32)
+    dist = rng.normal(0, 1e-4, 40)
+    pen = np.empty(5)
+    penetration_map(geom, dist, node_of_geom, pen)
+    np.testing.assert_array_equal(pen, penetration_map_reference(geom, dist, node_of_geom, 5))

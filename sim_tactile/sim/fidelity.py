@@ -93,8 +93,8 @@ def choose_fidelity(
         )
     if isinstance(plate.texture, Roughness):
         warnings.append(
-            "micro-roughness (Ra {:.3g} um) is below the node grid: the finger simulation sees "
-            "it only as far as its MuJoCo height field resolves it".format(plate.texture.ra_m * 1e6)
+            f"micro-roughness (Ra {plate.texture.ra_m * 1e6:.3g} um) is below the node grid: the finger simulation sees "
+            "it only as far as its MuJoCo height field resolves it"
         )
     period = _texture_period(plate)
     if period is not None and layout.min_pitch_m > period / 2 and layout.n > 1:

@@ -25,6 +25,7 @@ from ..scene.finger import Finger, skin_grid
 from ..scene.layouts import Layout, get_layout
 from ..scene.model import build_scene
 from . import contact
+from ._readout import penetration_map
 from .fidelity import Fidelity, choose_fidelity, flat_stiffness
 
 #: Largest omega * dt of the explicit skin-to-bone coupling before the run is refused; the
@@ -338,14 +339,12 @@ class _Runner:
         mujoco.mj_kinematics(s.m_col, dc)
         mujoco.mj_collision(s.m_col, dc)
         pen = self.pen
-        pen[:] = -np.inf
         n = dc.ncon
         if n:
             con = dc.contact
-            geoms = con.geom[:n]
-            node = s.node_of_geom[geoms[:, 0]]
-            node = np.where(node >= 0, node, s.node_of_geom[geoms[:, 1]])
-            np.maximum.at(pen, node, -con.dist[:n])
+            penetration_map(con.geom, con.dist, s.node_of_geom, pen)
+        else:
+            pen[:] = -np.inf
         p, self.active = _skin_pressure(s, self.fid, pen, self.active)
         loads = self.loads
         np.multiply(p, s.grid.area_m2, out=loads)
@@ -367,7 +366,7 @@ class _Runner:
                     f"(contact stiffness {k:.3g} N/m, dt {self.dt:g} s); valid: omega*dt <= {MAX_OMEGA_DT} "
                     f"(dt <= {self.dt * MAX_OMEGA_DT / w_dt:.3g} s)"
                 )
-            self._stiff_check = 10
+            self._stiff_check = 50
         drag = 0.0
         if slide_v != 0.0:
             drag = -self.finger.friction * Fs * math.tanh(dd.qvel[s.jx] / V_STICK)
