@@ -15,7 +15,9 @@ The refractory term is the convolution of the output with ``c * m d^m`` (``d = e
 tau_ref)``, ``c = -scale_ref * theta * e / tau_ref``), which two first-order recursions give
 exactly: ``b[n] = d b[n-1] + d a[n-1]``, ``a[n] = d a[n-1] + o[n]``, ``nu * o = c b``.
 :func:`srm_spikes_torch` is the plain reference; :func:`srm_spikes_numba` the fast CPU path,
-tested equal to it.
+tested equal to it. Both set the recursion's state to zero once it falls below
+:data:`FLUSH` (a decaying state would otherwise reach subnormal floats, which are ~100 times
+slower to compute with; the dropped refractory term is below 1e-12 theta).
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ import numpy as np
 
 #: The alpha kernel is cut where it has fallen below 1e-4 of its peak: m / tau > 13.4.
 KERNEL_SPAN = 14.0
+#: Recursion states below this are set to zero (see the module docstring).
+FLUSH = 1e-12
 
 
 def alpha_kernel(tau_steps: float) -> np.ndarray:
@@ -58,9 +62,11 @@ def srm_spikes_torch(torch, u, theta: float, d: float, c: float):
         c = torch.tensor(c, dtype=ut.dtype, device=ut.device)
         for n in range(ut.shape[0]):
             b = d * b + d * a
+            b = torch.where(b < FLUSH, 0.0, b)
             r = c * b
             s = (ut[n] + r >= theta).to(ut.dtype)
             a = d * a + s
+            a = torch.where(a < FLUSH, 0.0, a)
             spikes[n] = s
             refr[n] = r
         return spikes.movedim(0, -1), refr.movedim(0, -1)
@@ -73,9 +79,13 @@ def _srm_rows(u, theta, d, c, spikes, refr):  # pragma: no cover - compiled
         b = np.float32(0.0)
         for n in range(u.shape[1]):
             b = d * b + d * a
+            if b < FLUSH:
+                b = np.float32(0.0)
             r = c * b
             s = np.float32(1.0) if u[m, n] + r >= theta else np.float32(0.0)
             a = d * a + s
+            if a < FLUSH:
+                a = np.float32(0.0)
             spikes[m, n] = s
             refr[m, n] = r
 
