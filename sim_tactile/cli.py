@@ -104,7 +104,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         duration_s=args.duration,
         rate_hz=args.rate or layout.rate_hz,
     )
-    res = simulate(args.plate, layout, protocol=proto, fidelity=args.fidelity, seed=args.seed)
+    res = simulate(
+        args.plate,
+        args.sensor,
+        protocol=proto,
+        fidelity=args.fidelity,
+        seed=args.seed,
+        ideal=args.ideal,
+    )
     for w in res.warnings:
         _log(f"warning: {w}")
     _log(f"fidelity: {res.fidelity.reason}")
@@ -229,7 +236,11 @@ def build_parser() -> argparse.ArgumentParser:
         sub, "simulate", cmd_simulate, "press a finger on a plate, slide it, record the taxels"
     )
     sm.add_argument("--plate", required=True, help="preset plate name")
-    sm.add_argument("--sensor", default="grid3x3", help="taxel layout (grid3x3, dense-<pitch>mm)")
+    sm.add_argument(
+        "--sensor",
+        default="grid3x3",
+        help="sensor layout: grid3x3, multilayer3x3x2, biotac19, icub60, pvdf2, or dense-<pitch>mm",
+    )
     sm.add_argument("--speed", type=float, default=0.06, help="slide speed [m/s]")
     sm.add_argument("--force", type=float, default=1.0, help="normal force [N]")
     sm.add_argument(

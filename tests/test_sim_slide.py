@@ -46,7 +46,7 @@ def _xcorr_lag(a: np.ndarray, b: np.ndarray, dt: float) -> float:
 def ridges4(request, cache):
     v = request.param
     return v, simulate(
-        "finger7/ridges-4", "grid3x3", protocol=Protocol(speed_m_s=v), cache=cache
+        "finger7/ridges-4", "grid3x3", protocol=Protocol(speed_m_s=v), ideal=True, cache=cache
     ).recording
 
 
@@ -81,7 +81,11 @@ def test_grating_law_column_delay(ridges4):
 
 def test_flat_plate_steady_load(cache):
     rec = simulate(
-        "finger7/flat", "grid3x3", protocol=Protocol(speed_m_s=0.06, duration_s=0.5), cache=cache
+        "finger7/flat",
+        "grid3x3",
+        protocol=Protocol(speed_m_s=0.06, duration_s=0.5),
+        ideal=True,
+        cache=cache,
     ).recording
     steady = rec.data[5:].astype(float)  # after the 20 ms speed ramp
     assert steady.min() > 0
@@ -95,9 +99,15 @@ def test_same_seed_same_bits_and_jitter_follows_the_seed(cache):
     proto = Protocol(
         speed_m_s=0.06, duration_s=0.3, speed_jitter=0.1, force_jitter=0.1, offset_jitter_m=1e-3
     )
-    a = simulate("finger7/bumps-4x4", "grid3x3", protocol=proto, seed=7, cache=cache).recording
-    b = simulate("finger7/bumps-4x4", "grid3x3", protocol=proto, seed=7, cache=cache).recording
-    c = simulate("finger7/bumps-4x4", "grid3x3", protocol=proto, seed=8, cache=cache).recording
+    a = simulate(
+        "finger7/bumps-4x4", "grid3x3", protocol=proto, seed=7, ideal=True, cache=cache
+    ).recording
+    b = simulate(
+        "finger7/bumps-4x4", "grid3x3", protocol=proto, seed=7, ideal=True, cache=cache
+    ).recording
+    c = simulate(
+        "finger7/bumps-4x4", "grid3x3", protocol=proto, seed=8, ideal=True, cache=cache
+    ).recording
     assert np.array_equal(a.data, b.data) and a.data.tobytes() == b.data.tobytes()
     assert a.meta["protocol"] == b.meta["protocol"]
     assert a.meta["protocol"]["speed_m_s"] != c.meta["protocol"]["speed_m_s"]
@@ -105,7 +115,7 @@ def test_same_seed_same_bits_and_jitter_follows_the_seed(cache):
 
 def test_recording_roundtrip(tmp_path, cache):
     rec = simulate(
-        "finger7/ridges-2", "grid3x3", protocol=Protocol(duration_s=0.2), cache=cache
+        "finger7/ridges-2", "grid3x3", protocol=Protocol(duration_s=0.2), ideal=True, cache=cache
     ).recording
     path = rec.save(tmp_path / "r.npz")
     back = Recording.load(path)

@@ -20,7 +20,9 @@ def _ok(res):
 
 def test_fast_slide_200mm_s(cache):
     res = _ok(
-        simulate("finger7/ridges-4", "grid3x3", protocol=Protocol(speed_m_s=0.2), cache=cache)
+        simulate(
+            "finger7/ridges-4", "grid3x3", protocol=Protocol(speed_m_s=0.2), ideal=True, cache=cache
+        )
     )
     assert res.fidelity.dt_s <= 2.5e-3 / 0.2 / 20 + 1e-12  # 20 steps per ridge crossing
 
@@ -31,6 +33,7 @@ def test_strong_press_5n(cache):
             "finger7/ridges-4",
             "grid3x3",
             protocol=Protocol(force_n=5.0, duration_s=0.4),
+            ideal=True,
             cache=cache,
         )
     )
@@ -38,7 +41,11 @@ def test_strong_press_5n(cache):
 
 
 def test_sharp_ridge_edges(cache):
-    _ok(simulate("finger7/ridges-4", "grid3x3", finger=Finger(edge_radius_m=0.0), cache=cache))
+    _ok(
+        simulate(
+            "finger7/ridges-4", "grid3x3", finger=Finger(edge_radius_m=0.0), ideal=True, cache=cache
+        )
+    )
 
 
 def test_features_below_the_node_pitch_warn(cache):
@@ -47,14 +54,16 @@ def test_features_below_the_node_pitch_warn(cache):
             rows=30, cols=30, shape="box", size_m=0.3e-3, height_m=0.3e-3, spacing_m=1.2e-3
         )
     )
-    res = _ok(simulate(plate, "grid3x3", protocol=Protocol(duration_s=0.1), cache=cache))
+    res = _ok(
+        simulate(plate, "grid3x3", protocol=Protocol(duration_s=0.1), ideal=True, cache=cache)
+    )
     assert any("smeared" in w for w in res.warnings)
     assert any("aliases the texture" in w for w in res.warnings)
 
 
 def test_too_coarse_time_step_stops_with_the_limit(cache):
     with pytest.raises(PhysicsError, match=r"time step too coarse.*omega\*dt.*dt <="):
-        simulate("finger7/ridges-4", "grid3x3", dt_s=0.01, cache=cache)
+        simulate("finger7/ridges-4", "grid3x3", dt_s=0.01, ideal=True, cache=cache)
 
 
 def test_skin_pressed_to_the_bottom_stops(cache):
@@ -64,5 +73,6 @@ def test_skin_pressed_to_the_bottom_stops(cache):
             "grid3x3",
             finger=Finger(thickness_m=0.3e-3),
             protocol=Protocol(force_n=5.0),
+            ideal=True,
             cache=cache,
         )

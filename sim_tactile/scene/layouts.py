@@ -124,9 +124,75 @@ def dense_layout(
     return grid_layout(f"dense-{pitch_m * 1e3:g}mm", nx, ny, pitch_m, pitch_m, rate_hz=rate_hz)
 
 
+def multilayer_layout() -> Layout:
+    """multilayer3x3x2 (seed 003): two 3x3 layers of 3 x 3 mm elements at 5 mm pitch; the top
+    layer (0) 0.5 mm under the surface, the bottom layer (1) 2 mm under it; 100 Hz."""
+    top = grid_layout("top", 3, 3, 5e-3, 3e-3, depth_m=0.5e-3)
+    bot = grid_layout("bottom", 3, 3, 5e-3, 3e-3, depth_m=2.0e-3)
+    names = tuple(f"top_{n}" for n in top.names) + tuple(f"bottom_{n}" for n in bot.names)
+    return Layout(
+        "multilayer3x3x2",
+        np.vstack([top.positions, bot.positions]),
+        np.vstack([top.sizes, bot.sizes]),
+        np.r_[np.zeros(9, int), np.ones(9, int)],
+        100.0,
+        names,
+    )
+
+
+def biotac_layout() -> Layout:
+    """biotac19 (seed 000): 19 impedance electrodes on the BioTac's core, under about 2.5 mm
+    of fluid and skin, as five staggered columns (3, 4, 5, 4, 3) over 16 x 10 mm; 100 Hz.
+    An approximation of the real electrode map, which is curved around the core."""
+    pos = []
+    for col, n in zip((-2, -1, 0, 1, 2), (3, 4, 5, 4, 3), strict=True):
+        for k in range(n):
+            pos.append((col * 3.5e-3 * 0.866 * 1.3, (k - (n - 1) / 2) * 2.6e-3, -2.5e-3))
+    pos = np.array(pos)
+    return Layout(
+        "biotac19",
+        pos,
+        np.full((19, 2), 1.5e-3),
+        np.zeros(19, int),
+        100.0,
+        tuple(f"ele{i + 1}" for i in range(19)),
+    )
+
+
+def icub_layout() -> Layout:
+    """icub60 (seed 000): six triangular modules of ten taxels (rows of 1, 2, 3, 4 at 2.6 mm),
+    2 mm taxels 0.5 mm under a foam cover, modules alternately pointing up and down in a 3 x 2
+    arrangement over about 28 x 16 mm; 50 Hz."""
+    s = 2.6e-3
+    tri = np.array(
+        [((k - j / 2) * s, (j - 1.5) * s * 0.866) for j in range(4) for k in range(j + 1)]
+    )
+    tri[:, 1] -= tri[:, 1].mean()
+    pos = []
+    for m in range(6):
+        cx, cy = (m % 3 - 1) * 9.5e-3, (m // 3 - 0.5) * 9e-3
+        flip = -1.0 if (m % 3 + m // 3) % 2 else 1.0
+        pos += [(cx + x, cy + flip * y, -0.5e-3) for x, y in tri]
+    pos = np.array(pos)
+    names = tuple(f"m{m}t{k}" for m in range(6) for k in range(10))
+    return Layout("icub60", pos, np.full((60, 2), 2e-3), np.repeat(np.arange(6), 10), 50.0, names)
+
+
+def pvdf_layout() -> Layout:
+    """pvdf2 (seed 001): two PVDF films 1 mm under the surface of a fingertip, film 1 across
+    the slide (1 x 8 mm), film 2 along it (8 x 1 mm); 1 kHz."""
+    pos = np.array([(0.0, -2.0e-3, -1e-3), (0.0, 2.5e-3, -1e-3)])
+    sizes = np.array([(1e-3, 8e-3), (8e-3, 1e-3)])
+    return Layout("pvdf2", pos, sizes, np.array([0, 1]), 1000.0, ("film1_across", "film2_along"))
+
+
 #: grid3x3: the soft-finger paper's fabric array, 2 x 2 mm taxels at 2.5 mm, 100 Hz (seed 002).
 _LAYOUTS = {
     "grid3x3": lambda: grid_layout("grid3x3", 3, 3, 2.5e-3, 2.0e-3, rate_hz=100.0),
+    "multilayer3x3x2": multilayer_layout,
+    "biotac19": biotac_layout,
+    "icub60": icub_layout,
+    "pvdf2": pvdf_layout,
 }
 
 

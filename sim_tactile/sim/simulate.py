@@ -122,9 +122,12 @@ def simulate(
     seed: int = 0,
     pitch_m: float | None = None,
     dt_s: float | None = None,
+    ideal: bool = False,
     cache=None,
 ) -> SimResult:
-    """Run one press-and-slide and record the ideal normal load on each taxel [N].
+    """Run one press-and-slide and record each taxel: its sensor's output (``ideal=False``,
+    a named sensor: transducer and seeded imperfections) or the noise-free normal load [N].
+    A named sensor also brings its pad (``finger``, unless given).
 
     BLAS runs single-threaded inside: the skin's systems are small, and threads only contend.
     """
@@ -140,17 +143,21 @@ def simulate(
             seed=seed,
             pitch_m=pitch_m,
             dt_s=dt_s,
+            ideal=ideal,
             cache=cache,
         )
 
 
 def _simulate(
-    plate, layout, *, protocol, finger, fidelity, seed, pitch_m, dt_s, cache
+    plate, layout, *, protocol, finger, fidelity, seed, pitch_m, dt_s, ideal, cache
 ) -> SimResult:
     t_wall = time.perf_counter()
     plate = get_plate(plate) if isinstance(plate, str) else plate
+    from ..sensors import get_sensor, micro_loads, sensor_names
+
+    sensor = get_sensor(layout) if isinstance(layout, str) and layout in sensor_names() else None
     layout = get_layout(layout) if isinstance(layout, str) else layout
-    finger = finger or Finger()
+    finger = finger or (sensor.finger if sensor else Finger())
     protocol = protocol or Protocol(rate_hz=layout.rate_hz)
     v.integer("seed", seed, 0, 2**63 - 1)
     rng = np.random.default_rng(seed)
@@ -246,6 +253,7 @@ def _simulate(
             raise ConfigError("speed_m_s = 0 needs a duration_s")
     out = np.empty((n_samples, layout.n), dtype=np.float64)
     forces = np.empty(n_samples)
+    x_pad = np.empty(n_samples)
     acc = np.zeros(layout.n)
     stroke_i, (xa, xb, sgn) = 0, strokes[0]
     v_slide = proto.speed_m_s
@@ -266,8 +274,17 @@ def _simulate(
             t_stroke += dt
         out[s] = acc / n_sub
         forces[s] = fsum / n_sub
+        x_pad[s] = x_start + d_dyn.qpos[scene.jx] - 0.5 * vcmd / proto.rate_hz
         runner.check_warnings()
     slide_wall = time.perf_counter() - t_slide
+    # micro-roughness acts through the contact patch on top of the finger's simulation
+    micro = micro_loads(plate, layout, x_pad, out > 1e-9, finger.e_star_pa, proto.rate_hz)
+    if micro.any():
+        out = np.maximum(out + micro, 0.0)
+    units, transducer = "N", "ideal"
+    if not ideal and sensor is not None:
+        out = sensor.transduce(out, proto.rate_hz, np.random.default_rng([seed, 1]))
+        units, transducer = sensor.units, sensor.to_json()
     times = (np.arange(n_samples) + 0.5) / proto.rate_hz
     wall = time.perf_counter() - t_wall
     sim_s = n_samples / proto.rate_hz
@@ -283,7 +300,9 @@ def _simulate(
         "fidelity": fid.to_json(),
         "rate_hz": proto.rate_hz,
         "dt_s": dt,
-        "transducer": "ideal",
+        "transducer": transducer,
+        "micro_roughness": bool(micro.any()),
+        "x_pad_m": x_pad.tolist(),
         "normal_force_n": forces.tolist(),
         "mean_drag_n": runner.drag_sum / max(runner.n_slide_steps, 1),
         "versions": {
@@ -298,7 +317,7 @@ def _simulate(
         "slide_wall_s": slide_wall,
         "steps": n_samples * n_sub,
     }
-    rec = Recording(out.astype(np.float32), times, layout.positions, units="N", meta=meta)
+    rec = Recording(out.astype(np.float32), times, layout.positions, units=units, meta=meta)
     return SimResult(rec, fid, sim_s, wall, warnings)
 
 

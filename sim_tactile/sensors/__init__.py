@@ -1,0 +1,150 @@
+"""The papers' sensors: taxel layout, the pad it sits on, its transducer and imperfections.
+
+| sensor | layout | pad | transducer | rate |
+|---|---|---|---|---|
+| ``grid3x3`` | 3x3, 2 mm at 2.5 mm (seed 002) | flat 12 mm, 2 mm roll-off | piezoresistive, 10 kOhm divider, 10-bit ADC | 100 Hz |
+| ``multilayer3x3x2`` | 2 x 3x3, 3 mm at 5 mm, 0.5 / 2 mm deep (seed 003) | flat 16 mm | piezoresistive, 100 Ohm divider; top layer 4x more sensitive | 100 Hz |
+| ``biotac19`` | 19 electrodes, 2.5 mm deep (seed 000) | ellipsoid fingertip | impedance, counts | 100 Hz |
+| ``icub60`` | 6 triangles x 10 taxels (seed 000) | flat patch 32 x 22 mm | capacitive, 8-bit counts | 50 Hz |
+| ``pvdf2`` | 2 films, across and along the slide (seed 001) | spherical fingertip R 10 mm | piezoelectric, charge amplifier | 1 kHz |
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..errors import UnknownNameError
+from ..scene.finger import Finger
+from ..scene.layouts import Layout, get_layout
+from .micro import micro_loads
+from .transducers import (
+    Capacitive,
+    Imperfections,
+    Impedance,
+    Piezoelectric,
+    PiezoResistive,
+    Transducer,
+)
+
+
+@dataclass(frozen=True)
+class Sensor:
+    name: str
+    finger: Finger
+    transducer: Transducer | tuple[Transducer, ...]
+    imperfections: Imperfections
+
+    @property
+    def layout(self) -> Layout:
+        return get_layout(self.name)
+
+    def transduce(
+        self, loads_n: np.ndarray, rate_hz: float, rng: np.random.Generator
+    ) -> np.ndarray:
+        """(T, N) ideal loads [N] -> (T, N) hardware output, with seeded imperfections."""
+        layout = self.layout
+        tr = self.transducer
+        if isinstance(tr, tuple):  # one transducer per layer
+            out = np.empty(loads_n.shape)
+            for lay, t in enumerate(tr):
+                cols = layout.layer == lay
+                out[:, cols] = t.apply(loads_n[:, cols], rate_hz)
+        else:
+            out = tr.apply(loads_n, rate_hz)
+        return self.imperfections.apply(out, layout.positions, rate_hz, rng)
+
+    @property
+    def units(self) -> str:
+        tr = self.transducer
+        return (tr[0] if isinstance(tr, tuple) else tr).units
+
+    def to_json(self) -> dict:
+        tr = self.transducer
+        trs = [
+            asdict(t) | {"kind": type(t).__name__} for t in (tr if isinstance(tr, tuple) else (tr,))
+        ]
+        return {"name": self.name, "transducer": trs, "imperfections": self.imperfections.to_json()}
+
+
+_SENSORS = {
+    "grid3x3": lambda: Sensor(
+        "grid3x3",
+        Finger(),
+        PiezoResistive(),
+        Imperfections(
+            noise_std=5e-3,
+            quant_step=5.0 / 1024,
+            drift_std_per_sqrt_s=1e-3,
+            crosstalk=0.02,
+            crosstalk_radius_m=2.6e-3,
+        ),
+    ),
+    "multilayer3x3x2": lambda: Sensor(
+        "multilayer3x3x2",
+        Finger(shape="flat", size_m=(0.016, 0.016), edge_radius_m=0.002),
+        (
+            PiezoResistive(r_fix_ohm=100.0, r0_ohm=2e3, f_c_n=0.05),
+            PiezoResistive(r_fix_ohm=100.0, r0_ohm=2e3, f_c_n=0.2),
+        ),
+        Imperfections(
+            noise_std=5e-3,
+            quant_step=5.0 / 1024,
+            drift_std_per_sqrt_s=1e-3,
+            crosstalk=0.02,
+            crosstalk_radius_m=5.1e-3,
+        ),
+    ),
+    "biotac19": lambda: Sensor(
+        "biotac19",
+        Finger(
+            shape="ellipsoid",
+            radii_m=(0.014, 0.010, 0.008),
+            size_m=(0.022, 0.016),
+            thickness_m=0.004,
+        ),
+        Impedance(),
+        Imperfections(
+            noise_std=0.9, quant_step=1.0, drift_std_per_sqrt_s=0.3, offset_max=4.0, clip_min=0.0
+        ),
+    ),
+    "icub60": lambda: Sensor(
+        "icub60",
+        Finger(shape="flat", size_m=(0.032, 0.022), edge_radius_m=0.002),
+        Capacitive(),
+        Imperfections(noise_std=1.4, drift_std_per_sqrt_s=0.3, clip_min=0.0),
+    ),
+    "pvdf2": lambda: Sensor(
+        "pvdf2",
+        Finger(shape="sphere", radius_m=0.010, size_m=(0.014, 0.014)),
+        Piezoelectric(),
+        Imperfections(noise_std=2e-3, quant_step=20.0 / 65536),
+    ),
+}
+
+
+def sensor_names() -> list[str]:
+    return list(_SENSORS)
+
+
+def get_sensor(name: str) -> Sensor:
+    try:
+        return _SENSORS[name]()
+    except KeyError:
+        raise UnknownNameError(
+            f"sensor {name!r} is not known; valid: {', '.join(_SENSORS)}"
+        ) from None
+
+
+__all__ = [
+    "Capacitive",
+    "Imperfections",
+    "Impedance",
+    "Piezoelectric",
+    "PiezoResistive",
+    "Sensor",
+    "get_sensor",
+    "micro_loads",
+    "sensor_names",
+]
