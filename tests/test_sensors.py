@@ -1,0 +1,178 @@
+"""Sensors: every layout on every plate family, transducer behaviour, the grating's spectral
+peak, micro-roughness, seeded imperfections, real-data statistics, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import DATASET_DIR
+
+from sim_tactile.errors import ConfigError, UnknownNameError
+from sim_tactile.scene.finger import Finger
+from sim_tactile.sensors import Imperfections, get_sensor, sensor_names
+from sim_tactile.sim.simulate import Protocol, simulate
+
+FAMILIES = [
+    "finger7/flat",
+    "finger7/ridges-4",
+    "multilayer3/grating-9",
+    "finger7/bumps-3x3",
+    "roughness8/ra-25",
+]
+EXPECTED_N = {"grid3x3": 9, "multilayer3x3x2": 18, "biotac19": 19, "icub60": 60, "pvdf2": 2}
+EXPECTED_RATE = {
+    "grid3x3": 100.0,
+    "multilayer3x3x2": 100.0,
+    "biotac19": 100.0,
+    "icub60": 50.0,
+    "pvdf2": 1000.0,
+}
+#: The issue's tolerance on the grating's spectral peak.
+PEAK_RTOL = 0.03
+GRATING_PERIOD_M = 4e-3
+
+
+@pytest.mark.parametrize("plate", FAMILIES)
+@pytest.mark.parametrize("sensor", sensor_names())
+def test_every_layout_on_every_family(sensor, plate, cache):
+    rec = simulate(
+        plate, sensor, protocol=Protocol(duration_s=0.1, rate_hz=EXPECTED_RATE[sensor]), cache=cache
+    ).recording
+    assert rec.data.shape == (round(0.1 * EXPECTED_RATE[sensor]), EXPECTED_N[sensor])
+    assert rec.meta["rate_hz"] == EXPECTED_RATE[sensor]
+    assert np.isfinite(rec.data).all()
+    assert rec.units == get_sensor(sensor).units
+
+
+def _steady(sensor: str, cache):
+    proto = Protocol(speed_m_s=0.06, duration_s=1.0, rate_hz=EXPECTED_RATE[sensor])
+    res = simulate("finger7/flat", sensor, protocol=proto, seed=5, cache=cache)
+    return res.recording.data[10:].astype(float)  # after the 20 ms speed ramp
+
+
+def test_piezoelectric_output_averages_to_zero_on_a_flat_slide(cache):
+    y = _steady("pvdf2", cache)
+    noise = get_sensor("pvdf2").imperfections.noise_std
+    # a steady load reads zero: the mean is within 4 standard errors of the noise
+    assert np.abs(y.mean(axis=0)).max() < 4 * noise / np.sqrt(len(y)) + 1e-4
+
+
+@pytest.mark.parametrize("sensor", ["grid3x3", "icub60"])
+def test_resistive_and_capacitive_hold_a_steady_level_plus_noise(sensor, cache):
+    y = _steady(sensor, cache)
+    imp = get_sensor(sensor).imperfections
+    ideal = simulate(
+        "finger7/flat",
+        sensor,
+        protocol=Protocol(speed_m_s=0.06, duration_s=1.0, rate_hz=EXPECTED_RATE[sensor]),
+        ideal=True,
+        seed=5,
+        cache=cache,
+    ).recording.data[10:]
+    loaded = ideal.mean(axis=0) > 1e-4  # taxels in contact
+    assert loaded.any()
+    level = get_sensor(sensor).transducer.apply(ideal.mean(axis=0), EXPECTED_RATE[sensor])
+    # level: within 5 noise std plus crosstalk and the drift over the second
+    slack = 5 * imp.noise_std + 3 * imp.drift_std_per_sqrt_s + 0.05 * np.abs(level)
+    assert np.all(np.abs(y.mean(axis=0) - level)[loaded] < slack[loaded])
+    # fluctuation: the noise (quantisation and drift add a little), not a signal
+    spread = y[:, loaded].std(axis=0)
+    assert np.all(spread < 2.0 * imp.noise_std + imp.quant_step + 2 * imp.drift_std_per_sqrt_s)
+    assert np.all(spread > 0.5 * imp.noise_std)
+
+
+def _peak_frequency(y: np.ndarray, rate: float) -> float:
+    y = y - y.mean()
+    n = 16 * len(y)  # zero padding refines the peak's position
+    spec = np.abs(np.fft.rfft(y * np.hanning(len(y)), n))
+    f = np.fft.rfftfreq(n, 1 / rate)
+    spec[f < 2.0] = 0  # below the charge amplifier's cutoff
+    return float(f[np.argmax(spec)])
+
+
+@pytest.mark.parametrize("speed", [0.04, 0.065, 0.1])
+def test_pvdf_film_across_the_slide_peaks_at_speed_over_period(speed, cache):
+    rec = simulate(
+        "multilayer3/grating-9",
+        "pvdf2",
+        protocol=Protocol(speed_m_s=speed, rate_hz=1000.0),
+        cache=cache,
+    ).recording
+    over = np.abs(np.asarray(rec.meta["x_pad_m"])) < 16e-3  # film over the grating
+    f = _peak_frequency(rec.data[over, 0].astype(float), 1000.0)
+    assert f == pytest.approx(speed / GRATING_PERIOD_M, rel=PEAK_RTOL)
+
+
+def test_pvdf_rms_rises_monotonically_with_ra(cache):
+    rms = []
+    for ra in ("0.4", "0.8", "1.6", "3.2", "6.3", "12.5", "25", "50"):
+        rec = simulate(
+            f"roughness8/ra-{ra}",
+            "pvdf2",
+            protocol=Protocol(speed_m_s=0.24, rate_hz=1000.0),
+            seed=3,
+            cache=cache,
+        ).recording
+        over = np.abs(np.asarray(rec.meta["x_pad_m"])) < 12e-3
+        rms.append(float(np.sqrt(np.mean(rec.data[over, 0].astype(float) ** 2))))
+    assert all(b > a for a, b in zip(rms, rms[1:], strict=False)), rms
+
+
+def test_a_seed_reproduces_every_imperfection(cache):
+    proto = Protocol(duration_s=0.3)
+    a = simulate(
+        "finger7/ridges-2", "biotac19", protocol=proto, seed=11, cache=cache
+    ).recording.data
+    b = simulate(
+        "finger7/ridges-2", "biotac19", protocol=proto, seed=11, cache=cache
+    ).recording.data
+    c = simulate(
+        "finger7/ridges-2", "biotac19", protocol=proto, seed=12, cache=cache
+    ).recording.data
+    assert a.tobytes() == b.tobytes()
+    assert not np.array_equal(a, c)
+    imp = Imperfections(
+        noise_std=0.1, quant_step=0.05, drift_std_per_sqrt_s=0.1, dead_fraction=0.3, crosstalk=0.1
+    )
+    x = np.ones((50, 9))
+    pos = np.c_[np.arange(9) * 1e-3, np.zeros(9), np.zeros(9)]
+    r1 = imp.apply(x, pos, 100.0, np.random.default_rng(1))
+    r2 = imp.apply(x, pos, 100.0, np.random.default_rng(1))
+    r3 = imp.apply(x, pos, 100.0, np.random.default_rng(2))
+    assert np.array_equal(r1, r2) and not np.array_equal(r1, r3)
+    assert (r1 == 0).all(axis=0).any()  # dead taxels read their constant
+
+
+def _real_biotac(n: int = 20) -> np.ndarray:
+    files = sorted((DATASET_DIR / "raw_data").glob("mat*/mat*_bio.csv"))[:: max(1, 1000 // n)][:n]
+    return np.array([np.genfromtxt(f, delimiter=",", skip_header=1)[100:500, 26:45] for f in files])
+
+
+@pytest.mark.skipif(not DATASET_DIR.is_dir(), reason=f"real data set not found at {DATASET_DIR}")
+def test_simulated_biotac_and_icub_look_like_the_real_data(cache):
+    """Same order of magnitude, noise level and rate as the real recordings."""
+    real_b = _real_biotac()
+    real_i = (
+        np.load(DATASET_DIR / "compiled_data" / "icub_test.npy")
+        .reshape(200, 60, 75)
+        .transpose(0, 2, 1)
+    )
+    for sensor, real, rate in (("biotac19", real_b, 100.0), ("icub60", real_i, 50.0)):
+        sim = simulate("textures20/grating-3.0mm", sensor, cache=cache).recording
+        assert sim.meta["rate_hz"] == rate
+        s = sim.data.astype(float)
+        mean_ratio = s.mean() / real.mean()
+        assert 0.1 < mean_ratio < 10, (sensor, mean_ratio)
+        assert 0 <= s.min() and s.max() <= 2 * real.max()
+        noise_sim = np.median(np.diff(s, axis=0).std(axis=0))
+        noise_real = np.median(np.diff(real, axis=1).std(axis=1))
+        assert 0.5 < noise_sim / noise_real < 2.0, (sensor, noise_sim, noise_real)
+
+
+def test_bad_input_is_refused(cache):
+    with pytest.raises(UnknownNameError, match="not known"):
+        simulate("finger7/flat", "biotac20")
+    with pytest.raises(ConfigError, match="beyond the pad"):
+        simulate("finger7/flat", "icub60", finger=Finger(), cache=cache)
+    with pytest.raises(ConfigError, match="noise_std"):
+        Imperfections(noise_std=-1.0)
