@@ -187,8 +187,11 @@ def cmd_press(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- demo
 def cmd_demo(args: argparse.Namespace) -> int:
-    """The most complete job that exists so far: build every preset plate."""
+    """The most complete job that exists so far: build every preset plate, then press and
+    slide the soft finger with the 3x3 fabric sensor over the soft-finger paper's 7 plates."""
     from .plates import build, preset_names
+    from .sim.plots import plot_traces
+    from .sim.simulate import simulate
 
     out = Path(args.out)
     _log(
@@ -197,18 +200,80 @@ def cmd_demo(args: argparse.Namespace) -> int:
     )
     t0 = time.perf_counter()
     results = [build(n, out) for n in preset_names()]
+    t_build = time.perf_counter() - t0
+    _log("sliding the soft finger (grid3x3, 60 mm/s, 1 N) over the 7 finger7 plates")
+    slides = []
+    for name in [n for n in preset_names() if n.startswith("finger7/")]:
+        res = simulate(name, "grid3x3", seed=0)
+        rec = res.recording
+        png = plot_traces(rec, out / f"{name.replace('/', '_')}.slide.png")
+        slides.append(
+            {
+                "plate": name,
+                "samples": int(rec.data.shape[0]),
+                "units": rec.units,
+                "mean": float(rec.data.mean()),
+                "peak": float(rec.data.max()),
+                "rtf": rec.meta["sim_s"] / rec.meta["slide_wall_s"],
+                "fidelity": res.fidelity.level,
+                "figure": str(png),
+            }
+        )
     wall = time.perf_counter() - t0
     payload = {
-        "what": "built every preset plate",
+        "what": "built every preset plate; simulated one slide per finger7 plate",
         "out": str(out),
         "plates": [r.to_json() for r in results],
+        "slides": slides,
         "wall_s": round(wall, 3),
     }
-    _emit(
-        args,
-        payload,
-        lambda: _build_table(results) + f"\n\n{len(results)} plates in {wall:.1f} s -> {out}/",
+
+    def text() -> str:
+        lines = [
+            f"{len(results)} plates built in {t_build:.1f} s -> {out}/",
+            "",
+            f"{'slide over':20s} {'samples':>7s} {'mean [V]':>9s} {'peak [V]':>9s} {'RTF':>6s}  figure",
+        ]
+        lines += [
+            f"{r['plate']:20s} {r['samples']:7d} {r['mean']:9.3f} {r['peak']:9.3f} {r['rtf']:6.1f}  {r['figure']}"
+            for r in slides
+        ]
+        lines.append(f"\ndone in {wall:.1f} s")
+        return "\n".join(lines)
+
+    _emit(args, payload, text)
+    return 0
+
+
+# ---------------------------------------------------------------- run (benchmark tasks)
+def _run_table(report: dict) -> str:
+    lines = [f"{'classifier':10s} {'accuracy':>15s} {'paper':>15s}  vs paper"]
+    for r in report["results"]:
+        p = r["paper"]
+        paper = "-" if p is None else f"{p['mean']:.3f} ({p['std']:.3f})"
+        acc = f"{r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f})"
+        lines.append(f"{r['classifier']:10s} {acc:>15s} {paper:>15s}  {r['comparison']['message']}")
+    t = report["timing"]
+    lines.append(f"\nencode {t['encode_s']:.1f} s, classify {t['classify_s']:.1f} s")
+    lines += [f"figure: {f}" for f in report["figures"]]
+    return "\n".join(lines)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """Run a benchmark task's protocol and write its report."""
+    from .tasks import run_task
+
+    report = run_task(
+        args.task,
+        args.out,
+        quick=args.quick,
+        data=args.data,
+        classifiers=args.classifiers,
+        repeats=args.repeats,
+        seed=args.seed,
+        log=_log,
     )
+    _emit(args, report, lambda: _run_table(report))
     return 0
 
 
@@ -272,6 +337,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     pr.add_argument("--plate", default="finger7/flat")
     pr.add_argument("--fidelity", default="L1", choices=["L0", "L1"])
+
+    rn = add(sub, "run", cmd_run, "run a benchmark task's evaluation protocol and report")
+    rn.add_argument("task", help="task id, e.g. biotac20-real, icub20-real")
+    rn.add_argument("--quick", action="store_true", help="fewer epochs and repeats (~1 min)")
+    rn.add_argument("--data", default=None, help="folder of the real data set (*-real tasks)")
+    rn.add_argument(
+        "--classifiers", default=None, help="comma-separated names (default: the task's)"
+    )
+    rn.add_argument("--repeats", type=int, default=None, help="splits per classifier")
+    rn.add_argument("--seed", type=int, default=0, help="seed of the splits and models")
+    rn.add_argument("--out", required=True, help="output directory")
 
     d = add(sub, "demo", cmd_demo, "run the main demo job")
     d.add_argument("--out", default="demo-out", help="output directory (default: demo-out)")

@@ -21,8 +21,8 @@ from ..scene.layouts import Layout, get_layout
 from .micro import micro_loads
 from .transducers import (
     Capacitive,
-    Imperfections,
     Impedance,
+    Imperfections,
     Piezoelectric,
     PiezoResistive,
     Transducer,
