@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -21,6 +23,7 @@ from ..errors import ConfigError, require
 from ._checks import check_array, check_classes, check_labels
 
 DEVICES = ("auto", "cpu", "cuda")
+LR_SCHEDULES = ("constant", "cosine")
 
 
 def import_torch():
@@ -45,6 +48,25 @@ def seed_from(random_state: int | None) -> int:
     return int(np.random.SeedSequence(random_state).generate_state(2, np.uint64)[0] >> 1)
 
 
+@contextmanager
+def torch_threads(torch: Any, num_threads: int | None) -> Iterator[None]:
+    """Run with ``num_threads`` intra-op CPU threads and restore the previous number after.
+
+    One thread is the robust choice on a shared machine: small recurrent models gain little
+    from more, and OpenMP threads that wait for a descheduled peer can slow an epoch tenfold.
+    """
+    if num_threads is None:
+        yield
+        return
+    n = integer("num_threads", num_threads, 1, None)
+    before = torch.get_num_threads()
+    torch.set_num_threads(n)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
+
+
 class TorchClassifier(ClassifierMixin, BaseEstimator):
     """Base of the torch classifiers over arrays ``(samples, time, channels)``.
 
@@ -60,13 +82,16 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
     batch_size: int
     lr: float
     random_state: int | None
+    lr_schedule: str
     device: str
+    num_threads: int | None
     verbose: int
 
     def _check_params(self) -> None:
         integer("epochs", self.epochs, 1, None)
         integer("batch_size", self.batch_size, 1, None)
         positive("lr", self.lr)
+        one_of("lr_schedule", self.lr_schedule, LR_SCHEDULES)
         integer("verbose", self.verbose, 0, None)
 
     def _check_X(self, X: object, *, fitted: bool) -> np.ndarray:
@@ -82,6 +107,10 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
 
     def fit(self, X: object, y: object) -> TorchClassifier:
         torch = import_torch()
+        with torch_threads(torch, self.num_threads):
+            return self._fit(torch, X, y)
+
+    def _fit(self, torch: Any, X: object, y: object) -> TorchClassifier:
         self._check_params()
         x = self._check_X(X, fitted=False)
         y_arr = check_labels(y, x.shape[0])
@@ -96,6 +125,9 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         xt = self._prepare(torch, x, dev)
         yt = torch.as_tensor(y_idx, dtype=torch.long, device=dev)
         opt = self._optimizer(torch, module)
+        sched = None
+        if self.lr_schedule == "cosine":
+            sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=self.epochs)
         n = x.shape[0]
         self.loss_curve_, self.epoch_times_s_ = [], []
         module.train()
@@ -108,8 +140,11 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
                 opt.zero_grad(set_to_none=True)
                 loss = self._batch_loss(torch, module, xt[idx], yt[idx])
                 loss.backward()
+                self._after_backward(torch, module)
                 opt.step()
                 total += float(loss.detach()) * len(idx)
+            if sched is not None:
+                sched.step()
             self.loss_curve_.append(total / n)
             self.epoch_times_s_.append(time.perf_counter() - t0)
             if self.verbose and (epoch + 1) % self.verbose == 0:
@@ -125,6 +160,9 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
     def _optimizer(self, torch: Any, module: Any):
         return torch.optim.Adam(module.parameters(), lr=self.lr)
 
+    def _after_backward(self, torch: Any, module: Any) -> None:
+        """Hook between ``backward`` and the optimiser step (e.g. gradient clipping)."""
+
     def _fit_prepare(self, x: np.ndarray) -> None:
         """Learn any input statistics (e.g. standardisation) before training."""
 
@@ -138,11 +176,12 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         x = self._check_X(X, fitted=True)
         dev = next(self.module_.parameters()).device
         out = []
-        with torch.no_grad():
+        with torch.no_grad(), torch_threads(torch, self.num_threads):
             for start in range(0, x.shape[0], max(self.batch_size, 64)):
                 xb = self._prepare(torch, x[start : start + max(self.batch_size, 64)], dev)
                 out.append(self._scores(torch, self.module_, xb).cpu().numpy())
         return np.concatenate(out).astype(np.float64)
 
     def predict(self, X: object) -> np.ndarray:
-        return self.classes_[np.argmax(self.decision_function(X), axis=1)]
+        scores = self.decision_function(X)
+        return self.classes_[np.argmax(scores, axis=1)]

@@ -113,8 +113,10 @@ class SNNClassifier(TorchClassifier):
         tau_rho, scale_rho: width (in units of theta) and height of the surrogate derivative.
         weight_scale: initial weights are uniform in ``+-weight_scale / sqrt(fan_in)``.
         epochs, batch_size, lr, weight_decay: Adam training (paper: 300 epochs).
+        lr_schedule: ``cosine`` (the learning rate decays to 0 over the epochs) or ``constant``.
         random_state: seed of the initial weights and the mini-batch order.
         device: ``auto`` (GPU when present), ``cpu`` or ``cuda``.
+        num_threads: CPU threads of torch during fit / predict (None: torch's setting).
         verbose: log the loss every ``verbose`` epochs to stderr (0: silent).
     """
 
@@ -136,8 +138,10 @@ class SNNClassifier(TorchClassifier):
         batch_size: int = 32,
         lr: float = 1e-3,
         weight_decay: float = 0.0,
+        lr_schedule: str = "cosine",
         random_state: int | None = None,
         device: str = "auto",
+        num_threads: int | None = None,
         verbose: int = 0,
     ) -> None:
         self.hidden = hidden
@@ -155,8 +159,10 @@ class SNNClassifier(TorchClassifier):
         self.batch_size = batch_size
         self.lr = lr
         self.weight_decay = weight_decay
+        self.lr_schedule = lr_schedule
         self.random_state = random_state
         self.device = device
+        self.num_threads = num_threads
         self.verbose = verbose
 
     # ------------------------------------------------------------------ parameters

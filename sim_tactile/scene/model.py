@@ -33,6 +33,9 @@ NODE_BIT = 2
 #: Velocity actuator gain of the slide [N s/m]: stiff enough that friction drag changes the
 #: speed by well under 1%.
 SLIDE_KV = 2000.0
+#: Radius of a skin node's probe sphere, as a fraction of the node pitch: the sphere rounds a
+#: sharp edge over about this distance, so a node half over an edge feels part of it.
+PROBE_RADIUS_FRACTION = 0.25
 
 
 @dataclass
@@ -97,7 +100,7 @@ def build_scene(
         conaffinity=0,
         rgba=(0.85, 0.75, 0.65, 1),
     )
-    r = 0.25 * grid.pitch_m
+    r = PROBE_RADIUS_FRACTION * grid.pitch_m
     first = None
     for i, ((x, y), z) in enumerate(zip(grid.xy, grid.z, strict=True)):
         g = bone.add_geom(
