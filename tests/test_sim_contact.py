@@ -79,3 +79,16 @@ def test_numba_readout_equals_numpy_reference():
     pen = np.empty(5)
     penetration_map(geom, dist, node_of_geom, pen)
     np.testing.assert_array_equal(pen, penetration_map_reference(geom, dist, node_of_geom, 5))
+
+
+def test_factor_cache_gives_the_same_pressures():
+    from sim_tactile.sim.contact import FactorCache
+
+    C, pen = _problem(1)
+    cache = FactorCache(size=2)
+    K = np.linalg.inv(C)
+    for shift in (0.0, 1e-6, 0.0, 3e-4, 3e-4 + 1e-7):  # small shifts keep the contact set
+        p_ref, _ = halfspace(pen + shift, C, K=K)
+        p, _ = halfspace(pen + shift, C, K=K, cache=cache)
+        np.testing.assert_allclose(p, p_ref, rtol=1e-9, atol=1e-12 * p_ref.max())
+    assert cache.hits > 0 and cache.misses > 0

@@ -98,7 +98,7 @@ def _skin_pressure(scene, fid: Fidelity, pen: np.ndarray, active):
     if scene.C is None:
         p = contact.winkler(pen, fid.winkler_k_pa_per_m)
         return p, None
-    return contact.halfspace(pen, scene.C, active, scene.K)
+    return contact.halfspace(pen, scene.C, active, scene.K, scene.factors)
 
 
 def _contact_stiffness(scene, fid: Fidelity, p: np.ndarray, active) -> float:
@@ -109,7 +109,9 @@ def _contact_stiffness(scene, fid: Fidelity, p: np.ndarray, active) -> float:
     if active is None or not active.any():
         return 0.0
     S = np.flatnonzero(active)
-    return A * float(contact._solve_subset(scene.C, scene.K, S, np.ones(S.size)).sum())
+    return A * float(
+        contact._solve_subset(scene.C, scene.K, S, np.ones(S.size), scene.factors).sum()
+    )
 
 
 def simulate(
@@ -203,6 +205,7 @@ def _simulate(
         coupled=fid.coupled,
         cache=cache,
     )
+    scene.factors = contact.FactorCache() if fid.coupled else None
     scene.m_col.body("bone")  # validate name
     d_col = mujoco.MjData(scene.m_col)
     d_dyn = mujoco.MjData(scene.m_dyn)
