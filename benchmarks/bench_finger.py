@@ -49,18 +49,29 @@ def _period(rec) -> float:
 
 
 def run_levels(quick: bool) -> list[dict]:
-    ref = simulate(PLATE, "grid3x3", protocol=Protocol(speed_m_s=V), fidelity="L2").recording
+    ref = simulate(
+        PLATE, "grid3x3", protocol=Protocol(speed_m_s=V), fidelity="L2", ideal=True
+    ).recording
     rows = []
     factors = (1.0,) if quick else (2.0, 1.0, 0.5)
     for level in ("L0", "L1"):
         for f in factors:
             base = simulate(
-                PLATE, "grid3x3", protocol=Protocol(speed_m_s=V, duration_s=0.05), fidelity=level
+                PLATE,
+                "grid3x3",
+                protocol=Protocol(speed_m_s=V, duration_s=0.05),
+                fidelity=level,
+                ideal=True,
             )
             dt = base.fidelity.dt_s * f
             try:
                 r = simulate(
-                    PLATE, "grid3x3", protocol=Protocol(speed_m_s=V), fidelity=level, dt_s=dt
+                    PLATE,
+                    "grid3x3",
+                    protocol=Protocol(speed_m_s=V),
+                    fidelity=level,
+                    dt_s=dt,
+                    ideal=True,
                 )
             except Exception as exc:  # a too coarse step is a result too
                 rows.append(
@@ -136,7 +147,7 @@ def loop_overhead(repeats: int = 5) -> dict:
 
     S._Runner.__init__ = spy
     try:
-        simulate(PLATE, "grid3x3", protocol=Protocol(speed_m_s=V, duration_s=0.3))
+        simulate(PLATE, "grid3x3", protocol=Protocol(speed_m_s=V, duration_s=0.3), ideal=True)
     finally:
         S._Runner.__init__ = orig
     run = captured["runner"]
