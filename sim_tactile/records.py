@@ -198,9 +198,15 @@ class TactileDataset:
         """The samples at ``index`` (integer indices or a boolean mask)."""
         idx = np.asarray(index)
         return TactileDataset(
-            self.data[idx], self.labels[idx], self.rate_hz, self.channel_names,
-            self.class_names, self.taxel_positions, self.units, dict(self.meta),
-        )  # fmt: skip
+            self.data[idx],
+            self.labels[idx],
+            self.rate_hz,
+            self.channel_names,
+            self.class_names,
+            self.taxel_positions,
+            self.units,
+            dict(self.meta),
+        )
 
     def describe(self) -> dict:
         """JSON-able summary (no arrays)."""
@@ -237,6 +243,12 @@ class TactileDataset:
                 )
         names = first.meta.get("channel_names") or [f"t{i}" for i in range(first.n_taxels)]
         return cls(
-            np.stack([r.data for r in recordings]), np.asarray(labels), first.rate_hz,
-            tuple(names), tuple(class_names), first.taxels, first.units, dict(meta or {}),
-        )  # fmt: skip
+            np.stack([r.data for r in recordings]),
+            np.asarray(labels),
+            first.rate_hz,
+            tuple(names),
+            tuple(class_names),
+            first.taxels,
+            first.units,
+            dict(meta or {}),
+        )

@@ -3,8 +3,10 @@
 torch is an optional dependency: it is imported only when a torch model is fitted or used,
 and its absence raises :class:`~sim_tactile.errors.MissingDependencyError` with the install
 command. Randomness comes only from ``random_state``: it seeds a private ``torch.Generator``
-for the initial weights and the mini-batch order, never torch's global generator, so two fits
-with the same seed on the same machine give equal weights and predictions (CPU).
+for the initial weights and the mini-batch order, and, for dropout (which draws from torch's
+global generator), the global generator inside ``torch.random.fork_rng``, which restores the
+caller's generator state afterwards. Two fits with the same seed on the same machine give
+equal weights and predictions (CPU).
 """
 
 from __future__ import annotations
@@ -107,17 +109,20 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
 
     def fit(self, X: object, y: object) -> TorchClassifier:
         torch = import_torch()
-        with torch_threads(torch, self.num_threads):
-            return self._fit(torch, X, y)
-
-    def _fit(self, torch: Any, X: object, y: object) -> TorchClassifier:
         self._check_params()
+        seed = seed_from(self.random_state)
+        dev = resolve_device(torch, self.device)
+        devices = [dev.index or 0] if dev.type == "cuda" else []
+        with torch_threads(torch, self.num_threads), torch.random.fork_rng(devices=devices):
+            torch.manual_seed(seed)  # dropout only; restored when fork_rng exits
+            return self._fit(torch, X, y, seed, dev)
+
+    def _fit(self, torch: Any, X: object, y: object, seed: int, dev) -> TorchClassifier:
         x = self._check_X(X, fitted=False)
         y_arr = check_labels(y, x.shape[0])
         self.classes_ = check_classes(y_arr)
         y_idx = np.searchsorted(self.classes_, y_arr)
-        dev = resolve_device(torch, self.device)
-        gen = torch.Generator().manual_seed(seed_from(self.random_state))
+        gen = torch.Generator().manual_seed(seed)
         self.n_features_in_ = x.shape[2]
         self.n_time_ = x.shape[1]
         self._fit_prepare(x)

@@ -193,8 +193,7 @@ class SNNClassifier(TorchClassifier):
 
     # ------------------------------------------------------------------ torch hooks
     def _build(self, torch: Any, n_in: int, n_out: int, gen):
-        self._cfg = self._config()
-        return _build_net(torch, n_in, self.hidden, n_out, self._cfg, gen)
+        return _build_net(torch, n_in, self.hidden, n_out, self._config(), gen)
 
     def _optimizer(self, torch: Any, module: Any):
         return torch.optim.Adam(module.parameters(), lr=self.lr, weight_decay=self.weight_decay)

@@ -1,0 +1,202 @@
+"""The registry of classifier names (the contract's ``run --classifiers``) -> estimators.
+
+Every registered classifier is built for a task's data by :func:`make_classifier` and takes
+the task's recordings, arrays ``(samples, time, channels)``, so that the protocols treat all
+of them alike (splits, truncation for accuracy over time). Where a classifier needs spike
+trains, the task's encoder (a :class:`LearnContext` field) comes first in its pipeline.
+
+==========  ==================================================================================
+svm-raw     linear SVM on the raw data collapsed in time (mean per channel; paper 000)
+svm-spike   linear SVM on spike counts of the encoding (paper 000: threshold encoding, K = 2)
+lstm        :class:`~sim_tactile.learn.lstm.LSTMClassifier` on the raw data
+snn         :class:`~sim_tactile.learn.snn.SNNClassifier` on the encoded spike rasters
+svm         linear SVM on spike features (papers 002, 003; standardised)
+lda         linear discriminant analysis on spike features (paper 003)
+knn         k nearest neighbours on spike features (paper 001, SF-kNN)
+std-knn     k nearest neighbours on spike-train distances (paper 001, STD-kNN)
+src         sparse representation classification on spike features (paper 003)
+==========  ==================================================================================
+
+The linear SVMs are scikit-learn's ``SVC(kernel="linear")`` (libsvm, one-vs-one), C = 1.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.discriminant_analysis import LinearDiscriminantAnalysis
+from sklearn.neighbors import KNeighborsClassifier
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.svm import SVC
+
+from ..encoders import ThresholdEncoder
+from ..errors import UnknownNameError
+from ..spikes import SpikeFeatures, SpikeTrainDistances
+from .preprocess import RangeScaler, SampleStandardizer, SpikeCounts, SpikeRaster, TimeCollapse
+from .src import SRCClassifier
+
+Steps = list[tuple[str, Any]]
+
+#: Thresholds (in standard deviations of each sample's channel) of :func:`threshold_encoding`.
+THRESHOLDS_SD = (-0.5, 0.5)
+#: Percentiles of the training data that :func:`range_threshold_encoding` maps to 0 and K + 1.
+RANGE_PCT = (1.0, 99.0)
+
+
+def threshold_encoding(ctx: LearnContext) -> Steps:
+    """Threshold encoding of each slide's fluctuations (the default): each channel of each
+    sample standardised over its own window, then K = 2 thresholds at -0.5 and +0.5 standard
+    deviations (2K + 1 = 5 spike channels per input; see :mod:`sim_tactile.encoders.threshold`).
+    The spikes carry how a signal moves, not its level."""
+    return [
+        ("standardize", SampleStandardizer()),
+        ("encode", ThresholdEncoder(rate_hz=ctx.rate_hz, thresholds=np.array(THRESHOLDS_SD))),
+    ]
+
+
+def range_threshold_encoding(ctx: LearnContext) -> Steps:
+    """Threshold encoding against the training data's range: each channel scaled so that
+    its 1st..99th percentile over the training set becomes [0, K + 1] = [0, 3], then the
+    K = 2 thresholds at 1 and 2, as eq. 1 of seed paper 000 writes them. The spikes carry
+    when a signal reaches which level of its channel's range."""
+    return [
+        ("scale", RangeScaler(*RANGE_PCT, span=3.0)),
+        ("encode", ThresholdEncoder(rate_hz=ctx.rate_hz, thresholds=np.array([1.0, 2.0]))),
+    ]
+
+
+@dataclass(frozen=True)
+class LearnContext:
+    """What the builders need to know about a task's data.
+
+    rate_hz: sampling rate [Hz]; n_channels: input channels; grid_shape: ``(rows, cols)`` of
+    spatially arranged taxels (enables the LSTM's convolutional front) or None; encoder:
+    ``context -> pipeline steps`` from arrays to ``list[SpikeTrains]``; spike_features: the
+    :data:`~sim_tactile.spikes.FEATURES` of svm / lda / knn / src; params: per-classifier
+    keyword overrides of the final estimator (e.g. ``{"snn": {"hidden": 1200}}``).
+    """
+
+    rate_hz: float
+    n_channels: int
+    grid_shape: tuple[int, int] | None = None
+    encoder: Callable[[LearnContext], Steps] = threshold_encoding
+    spike_features: tuple[str, ...] = ("rate_hz", "mean_isi_s")
+    params: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+
+    def kwargs(self, name: str, **defaults: Any) -> dict:
+        return {**defaults, **dict(self.params.get(name, {}))}
+
+
+@dataclass(frozen=True)
+class ClassifierSpec:
+    """A registered classifier: its name, a description of its input features, its builder
+    ``(context, random_state) -> estimator``, whether it reads recordings causally (then
+    accuracy over time needs one fit) and whether it needs torch."""
+
+    name: str
+    features: str
+    build: Callable[[LearnContext, int | None], BaseEstimator]
+    anytime: bool = False
+    needs_torch: bool = False
+
+
+def _svm(**kw: Any) -> SVC:
+    return SVC(kernel="linear", **{"C": 1.0, **kw})
+
+
+def _build_svm_raw(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    return Pipeline([("collapse", TimeCollapse()), ("svm", _svm(**ctx.kwargs("svm-raw")))])
+
+
+def _build_svm_spike(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    steps = ctx.encoder(ctx) + [("counts", SpikeCounts()), ("svm", _svm(**ctx.kwargs("svm-spike")))]
+    return Pipeline(steps)
+
+
+def _build_snn(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    from .snn import SNNClassifier  # torch is imported when it is fitted
+
+    dt = 1.0 / ctx.rate_hz
+    snn = SNNClassifier(**ctx.kwargs("snn", dt_s=dt, random_state=seed))
+    return Pipeline(ctx.encoder(ctx) + [("raster", SpikeRaster(dt_s=dt)), ("snn", snn)])
+
+
+def _build_lstm(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    from .lstm import LSTMClassifier
+
+    return LSTMClassifier(**ctx.kwargs("lstm", grid_shape=ctx.grid_shape, random_state=seed))
+
+
+def _feature_pipeline(ctx: LearnContext, final: BaseEstimator) -> BaseEstimator:
+    steps = ctx.encoder(ctx) + [
+        ("features", SpikeFeatures(features=ctx.spike_features)),
+        ("scale", StandardScaler()),
+    ]
+    return Pipeline([*steps, ("clf", final)])
+
+
+def _build_svm(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    return _feature_pipeline(ctx, _svm(**ctx.kwargs("svm")))
+
+
+def _build_lda(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    return _feature_pipeline(ctx, LinearDiscriminantAnalysis(**ctx.kwargs("lda")))
+
+
+def _build_knn(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    return _feature_pipeline(ctx, KNeighborsClassifier(**ctx.kwargs("knn", n_neighbors=5)))
+
+
+def _build_src(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    # standardised features, then each sample to unit norm (SRCClassifier, paper 003):
+    # without centring, samples that differ only in overall rate would look alike
+    return _feature_pipeline(ctx, SRCClassifier(**ctx.kwargs("src", sparsity=5)))
+
+
+def _build_std_knn(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    kw = ctx.kwargs("std-knn", metric="victor_purpura", q=24.0, combine="sum", n_neighbors=11)
+    metric = kw.pop("metric")
+    combine = kw.pop("combine")
+    k = kw.pop("n_neighbors")
+    dist = SpikeTrainDistances(metric=metric, metric_params=kw, combine=combine)
+    knn = KNeighborsClassifier(n_neighbors=k, metric="precomputed")
+    return Pipeline(ctx.encoder(ctx) + [("distances", dist), ("knn", knn)])
+
+
+_SPECS = (
+    ClassifierSpec("svm-raw", "raw data, mean over time per channel", _build_svm_raw),
+    ClassifierSpec("svm-spike", "spike counts per encoded channel", _build_svm_spike),
+    ClassifierSpec("lstm", "raw data (standardised)", _build_lstm, needs_torch=True),
+    ClassifierSpec("snn", "encoded spike rasters", _build_snn, anytime=True, needs_torch=True),
+    ClassifierSpec("svm", "spike features (standardised)", _build_svm),
+    ClassifierSpec("lda", "spike features (standardised)", _build_lda),
+    ClassifierSpec("knn", "spike features (standardised)", _build_knn),
+    ClassifierSpec("std-knn", "spike-train distances", _build_std_knn),
+    ClassifierSpec("src", "spike features (standardised, unit norm)", _build_src),
+)
+CLASSIFIERS: Mapping[str, ClassifierSpec] = {s.name: s for s in _SPECS}
+
+
+def classifier_names() -> tuple[str, ...]:
+    return tuple(CLASSIFIERS)
+
+
+def get_classifier(name: str) -> ClassifierSpec:
+    try:
+        return CLASSIFIERS[name]
+    except KeyError:
+        raise UnknownNameError(
+            f"classifier {name!r} is not known; valid: {', '.join(CLASSIFIERS)}"
+        ) from None
+
+
+def make_classifier(
+    name: str, context: LearnContext, random_state: int | None = None
+) -> BaseEstimator:
+    """A fresh, unfitted estimator ``name`` for data described by ``context``."""
+    return get_classifier(name).build(context, random_state)

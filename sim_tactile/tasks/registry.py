@@ -1,0 +1,123 @@
+"""The registry of benchmark tasks: versioned ids, one small definition each.
+
+A task id never changes meaning once released (``finger7-v1``, ``biotac20-real``): a change
+of data, encoding, protocol or hyperparameters is a new id. A task says where its data comes
+from (``get_data``: a loader of real recordings, or a simulation), which classifiers it runs
+by default with which parameters, its protocol (split, repeats, the time points of the
+accuracy-over-time curve) and the numbers of the paper it reproduces.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import ConfigError, UnknownNameError
+from ..learn.classifiers import LearnContext, Steps, get_classifier, threshold_encoding
+from ..records import TactileDataset
+
+
+@dataclass(frozen=True)
+class PaperCell:
+    """A number of a paper's table: mean accuracy and its standard deviation (or None)."""
+
+    mean: float
+    std: float | None
+    source: str
+
+    def to_json(self) -> dict:
+        return {"mean": self.mean, "std": self.std, "source": self.source}
+
+
+@dataclass(frozen=True)
+class DataRequest:
+    """What ``get_data`` gets: the user's data path (real tasks), the quick flag, the seed
+    and a logger (one line per call, to stderr). A simulating ``get_data`` puts its wall time
+    [s] in the dataset's ``meta["simulate_s"]``; the report's ``timing.simulate_s`` reads it."""
+
+    data: Path | None
+    quick: bool
+    seed: int
+    log: Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The protocol and classifier parameters of one mode (full or quick)."""
+
+    repeats: int = 5
+    repeats_by_classifier: Mapping[str, int] = field(default_factory=dict)
+    time_points_s: tuple[float, ...] = ()
+    time_repeats: int = 1
+    params: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+
+    def repeats_for(self, name: str) -> int:
+        return int(self.repeats_by_classifier.get(name, self.repeats))
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """One benchmark task (see the module docstring).
+
+    ``paper`` maps classifier names to the paper's cells; ``notes`` maps classifier names to
+    a sentence on why a cell differs from the paper (shown when it differs by more than two
+    of the paper's standard deviations). ``features`` are the spike features of svm / lda /
+    knn / src.
+    """
+
+    id: str
+    title: str
+    get_data: Callable[[DataRequest], TactileDataset]
+    classifiers: tuple[str, ...]
+    split: str = "7:3"
+    full: Settings = Settings()
+    quick: Settings = Settings(repeats=1)
+    needs_data_path: bool = False
+    encoder: Callable[[LearnContext], Steps] = threshold_encoding
+    encoding: str = "threshold encoding, K = 2"
+    features: tuple[str, ...] = ("rate_hz", "mean_isi_s")
+    paper: Mapping[str, PaperCell] = field(default_factory=dict)
+    notes: Mapping[str, str] = field(default_factory=dict)
+    reference: str = ""
+
+    def settings(self, quick: bool) -> Settings:
+        return self.quick if quick else self.full
+
+    def context(self, dataset: TactileDataset, quick: bool) -> LearnContext:
+        grid = dataset.meta.get("grid_shape")
+        return LearnContext(
+            rate_hz=dataset.rate_hz,
+            n_channels=dataset.n_channels,
+            grid_shape=tuple(grid) if grid else None,
+            encoder=self.encoder,
+            spike_features=self.features,
+            params=self.settings(quick).params,
+        )
+
+
+_TASKS: dict[str, TaskSpec] = {}
+
+
+def register(spec: TaskSpec) -> TaskSpec:
+    """Add a task; an id can be registered once (ids never change meaning)."""
+    if spec.id in _TASKS:
+        raise ConfigError(f"task id {spec.id!r} is already registered; give a new version")
+    for name in (*spec.classifiers, *spec.paper):
+        get_classifier(name)
+    _TASKS[spec.id] = spec
+    return spec
+
+
+def task_ids() -> tuple[str, ...]:
+    return tuple(_TASKS)
+
+
+def get_task(task_id: str) -> TaskSpec:
+    try:
+        return _TASKS[task_id]
+    except KeyError:
+        raise UnknownNameError(
+            f"task {task_id!r} is not known; valid: {', '.join(_TASKS) or '(none)'}"
+        ) from None

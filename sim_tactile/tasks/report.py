@@ -1,0 +1,214 @@
+"""The task report: comparison with the paper, ``report.md`` and the PNG figures."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..learn.protocols import EvalResult
+from ..records import TactileDataset
+from ..spikes.trains import SpikeTrains
+from .registry import PaperCell, TaskSpec
+
+#: A cell reproduces the paper when it lies within this many of the paper's standard
+#: deviations (issue 6), or above.
+TOLERANCE_SD = 2.0
+
+
+def compare(mean: float, cell: PaperCell | None, note: str | None, *, quick: bool) -> dict:
+    """Where ``mean`` lies against the paper's cell: ``status`` is ``within`` (|delta| <= 2
+    paper SDs), ``above``, ``below`` or ``no paper value``; ``message`` says it in words."""
+    if cell is None:
+        return {"status": "no paper value", "message": "the paper gives no number for this"}
+    delta = mean - cell.mean
+    out: dict = {"delta": round(delta, 4)}
+    if cell.std is None or cell.std <= 0:
+        out.update(status="no paper SD", message=f"{delta:+.3f} from the paper (no SD given)")
+        return out
+    k = delta / cell.std
+    out["delta_sd"] = round(k, 2)
+    if abs(k) <= TOLERANCE_SD:
+        out.update(status="within", message=f"within {TOLERANCE_SD:g} paper SDs ({k:+.1f} SD)")
+    else:
+        word = "above" if k > 0 else "below"
+        verb = "exceeds" if k > 0 else "misses"
+        msg = f"{verb} the paper by {abs(delta):.3f} ({abs(k):.1f} paper SDs)"
+        if quick:
+            msg += "; quick run (fewer epochs and repeats), not a reproduction"
+        if note:
+            msg += f". Why: {note}"
+        out.update(status=word, message=msg)
+    out["goal_met"] = out["status"] in ("within", "above")
+    return out
+
+
+def write_markdown(path: Path, report: dict, spec: TaskSpec) -> None:
+    """``report.md``: the table next to the paper's, the timing and the figures."""
+    lines = [f"# {report['task']}: {spec.title}", ""]
+    if report["quick"]:
+        lines += [
+            "**Quick run**: fewer epochs, repeats and time points than the paper's protocol; "
+            "the neural models are not trained to convergence.",
+            "",
+        ]
+    p = report["protocol"]
+    lines += [
+        f"Protocol: split {p['split']}, repeats {p['repeats']}, seed {p['seed']}; "
+        f"encoding: {p['encoding']}.",
+        f"Data: {report['dataset']['samples']} samples, {report['dataset']['time_steps']} "
+        f"steps at {report['dataset']['rate_hz']:g} Hz, {report['dataset']['channels']} "
+        f"channels, {report['dataset']['classes']} classes.",
+        "",
+        "| classifier | features | accuracy (SD) | paper (SD) | repeats | vs paper | wall [s] |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in report["results"]:
+        paper = r["paper"]
+        ptxt = "-" if paper is None else f"{paper['mean']:.3f} ({paper['std']:.3f})"
+        lines.append(
+            f"| {r['classifier']} | {r['features']} | {r['accuracy_mean']:.3f} "
+            f"({r['accuracy_std']:.3f}) | {ptxt} | {r['repeats']} | "
+            f"{r['comparison']['message']} | {r['wall_s']:.1f} |"
+        )
+    t = report["timing"]
+    lines += [
+        "",
+        f"Timing: load {t['load_s']:.1f} s, encode {t['encode_s']:.1f} s, classify "
+        f"{t['classify_s']:.1f} s, simulate {t['simulate_s']:.1f} s, wall {t['wall_s']:.1f} s.",
+    ]
+    curves = [r for r in report["results"] if r["over_time"]]
+    if curves:
+        pts = sorted({float(t) for r in curves for t in r["over_time"]})
+        lines += [
+            "",
+            "## Accuracy over time",
+            "",
+            "| classifier | " + " | ".join(f"{t:g} s" for t in pts) + " |",
+            "|---|" + "---|" * len(pts),
+        ]
+        for r in curves:
+            cells = [
+                f"{r['over_time'][f'{t:g}']['mean']:.3f}" if f"{t:g}" in r["over_time"] else "-"
+                for t in pts
+            ]
+            lines.append(f"| {r['classifier']} | " + " | ".join(cells) + " |")
+    if report["figures"]:
+        lines += ["", "## Figures", ""]
+        lines += [f"![{Path(f).stem}]({Path(f).name})" for f in report["figures"]]
+    if spec.reference:
+        lines += ["", f"Reference: {spec.reference}"]
+    path.write_text("\n".join(lines) + "\n")
+
+
+# ------------------------------------------------------------------------------- figures
+def _figure(**kw):
+    from matplotlib.figure import Figure  # no pyplot: no global state, headless
+
+    return Figure(**kw)
+
+
+def plot_confusions(results: dict[str, EvalResult], class_names: Sequence[str], out: Path):
+    names = list(results)
+    cols = min(4, len(names))
+    rows = int(np.ceil(len(names) / cols))
+    fig = _figure(figsize=(4.2 * cols, 4.0 * rows), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    for ax, name in zip(axes, names, strict=False):
+        cm = results[name].confusion.astype(float)
+        cm = cm / np.maximum(cm.sum(axis=1, keepdims=True), 1)
+        ax.imshow(cm, vmin=0, vmax=1, cmap="Blues")
+        ax.set_title(f"{name}: {results[name].mean:.3f}")
+        ax.set_xlabel("predicted")
+        ax.set_ylabel("true")
+        ticks = np.arange(len(class_names))
+        ax.set_xticks(ticks, [str(c) for c in class_names], rotation=90, fontsize=6)
+        ax.set_yticks(ticks, [str(c) for c in class_names], fontsize=6)
+    for ax in axes[len(names) :]:
+        ax.set_axis_off()
+    fig.savefig(out, dpi=110)
+
+
+def plot_over_time(results: dict[str, EvalResult], spec: TaskSpec, title: str, out: Path):
+    fig = _figure(figsize=(6.5, 4.2), layout="constrained")
+    ax = fig.subplots()
+    for name, r in results.items():
+        if not r.over_time:
+            continue
+        ts = sorted(r.over_time)
+        m = np.array([np.mean(r.over_time[t]) for t in ts])
+        s = np.array([np.std(r.over_time[t]) for t in ts])
+        line = ax.plot(ts, m, marker="o", label=name)[0]
+        ax.fill_between(ts, m - s, m + s, color=line.get_color(), alpha=0.15)
+        cell = spec.paper.get(name)
+        if cell is not None:
+            ax.errorbar(
+                [ts[-1]],
+                [cell.mean],
+                yerr=[cell.std or 0],
+                fmt="x",
+                color=line.get_color(),
+                capsize=3,
+            )
+    ax.set_xlabel("time from the start of the recording [s]")
+    ax.set_ylabel("test accuracy")
+    ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3)
+    ax.set_title(title + " (x: paper, full length)")
+    ax.legend(loc="lower right")
+    fig.savefig(out, dpi=110)
+
+
+def plot_rasters(ds: TactileDataset, encoded: Sequence[SpikeTrains], out: Path):
+    """One encoded sample of every class (the first of each), spikes over time."""
+    from matplotlib.collections import LineCollection
+
+    n_cls = len(ds.class_names)
+    cols = min(5, n_cls)
+    rows = int(np.ceil(n_cls / cols))
+    fig = _figure(figsize=(3.2 * cols, 2.6 * rows), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False, sharex=True)).ravel()
+    for k, ax in enumerate(axes):
+        if k >= n_cls:
+            ax.set_axis_off()
+            continue
+        idx = int(np.flatnonzero(ds.labels == k)[0])
+        tr = encoded[idx]
+        times = np.concatenate(tr.times)
+        chan = np.repeat(np.arange(tr.n_channels), [t.size for t in tr.times])
+        segs = np.stack([np.c_[times, chan - 0.4], np.c_[times, chan + 0.4]], axis=1)
+        ax.add_collection(LineCollection(segs, colors="k", linewidths=0.6))  # one artist
+        ax.set_xlim(tr.t_start, tr.t_end)
+        ax.set_ylim(-0.5, tr.n_channels - 0.5)
+        ax.invert_yaxis()
+        ax.set_title(f"{ds.class_names[k]} (sample {idx})", fontsize=8)
+        ax.tick_params(labelsize=6)
+        if k % cols == 0:
+            ax.set_ylabel("encoded channel", fontsize=7)
+        if k >= (rows - 1) * cols:
+            ax.set_xlabel("time [s]", fontsize=7)
+    fig.savefig(out, dpi=100)
+
+
+def write_figures(
+    out: Path,
+    spec: TaskSpec,
+    ds: TactileDataset,
+    encoded: Sequence[SpikeTrains],
+    results: dict[str, EvalResult],
+    names: Sequence[str],
+) -> list[str]:
+    """Confusion matrices, accuracy over time (when computed) and rasters; returns paths."""
+    files = []
+    f = out / "confusion.png"
+    plot_confusions(results, ds.class_names, f)
+    files.append(str(f))
+    if any(results[n].over_time for n in names):
+        f = out / "accuracy_over_time.png"
+        plot_over_time(results, spec, spec.id, f)
+        files.append(str(f))
+    f = out / "raster_per_class.png"
+    plot_rasters(ds, encoded, f)
+    files.append(str(f))
+    return files

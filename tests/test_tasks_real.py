@@ -1,0 +1,170 @@
+"""The task registry, the report and the contract's ``run`` command: on a small stand-in of
+the iCub data set (written here, so it always runs) and on the real data when present."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import DATASET_DIR
+
+from sim_tactile.errors import ConfigError, UnknownNameError
+from sim_tactile.tasks import PaperCell, get_task, register, run_task, task_ids
+from sim_tactile.tasks.report import compare
+
+EXE = shutil.which("sim-tactile", path=str(Path(sys.executable).parent)) or "sim-tactile"
+REPORT_KEYS = {"task", "results", "timing", "figures"}
+RESULT_KEYS = {"classifier", "features", "accuracy_mean", "accuracy_std", "paper"}
+TIMING_KEYS = {"simulate_s", "encode_s", "classify_s"}
+
+
+@pytest.fixture(scope="module")
+def fake_icub(tmp_path_factory) -> Path:
+    """compiled_data/ like the release's, 4 materials x 10 slides: material k vibrates taxel
+    patch k at 2 + 3 k Hz on top of a level k (so every model can tell them apart)."""
+    root = tmp_path_factory.mktemp("icub")
+    (root / "compiled_data").mkdir()
+    rng = np.random.default_rng(0)
+    t = np.arange(75) / 50.0
+    for f in ("test", "val_0", "val_1", "val_2", "val_3"):
+        y = np.repeat(np.arange(4), 2)
+        x = rng.normal(0, 0.2, size=(8, 6, 10, 75)).astype(np.float32)
+        for i, k in enumerate(y):
+            x[i, k] += k + np.sin(2 * np.pi * (2 + 3 * k) * t + rng.uniform(0, 6))
+        np.save(root / "compiled_data" / f"icub_{f}.npy", x)
+        np.save(root / "compiled_data" / f"labels_{f}.npy", y)
+    return root
+
+
+def _run_cli(args: list[str], env: dict) -> subprocess.CompletedProcess:
+    return subprocess.run([EXE, *args], env=env, capture_output=True, text=True, check=False)
+
+
+def test_registry_ids_and_errors():
+    assert {"biotac20-real", "icub20-real"} <= set(task_ids())
+    spec = get_task("icub20-real")
+    assert spec.split == "7:3" and spec.full.repeats == 5
+    assert spec.full.params["snn"]["hidden"] == 1200
+    assert (spec.full.params["snn"]["target_true"], spec.full.params["snn"]["target_false"]) == (
+        70,
+        3,
+    )
+    assert get_task("biotac20-real").full.params["snn"]["hidden"] == 60
+    assert get_task("biotac20-real").paper["svm-raw"] == PaperCell(
+        0.942, 0.007, "Taunyazov et al. 2020, Table I"
+    )
+    with pytest.raises(UnknownNameError, match="'finger9-v1' is not known"):
+        get_task("finger9-v1")
+    with pytest.raises(ConfigError, match="already registered"):
+        register(spec)
+
+
+def test_compare_to_the_paper():
+    cell = PaperCell(0.9, 0.01, "x")
+    assert compare(0.91, cell, None, quick=False)["status"] == "within"
+    low = compare(0.85, cell, "the data differ", quick=False)
+    assert low["status"] == "below" and not low["goal_met"]
+    assert "misses the paper by 0.050 (5.0 paper SDs). Why: the data differ" == low["message"]
+    high = compare(0.95, cell, None, quick=True)
+    assert high["status"] == "above" and high["goal_met"] and "quick run" in high["message"]
+    assert compare(0.5, None, None, quick=False)["status"] == "no paper value"
+
+
+def test_run_task_writes_report_and_figures(fake_icub, tmp_path):
+    pytest.importorskip("torch")
+    report = run_task(
+        "icub20-real", tmp_path, quick=True, data=fake_icub, seed=1, log=lambda m: None
+    )
+    assert REPORT_KEYS <= set(report) and TIMING_KEYS <= set(report["timing"])
+    assert [r["classifier"] for r in report["results"]] == ["svm-raw", "svm-spike", "lstm", "snn"]
+    for r in report["results"]:
+        assert RESULT_KEYS <= set(r)
+        assert 0.0 <= r["accuracy_mean"] <= 1.0
+        assert r["paper"]["source"].startswith("Taunyazov")
+        assert set(r["over_time"]) == {"0.25", "0.75", "1.5"}
+    by = {r["classifier"]: r for r in report["results"]}
+    assert by["svm-raw"]["accuracy_mean"] == 1.0  # the stand-in's levels are separable
+    names = {Path(f).name for f in report["figures"]}
+    assert names == {"confusion.png", "accuracy_over_time.png", "raster_per_class.png"}
+    for f in report["figures"]:
+        assert Path(f).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert json.loads((tmp_path / "report.json").read_text())["task"] == "icub20-real"
+    md = (tmp_path / "report.md").read_text()
+    assert "| snn |" in md and "0.922 (0.005)" in md and "Accuracy over time" in md
+
+
+def test_run_task_input_errors(fake_icub, tmp_path):
+    with pytest.raises(ConfigError, match="--data PATH"):
+        run_task("icub20-real", tmp_path, quick=True)
+    with pytest.raises(UnknownNameError, match="'svn' is not known"):
+        run_task("icub20-real", tmp_path, classifiers="svm-raw,svn", data=fake_icub)
+    with pytest.raises(ConfigError, match="repeats"):
+        run_task("icub20-real", tmp_path, repeats=0, data=fake_icub)
+
+
+def test_cli_run_json_and_errors(fake_icub, tmp_path, cli_env):
+    out = _run_cli(
+        [
+            "run",
+            "icub20-real",
+            "--quick",
+            "--data",
+            str(fake_icub),
+            "--classifiers",
+            "svm-raw",
+            "--repeats",
+            "1",
+            "--out",
+            str(tmp_path),
+            "--json",
+        ],
+        cli_env,
+    )
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    assert doc["task"] == "icub20-real" and doc["results"][0]["classifier"] == "svm-raw"
+    assert doc["results"][0]["repeats"] == 1
+    bad = _run_cli(
+        [
+            "run",
+            "icub20-real",
+            "--data",
+            str(tmp_path / "absent"),
+            "--out",
+            str(tmp_path),
+            "--json",
+        ],
+        cli_env,
+    )
+    assert bad.returncode != 0 and bad.stdout == ""
+    lines = bad.stderr.strip().splitlines()
+    assert len(lines) == 1 and "absent" in lines[0] and "--data PATH" in lines[0]
+
+
+@pytest.mark.skipif(not DATASET_DIR.is_dir(), reason=f"real data set not found at {DATASET_DIR}")
+def test_cli_run_biotac_quick_on_the_real_data(tmp_path, cli_env):
+    out = _run_cli(
+        [
+            "run",
+            "biotac20-real",
+            "--quick",
+            "--data",
+            str(DATASET_DIR),
+            "--classifiers",
+            "svm-raw",
+            "--out",
+            str(tmp_path),
+            "--json",
+        ],
+        cli_env,
+    )
+    assert out.returncode == 0, out.stderr
+    (row,) = json.loads(out.stdout)["results"]
+    # the linear SVM on time-averaged electrodes reproduces Table I (0.942 +- 0.007) within
+    # two of the paper's SDs on 2 repeats of the 7:3 split
+    assert row["comparison"]["status"] == "within", row
