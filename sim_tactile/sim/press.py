@@ -21,6 +21,7 @@ from ..scene.finger import Finger, skin_grid
 from ..scene.layouts import Layout, dense_layout
 from ..scene.model import build_scene
 from . import contact
+from ._readout import penetration_map
 
 
 @dataclass
@@ -98,13 +99,11 @@ def press(
         d.qpos[scene.jz] = z - top
         mujoco.mj_kinematics(scene.m_col, d)
         mujoco.mj_collision(scene.m_col, d)
-        pen = np.full(grid.n, -np.inf)
-        n = d.ncon
-        if n:
-            g = d.contact.geom[:n]
-            node = scene.node_of_geom[g[:, 0]]
-            node = np.where(node >= 0, node, scene.node_of_geom[g[:, 1]])
-            np.maximum.at(pen, node, -d.contact.dist[:n])
+        pen = np.empty(grid.n)
+        if d.ncon:
+            penetration_map(d.contact.geom, d.contact.dist, scene.node_of_geom, pen)
+        else:
+            pen[:] = -np.inf
         return pen
 
     state = {"active": None}
