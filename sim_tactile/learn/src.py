@@ -28,7 +28,7 @@ class SRCClassifier(ClassifierMixin, BaseEstimator):
 
     Parameters:
         sparsity: largest number of training samples in a code (paper 003: 5); capped at the
-            number of training samples.
+            numbers of training samples and of features.
         normalize: scale each training sample (and each test sample) to unit norm.
 
     Learned state: ``classes_``, ``dictionary_`` ``(n_features, n_train)`` (unit-norm
