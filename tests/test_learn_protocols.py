@@ -63,12 +63,19 @@ class _FirstStepSign(ClassifierMixin, BaseEstimator):
     fits = 0
 
     def fit(self, X, y):
-        type(self).fits += 1
+        _FirstStepSign.fits += 1
         self.classes_ = np.unique(y)
         return self
 
     def predict(self, X):
         return (np.asarray(X)[:, -1, 0] > 0).astype(int)
+
+
+class _Anytime(_FirstStepSign):
+    """A causal model at 10 Hz: its decision at t reads the first round(10 t) steps."""
+
+    def predict_upto(self, X, t_s):
+        return self.predict(np.asarray(X)[:, : round(t_s * 10)])
 
 
 def test_evaluate_accuracy_confusion_and_over_time():
@@ -86,16 +93,21 @@ def test_evaluate_accuracy_confusion_and_over_time():
     assert _FirstStepSign.fits == 3 + 3  # retrained for the 0.3 s prefix of each repeat
     _FirstStepSign.fits = 0
     res = evaluate(
-        lambda r: _FirstStepSign(),
+        lambda r: _Anytime(),
         X,
         y,
         splits,
-        times_s=(0.3,),
+        times_s=(0.3, 0.6),
         rate_hz=10.0,
         anytime=True,
         time_repeats=1,
     )
-    assert _FirstStepSign.fits == 3 and len(res.over_time[0.3]) == 1
+    assert _FirstStepSign.fits == 3 and len(res.over_time[0.3]) == 1  # no refits
+    assert res.over_time[0.6] == [1.0]  # step 5 (informative) is within the first 0.6 s
+    with pytest.raises(ConfigError, match="no predict_upto"):
+        evaluate(
+            lambda r: _FirstStepSign(), X, y, splits, times_s=(0.3,), rate_hz=10.0, anytime=True
+        )
     doc = res.to_json()
     assert doc["accuracy_mean"] == 1.0 and doc["accuracy_std"] == 0.0
 

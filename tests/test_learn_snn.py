@@ -111,8 +111,8 @@ def test_learns_a_spike_pattern():
     assert counts.shape == (len(yt), 2)
     # the true class fires more than the other one, and near its target of 20 spikes
     assert np.all(counts[np.arange(len(yt)), yt] > counts[np.arange(len(yt)), 1 - yt])
-    # the network is causal: its output on a prefix is its output up to that step
-    assert clf.predict(Xt[:, :30]).shape == (len(yt),)
+    # decisions from the counts up to 0.3 s = 30 steps are those on the first 30 steps
+    np.testing.assert_array_equal(clf.predict_upto(Xt, 0.3), clf.predict(Xt[:, :30]))
 
 
 def test_same_seed_same_model_other_seed_other_model():

@@ -6,11 +6,13 @@ Splits are given as a ratio ``"7:3"`` (stratified, as scikit-learn's
 samples drawn from every class). Each repeat draws a new split from one seeded generator.
 
 Accuracy over time (seed paper 000, Figs. 5 and 8): a model is evaluated on the first ``t``
-seconds of each test sample. Models that read a recording causally (the SNN: its output
-counts up to step ``n`` are those it gives for the first ``n`` input steps) are trained once
-on full recordings and evaluated on the truncated test samples, which are encoded from those
-``t`` seconds alone (what is known at ``t``); the others (SVM, LSTM) are trained anew on the
-first ``t`` seconds of the training samples, as the paper does.
+seconds of each test sample. The SVMs and the LSTM are trained anew on the first ``t`` seconds
+of the training samples and tested on the first ``t`` seconds of the test samples, as the
+paper does. An "anytime" model (the SNN) is trained once on full recordings; its decision at
+``t`` is its output spike count up to ``t`` on the encoded test recording (the encoder sees
+the whole recording, as in the paper; the network is causal, so its counts up to ``t`` depend
+on the input spikes up to ``t`` only). It must offer ``predict_upto(X, t_s)``; in a Pipeline
+that is its last step, fed by the other steps' transform of the whole recording.
 """
 
 from __future__ import annotations
@@ -197,7 +199,7 @@ def evaluate(
             ``times_s``); ``y``: labels.
         splits: from :func:`repeated_splits`.
         times_s: time points [s] of the accuracy-over-time curve (needs 3-D ``X``, ``rate_hz``).
-        anytime: the estimator reads recordings causally: fit once, evaluate truncated inputs.
+        anytime: fit once; the decision at ``t`` is ``predict_upto`` (see the module docstring).
         time_repeats: how many of the splits also get the curve (default: all).
     """
     x = np.asarray(X)
@@ -230,11 +232,12 @@ def evaluate(
             log(f"{name} repeat {r + 1}/{len(splits)}: accuracy {acc:.3f} (fit {t1 - t0:.1f} s)")
         if r >= n_curve:
             continue
+        upto = _anytime(est, x[te]) if anytime and points else None
         for t, n in points:
             if n == x.shape[1]:
                 a = acc
-            elif anytime:
-                a = float(np.mean(est.predict(x[te, :n]) == labels[te]))
+            elif upto is not None:
+                a = float(np.mean(upto(t) == labels[te]))
             else:
                 est_t = make_estimator(r)
                 est_t.fit(x[tr, :n], labels[tr])
@@ -244,6 +247,21 @@ def evaluate(
             curve = ", ".join(f"{t:g}s {res.over_time[t][-1]:.2f}" for t, _ in points)
             log(f"{name} repeat {r + 1} over time: {curve}")
     return res
+
+
+def _anytime(est: BaseEstimator, x_test: np.ndarray) -> Callable[[float], np.ndarray]:
+    """``t -> predictions at t`` of an anytime model (a Pipeline's input steps run once)."""
+    if hasattr(est, "steps"):
+        final = est.steps[-1][1]
+        z = est[:-1].transform(x_test)
+    else:
+        final, z = est, x_test
+    if not hasattr(final, "predict_upto"):
+        raise ConfigError(
+            f"{type(final).__name__} has no predict_upto(X, t_s); it cannot be evaluated as an "
+            f"anytime model"
+        )
+    return lambda t: final.predict_upto(z, t)
 
 
 def _epoch_times(est: BaseEstimator) -> list[float]:

@@ -16,8 +16,8 @@ convolutions are differentiated exactly, the refractory response is treated as a
                                                    target_false for the others
 
 (paper: 250 / 30 for BioTac (400 steps), 70 / 3 for iCub (75 steps)). Because the network
-is causal, the output counts up to step ``n`` are those of the first ``n`` input steps: an
-accuracy-over-time curve evaluates :meth:`SNNClassifier.predict` on truncated inputs.
+is causal, the output counts up to step ``n`` are those of the first ``n`` input steps:
+:meth:`SNNClassifier.predict_upto` gives the decision from the counts up to a time ``t``.
 """
 
 from __future__ import annotations
@@ -214,6 +214,14 @@ class SNNClassifier(TorchClassifier):
         out, v = module(xb)
         tie = (1.0 + torch.tanh(v.mean(-1) / self._config()["theta"])) / 2.0
         return out.sum(-1) + TIE_WEIGHT * tie
+
+    def predict_upto(self, X: object, t_s: float) -> np.ndarray:
+        """Decisions from the output spike counts up to ``t_s`` seconds (the first
+        ``round(t_s / dt_s)`` steps of each raster; at least one)."""
+        t = positive("t_s", t_s, unit="s")
+        x = np.asarray(X)
+        n = min(max(1, round(t / self.dt_s)), x.shape[1] if x.ndim == 3 else 1)
+        return self.predict(x[:, :n] if x.ndim == 3 else x)
 
     def output_counts(self, X: object) -> np.ndarray:
         """Output spike counts per class, shape ``(samples, classes)``."""

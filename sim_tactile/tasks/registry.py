@@ -63,8 +63,9 @@ class TaskSpec:
 
     ``paper`` maps classifier names to the paper's cells; ``notes`` maps classifier names to
     a sentence on why a cell differs from the paper (shown when it differs by more than two
-    of the paper's standard deviations). ``features`` are the spike features of svm / lda /
-    knn / src.
+    of the paper's standard deviations); ``remarks`` are sentences shown in every report (the
+    choices the paper leaves open). ``features`` are the spike features of svm / lda / knn /
+    src.
     """
 
     id: str
@@ -80,6 +81,7 @@ class TaskSpec:
     features: tuple[str, ...] = ("rate_hz", "mean_isi_s")
     paper: Mapping[str, PaperCell] = field(default_factory=dict)
     notes: Mapping[str, str] = field(default_factory=dict)
+    remarks: tuple[str, ...] = ()
     reference: str = ""
 
     def settings(self, quick: bool) -> Settings:

@@ -97,6 +97,8 @@ def write_markdown(path: Path, report: dict, spec: TaskSpec) -> None:
     if report["figures"]:
         lines += ["", "## Figures", ""]
         lines += [f"![{Path(f).stem}]({Path(f).name})" for f in report["figures"]]
+    if spec.remarks:
+        lines += ["", "## Notes", ""] + [f"- {r}" for r in spec.remarks]
     if spec.reference:
         lines += ["", f"Reference: {spec.reference}"]
     path.write_text("\n".join(lines) + "\n")
@@ -155,7 +157,15 @@ def plot_over_time(results: dict[str, EvalResult], spec: TaskSpec, title: str, o
     ax.set_ylabel("test accuracy")
     ax.set_ylim(0, 1.02)
     ax.grid(alpha=0.3)
-    ax.set_title(title + " (x: paper, full length)")
+    ax.set_title(title + " (x: paper, full length)", fontsize=10)
+    ax.text(
+        0.01,
+        0.01,
+        "SVM, LSTM: retrained on the first t s; SNN: output counts up to t",
+        transform=ax.transAxes,
+        fontsize=7,
+        color="0.3",
+    )
     ax.legend(loc="lower right")
     fig.savefig(out, dpi=110)
 

@@ -168,6 +168,7 @@ def run_task(
             "params": {n: dict(settings.params.get(n, {})) for n in names},
         },
         "dataset": ds.describe(),
+        "remarks": list(spec.remarks),
         "reference": spec.reference,
         "environment": {
             "sim_tactile": __version__,
