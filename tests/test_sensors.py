@@ -176,3 +176,24 @@ def test_bad_input_is_refused(cache):
         simulate("finger7/flat", "icub60", finger=Finger(), cache=cache)
     with pytest.raises(ConfigError, match="noise_std"):
         Imperfections(noise_std=-1.0)
+
+
+def test_baselines_and_dead_taxels_belong_to_the_unit_not_the_slide():
+    """Two slides of one sensor unit share its per-taxel baselines and dead taxels; noise is
+    new in every slide; another unit has other baselines."""
+    from sim_tactile.sensors.transducers import Imperfections
+
+    pos = np.zeros((40, 3))
+    y = np.ones((50, 40))
+    imp = Imperfections(noise_std=0.1, offset_max=4.0, dead_fraction=0.2)
+    a = imp.apply(y, pos, 100.0, np.random.default_rng(1))
+    b = imp.apply(y, pos, 100.0, np.random.default_rng(2))
+    dead_a, dead_b = np.all(a == 0.0, axis=0), np.all(b == 0.0, axis=0)
+    assert dead_a.any() and np.array_equal(dead_a, dead_b)
+    live = ~dead_a
+    # per-taxel means agree to the noise's standard error; the slides' noise differs
+    np.testing.assert_allclose(a[:, live].mean(0), b[:, live].mean(0), atol=0.1)
+    assert not np.array_equal(a, b)
+    other = Imperfections(noise_std=0.1, offset_max=4.0, dead_fraction=0.2, unit_seed=7)
+    c = other.apply(y, pos, 100.0, np.random.default_rng(1))
+    assert np.abs(c.mean(0) - a.mean(0)).max() > 0.5

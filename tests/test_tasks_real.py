@@ -90,7 +90,12 @@ def test_run_task_writes_report_and_figures(fake_icub, tmp_path):
     by = {r["classifier"]: r for r in report["results"]}
     assert by["svm-raw"]["accuracy_mean"] == 1.0  # the stand-in's levels are separable
     names = {Path(f).name for f in report["figures"]}
-    assert names == {"confusion.png", "accuracy_over_time.png", "raster_per_class.png"}
+    assert names == {
+        "confusion.png",
+        "accuracy_over_time.png",
+        "raster_per_class.png",
+        "streams_per_class.png",
+    }
     for f in report["figures"]:
         assert Path(f).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert json.loads((tmp_path / "report.json").read_text())["task"] == "icub20-real"

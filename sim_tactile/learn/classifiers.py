@@ -35,7 +35,7 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
 from ..encoders import ThresholdEncoder
-from ..errors import UnknownNameError
+from ..errors import ConfigError, UnknownNameError
 from ..spikes import SpikeFeatures, SpikeTrainDistances
 from .preprocess import RangeScaler, SampleStandardizer, SpikeCounts, SpikeRaster, TimeCollapse
 from .src import SRCClassifier
@@ -132,37 +132,67 @@ def _build_lstm(ctx: LearnContext, seed: int | None) -> BaseEstimator:
     return LSTMClassifier(**ctx.kwargs("lstm", grid_shape=ctx.grid_shape, random_state=seed))
 
 
-def _feature_pipeline(ctx: LearnContext, final: BaseEstimator) -> BaseEstimator:
-    steps = ctx.encoder(ctx) + [
-        ("features", SpikeFeatures(features=ctx.spike_features)),
-        ("scale", StandardScaler()),
-    ]
-    return Pipeline([*steps, ("clf", final)])
+def _feature_final(name: str, ctx: LearnContext) -> BaseEstimator:
+    """The estimator of a feature classifier after the spike features: scaling + model."""
+    if name == "svm":
+        clf = _svm(**ctx.kwargs("svm"))
+    elif name == "lda":
+        clf = LinearDiscriminantAnalysis(**ctx.kwargs("lda"))
+    elif name == "knn":
+        clf = KNeighborsClassifier(**ctx.kwargs("knn", n_neighbors=5))
+    elif name == "src":
+        # standardised features, then each sample to unit norm (SRCClassifier, paper 003):
+        # without centring, samples that differ only in overall rate would look alike
+        clf = SRCClassifier(**ctx.kwargs("src", sparsity=5))
+    else:
+        raise ConfigError(f"{name!r} is not a spike-feature classifier; valid: {FEATURE_MODELS}")
+    return Pipeline([("scale", StandardScaler()), ("clf", clf)])
 
 
-def _build_svm(ctx: LearnContext, seed: int | None) -> BaseEstimator:
-    return _feature_pipeline(ctx, _svm(**ctx.kwargs("svm")))
+#: classifiers on spike features (their final estimator: :func:`feature_estimator`)
+FEATURE_MODELS = ("svm", "lda", "knn", "src")
 
 
-def _build_lda(ctx: LearnContext, seed: int | None) -> BaseEstimator:
-    return _feature_pipeline(ctx, LinearDiscriminantAnalysis(**ctx.kwargs("lda")))
+def feature_estimator(name: str, ctx: LearnContext) -> BaseEstimator:
+    """Scaling + model of the spike-feature classifier ``name`` (svm, lda, knn, src), for a
+    feature matrix computed beforehand."""
+    return _feature_final(name, ctx)
 
 
-def _build_knn(ctx: LearnContext, seed: int | None) -> BaseEstimator:
-    return _feature_pipeline(ctx, KNeighborsClassifier(**ctx.kwargs("knn", n_neighbors=5)))
-
-
-def _build_src(ctx: LearnContext, seed: int | None) -> BaseEstimator:
-    # standardised features, then each sample to unit norm (SRCClassifier, paper 003):
-    # without centring, samples that differ only in overall rate would look alike
-    return _feature_pipeline(ctx, SRCClassifier(**ctx.kwargs("src", sparsity=5)))
-
-
-def _build_std_knn(ctx: LearnContext, seed: int | None) -> BaseEstimator:
-    kw = ctx.kwargs("std-knn", metric="victor_purpura", q=24.0, combine="sum", n_neighbors=11)
+def std_knn_params(ctx: LearnContext) -> tuple[str, dict, str, int]:
+    """``(metric, metric params, combine, k)`` of the STD-kNN classifier in ``ctx``."""
+    kw = ctx.kwargs("std-knn", metric="victor_purpura", combine="sum", n_neighbors=11)
     metric = kw.pop("metric")
     combine = kw.pop("combine")
     k = kw.pop("n_neighbors")
+    if metric in ("victor_purpura", "vp") and "q" not in kw:
+        kw["q"] = 24.0  # paper 001's best, 0.024 / ms
+    return metric, kw, combine, k
+
+
+def _feature_pipeline(ctx: LearnContext, name: str) -> BaseEstimator:
+    steps = ctx.encoder(ctx) + [("features", SpikeFeatures(features=ctx.spike_features))]
+    return Pipeline([*steps, *_feature_final(name, ctx).steps])
+
+
+def _build_svm(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    return _feature_pipeline(ctx, "svm")
+
+
+def _build_lda(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    return _feature_pipeline(ctx, "lda")
+
+
+def _build_knn(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    return _feature_pipeline(ctx, "knn")
+
+
+def _build_src(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    return _feature_pipeline(ctx, "src")
+
+
+def _build_std_knn(ctx: LearnContext, seed: int | None) -> BaseEstimator:
+    metric, kw, combine, k = std_knn_params(ctx)
     dist = SpikeTrainDistances(metric=metric, metric_params=kw, combine=combine)
     knn = KNeighborsClassifier(n_neighbors=k, metric="precomputed")
     return Pipeline(ctx.encoder(ctx) + [("distances", dist), ("knn", knn)])

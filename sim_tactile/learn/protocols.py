@@ -228,7 +228,7 @@ def evaluate(
         res.accuracies.append(acc)
         res.confusion += confusion_matrix(labels[te], pred, labels=classes)
         res.epoch_s += _epoch_times(est)
-        if log:
+        if log and (len(splits) <= 20 or (r + 1) % max(1, len(splits) // 5) == 0):
             log(f"{name} repeat {r + 1}/{len(splits)}: accuracy {acc:.3f} (fit {t1 - t0:.1f} s)")
         if r >= n_curve:
             continue

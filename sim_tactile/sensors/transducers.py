@@ -108,7 +108,11 @@ class Imperfections:
     """Seeded imperfections, in output units. ``noise_std`` white Gaussian; ``quant_step``
     ADC step (0: none); ``drift_std_per_sqrt_s`` random-walk drift; ``dead_fraction`` share
     of taxels stuck at ``dead_value``; ``crosstalk`` share of each neighbour's signal (within
-    ``crosstalk_radius_m``) added to a taxel; ``offset_max`` per-taxel baseline in [0, max)."""
+    ``crosstalk_radius_m``) added to a taxel; ``offset_max`` per-taxel baseline in [0, max).
+
+    The baselines and the dead taxels belong to the sensor, not to a slide: they are drawn
+    from ``unit_seed`` (which physical unit) and are the same in every recording of that unit;
+    noise and drift are drawn anew for every slide from the slide's generator."""
 
     noise_std: float = 0.0
     quant_step: float = 0.0
@@ -119,6 +123,7 @@ class Imperfections:
     crosstalk_radius_m: float = 3e-3
     offset_max: float = 0.0
     clip_min: float | None = None
+    unit_seed: int = 0
 
     def __post_init__(self) -> None:
         v.non_negative("noise_std", self.noise_std)
@@ -128,6 +133,7 @@ class Imperfections:
         v.in_range("crosstalk", self.crosstalk, 0.0, 0.5)
         v.non_negative("crosstalk_radius_m", self.crosstalk_radius_m, unit="m")
         v.non_negative("offset_max", self.offset_max)
+        v.integer("unit_seed", self.unit_seed, 0, None)
 
     def apply(
         self, y: np.ndarray, positions: np.ndarray, rate_hz: float, rng: np.random.Generator
@@ -138,14 +144,16 @@ class Imperfections:
             d = np.linalg.norm(positions[:, None, :] - positions[None, :, :], axis=-1)
             M = np.eye(N) + self.crosstalk * ((d > 0) & (d <= self.crosstalk_radius_m))
             y = y @ M.T
+        unit = np.random.default_rng([self.unit_seed, N])  # this sensor unit's own defects
+        offsets = unit.uniform(0, self.offset_max, N)
+        dead = unit.random(N) < self.dead_fraction
         if self.offset_max > 0:
-            y += rng.uniform(0, self.offset_max, N)
+            y += offsets
         if self.drift_std_per_sqrt_s > 0:
             steps = rng.standard_normal((T, N)) * self.drift_std_per_sqrt_s / np.sqrt(rate_hz)
             y += np.cumsum(steps, axis=0)
         if self.noise_std > 0:
             y += self.noise_std * rng.standard_normal((T, N))
-        dead = rng.random(N) < self.dead_fraction
         y[:, dead] = self.dead_value
         if self.quant_step > 0:
             y = np.round(y / self.quant_step) * self.quant_step

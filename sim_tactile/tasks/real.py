@@ -65,7 +65,7 @@ BIOTAC_SNN = {
 _LSTM = {"hidden_size": 60, "num_layers": 2, "lr": 5e-3, "batch_size": 32, "dropout": 0.3}
 BIOTAC_LSTM = {**_LSTM, "weight_decay": 1e-4, **_TORCH}
 
-register(
+BIOTAC_TASK = register(
     TaskSpec(
         id="biotac20-real",
         title="BioTac, 20 materials x 50 slides, 19 electrodes, 1-5 s at 100 Hz (real data)",
@@ -138,7 +138,7 @@ ICUB_SNN = {
 }
 ICUB_LSTM = {**_LSTM, "weight_decay": 1e-4, **_TORCH}
 
-register(
+ICUB_TASK = register(
     TaskSpec(
         id="icub20-real",
         title="iCub forearm RoboSkin, 20 materials x 50 slides, 60 taxels, 1.5 s at 50 Hz "
@@ -209,3 +209,6 @@ register(
         reference=REFERENCE,
     )
 )
+
+#: the real-data task of each sensor (the simulated textures20 parts reuse their settings)
+TASKS_BY_SENSOR = {"biotac19": BIOTAC_TASK, "icub60": ICUB_TASK}

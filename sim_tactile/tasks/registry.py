@@ -44,14 +44,45 @@ class DataRequest:
 
 
 @dataclass(frozen=True)
+class Run:
+    """One row of a task's table: a classifier on a set of channels under a split.
+
+    channels: a key of :attr:`TaskSpec.channel_sets` (``"all"``: every channel); split: None
+    for the task's (or the mode's) split; params: overrides of the classifier's parameters
+    (for example a distance and its ``q``); label: the row's name (default
+    ``classifier[ channels][ split]``); paper: the paper's number for this row.
+    """
+
+    classifier: str
+    channels: str = "all"
+    split: str | None = None
+    params: Mapping[str, Any] = field(default_factory=dict)
+    label: str = ""
+    paper: PaperCell | None = None
+
+    @property
+    def name(self) -> str:
+        if self.label:
+            return self.label
+        parts = [self.classifier]
+        if self.channels != "all":
+            parts.append(self.channels)
+        if self.split:
+            parts.append(self.split)
+        return " ".join(parts)
+
+
+@dataclass(frozen=True)
 class Settings:
-    """The protocol and classifier parameters of one mode (full or quick)."""
+    """The protocol and classifier parameters of one mode (full or quick). ``split``
+    replaces the task's split in this mode (a quick run has fewer samples per class)."""
 
     repeats: int = 5
     repeats_by_classifier: Mapping[str, int] = field(default_factory=dict)
     time_points_s: tuple[float, ...] = ()
     time_repeats: int = 1
     params: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    split: str | None = None
 
     def repeats_for(self, name: str) -> int:
         return int(self.repeats_by_classifier.get(name, self.repeats))
@@ -83,6 +114,19 @@ class TaskSpec:
     notes: Mapping[str, str] = field(default_factory=dict)
     remarks: tuple[str, ...] = ()
     reference: str = ""
+    runs: tuple[Run, ...] = ()
+    channel_sets: Mapping[str, tuple[int, ...]] = field(default_factory=dict)
+    encode_once: bool = False
+    parts: tuple[str, ...] = ()
+
+    def all_runs(self) -> tuple[Run, ...]:
+        if self.runs:
+            return self.runs
+        return tuple(Run(c, paper=self.paper.get(c)) for c in self.classifiers)
+
+    def split_for(self, run: Run, quick: bool) -> str:
+        # a mode's split (the quick run's, on fewer samples) overrides the rows' own
+        return self.settings(quick).split or run.split or self.split
 
     def settings(self, quick: bool) -> Settings:
         return self.quick if quick else self.full
@@ -106,8 +150,17 @@ def register(spec: TaskSpec) -> TaskSpec:
     """Add a task; an id can be registered once (ids never change meaning)."""
     if spec.id in _TASKS:
         raise ConfigError(f"task id {spec.id!r} is already registered; give a new version")
-    for name in (*spec.classifiers, *spec.paper):
+    for name in (*spec.classifiers, *spec.paper, *(r.classifier for r in spec.runs)):
         get_classifier(name)
+    for r in spec.runs:
+        if r.channels != "all" and r.channels not in spec.channel_sets:
+            raise ConfigError(
+                f"task {spec.id}: run {r.name!r} names channel set {r.channels!r}; "
+                f"valid: all, {', '.join(spec.channel_sets)}"
+            )
+    labels = [r.name for r in spec.all_runs()]
+    if len(set(labels)) != len(labels):
+        raise ConfigError(f"task {spec.id}: two runs share a label: {labels}")
     _TASKS[spec.id] = spec
     return spec
 

@@ -61,14 +61,17 @@ def write_markdown(path: Path, report: dict, spec: TaskSpec) -> None:
         f"steps at {report['dataset']['rate_hz']:g} Hz, {report['dataset']['channels']} "
         f"channels, {report['dataset']['classes']} classes.",
         "",
-        "| classifier | features | accuracy (SD) | paper (SD) | repeats | vs paper | wall [s] |",
+        "| run | features | accuracy (SD) | paper (SD) | repeats | vs paper | wall [s] |",
         "|---|---|---|---|---|---|---|",
     ]
     for r in report["results"]:
         paper = r["paper"]
-        ptxt = "-" if paper is None else f"{paper['mean']:.3f} ({paper['std']:.3f})"
+        ptxt = "-" if paper is None else f"{paper['mean']:.3f}"
+        if paper is not None and paper["std"] is not None:
+            ptxt += f" ({paper['std']:.3f})"
+        label = r.get("label", r["classifier"])
         lines.append(
-            f"| {r['classifier']} | {r['features']} | {r['accuracy_mean']:.3f} "
+            f"| {label} | {r['features']} | {r['accuracy_mean']:.3f} "
             f"({r['accuracy_std']:.3f}) | {ptxt} | {r['repeats']} | "
             f"{r['comparison']['message']} | {r['wall_s']:.1f} |"
         )
@@ -93,7 +96,7 @@ def write_markdown(path: Path, report: dict, spec: TaskSpec) -> None:
                 f"{r['over_time'][f'{t:g}']['mean']:.3f}" if f"{t:g}" in r["over_time"] else "-"
                 for t in pts
             ]
-            lines.append(f"| {r['classifier']} | " + " | ".join(cells) + " |")
+            lines.append(f"| {r.get('label', r['classifier'])} | " + " | ".join(cells) + " |")
     if report["figures"]:
         lines += ["", "## Figures", ""]
         lines += [f"![{Path(f).stem}]({Path(f).name})" for f in report["figures"]]
@@ -132,7 +135,9 @@ def plot_confusions(results: dict[str, EvalResult], class_names: Sequence[str], 
     fig.savefig(out, dpi=110)
 
 
-def plot_over_time(results: dict[str, EvalResult], spec: TaskSpec, title: str, out: Path):
+def plot_over_time(
+    results: dict[str, EvalResult], papers: dict[str, PaperCell | None], title: str, out: Path
+):
     fig = _figure(figsize=(6.5, 4.2), layout="constrained")
     ax = fig.subplots()
     for name, r in results.items():
@@ -143,7 +148,7 @@ def plot_over_time(results: dict[str, EvalResult], spec: TaskSpec, title: str, o
         s = np.array([np.std(r.over_time[t]) for t in ts])
         line = ax.plot(ts, m, marker="o", label=name)[0]
         ax.fill_between(ts, m - s, m + s, color=line.get_color(), alpha=0.15)
-        cell = spec.paper.get(name)
+        cell = papers.get(name)
         if cell is not None:
             ax.errorbar(
                 [ts[-1]],
@@ -201,24 +206,86 @@ def plot_rasters(ds: TactileDataset, encoded: Sequence[SpikeTrains], out: Path):
     fig.savefig(out, dpi=100)
 
 
+def plot_streams(ds: TactileDataset, out: Path):
+    """The sensor output of one sample of every class (the first of each), every channel."""
+    n_cls = len(ds.class_names)
+    cols = min(5, n_cls)
+    rows = int(np.ceil(n_cls / cols))
+    fig = _figure(figsize=(3.2 * cols, 2.4 * rows), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False, sharex=True, sharey=True)).ravel()
+    t = np.arange(ds.n_time) / ds.rate_hz
+    for k, ax in enumerate(axes):
+        if k >= n_cls:
+            ax.set_axis_off()
+            continue
+        idx = int(np.flatnonzero(ds.labels == k)[0])
+        ax.plot(t, ds.data[idx], lw=0.6)
+        ax.set_title(f"{ds.class_names[k]} (sample {idx})", fontsize=8)
+        ax.tick_params(labelsize=6)
+        if k % cols == 0:
+            ax.set_ylabel(ds.units or "output", fontsize=7)
+        if k >= (rows - 1) * cols:
+            ax.set_xlabel("time [s]", fontsize=7)
+    fig.savefig(out, dpi=100)
+
+
+def plot_plates(plates: Sequence[str], class_names: Sequence[str], out: Path):
+    """Top view of each plate's surface height (the analytic definition the simulation uses)."""
+    from ..plates import get_plate, height_at
+
+    n = len(plates)
+    cols = min(5, n)
+    rows = int(np.ceil(n / cols))
+    fig = _figure(figsize=(2.6 * cols, 2.0 * rows), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    for k, ax in enumerate(axes):
+        if k >= n:
+            ax.set_axis_off()
+            continue
+        p = get_plate(plates[k])
+        hx, hy = 0.5 * p.area_length_m + 3e-3, 0.5 * p.area_width_m + 3e-3
+        x = np.linspace(-hx, hx, 360)
+        y = np.linspace(-hy, hy, 240)
+        z = height_at(p, x[None, :], y[:, None]) * 1e3
+        im = ax.imshow(
+            z, extent=(-hx * 1e3, hx * 1e3, -hy * 1e3, hy * 1e3), origin="lower", cmap="viridis"
+        )
+        fig.colorbar(im, ax=ax, shrink=0.8).ax.tick_params(labelsize=5)
+        ax.set_title(str(class_names[k]), fontsize=8)
+        ax.tick_params(labelsize=5)
+    fig.suptitle("plate height [mm] over x (slide) and y [mm]", fontsize=8)
+    fig.savefig(out, dpi=100)
+
+
 def write_figures(
     out: Path,
     spec: TaskSpec,
     ds: TactileDataset,
     encoded: Sequence[SpikeTrains],
     results: dict[str, EvalResult],
-    names: Sequence[str],
+    runs: Sequence,
 ) -> list[str]:
-    """Confusion matrices, accuracy over time (when computed) and rasters; returns paths."""
+    """Confusion matrices (runs on all channels), accuracy over time (when computed), the
+    sensor streams and spike rasters of one sample per class and, for simulated data, the
+    plates; returns the paths."""
     files = []
+    main = {r.name: results[r.name] for r in runs if r.channels == "all"} or dict(results)
     f = out / "confusion.png"
-    plot_confusions(results, ds.class_names, f)
+    plot_confusions(main, ds.class_names, f)
     files.append(str(f))
-    if any(results[n].over_time for n in names):
+    if any(results[r.name].over_time for r in runs):
         f = out / "accuracy_over_time.png"
-        plot_over_time(results, spec, spec.id, f)
+        plot_over_time(results, {r.name: r.paper for r in runs}, spec.id, f)
         files.append(str(f))
+    f = out / "streams_per_class.png"
+    plot_streams(ds, f)
+    files.append(str(f))
     f = out / "raster_per_class.png"
     plot_rasters(ds, encoded, f)
     files.append(str(f))
+    plates = ds.meta.get("setup", {}).get("plates")
+    if plates:
+        f = out / "plates.png"
+        plot_plates(plates, ds.class_names, f)
+        files.append(str(f))
     return files

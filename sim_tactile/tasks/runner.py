@@ -12,6 +12,7 @@ import platform
 import sys
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -20,9 +21,21 @@ from sklearn.pipeline import Pipeline
 from .. import __version__
 from .._validate import integer
 from ..errors import ConfigError, require
-from ..learn.classifiers import get_classifier, make_classifier
+from ..learn.classifiers import (
+    FEATURE_MODELS,
+    LearnContext,
+    classifier_names,
+    feature_estimator,
+    get_classifier,
+    make_classifier,
+    std_knn_params,
+)
+from ..learn.precomputed import OnDistances, OnFeatures, sample_index
 from ..learn.protocols import EvalResult, evaluate, repeated_splits
-from .registry import DataRequest, TaskSpec, get_task
+from ..spikes import SpikeFeatures
+from ..spikes.multichannel import pairwise_multichannel
+from ..spikes.trains import SpikeTrains
+from .registry import DataRequest, Run, TaskSpec, get_task
 from .report import compare, write_figures, write_markdown
 
 
@@ -36,7 +49,7 @@ def _seed(seed: int, *keys: int) -> int:
 
 def _classifier_list(spec: TaskSpec, classifiers: Sequence[str] | str | None) -> list[str]:
     if classifiers is None:
-        return list(spec.classifiers)
+        return list(dict.fromkeys(r.classifier for r in spec.all_runs()))
     names = classifiers.split(",") if isinstance(classifiers, str) else list(classifiers)
     names = [n.strip() for n in names if n.strip()]
     if not names:
@@ -46,6 +59,105 @@ def _classifier_list(spec: TaskSpec, classifiers: Sequence[str] | str | None) ->
     if len(set(names)) != len(names):
         raise ConfigError(f"--classifiers names a classifier twice: {','.join(names)}")
     return names
+
+
+def _runs(spec: TaskSpec, classifiers, names: list[str]) -> list[Run]:
+    """The task's runs, restricted to ``names`` when the user chose classifiers; a chosen
+    classifier without a run of its own gets one on all channels."""
+    runs = list(spec.all_runs())
+    if classifiers is None:
+        return runs
+    out = [r for r in runs if r.classifier in names]
+    out += [Run(n, paper=spec.paper.get(n)) for n in names if all(r.classifier != n for r in out)]
+    return out
+
+
+def _channels(spec: TaskSpec, run: Run, ds) -> list[int] | None:
+    if run.channels == "all":
+        return None
+    cols = [int(c) for c in spec.channel_sets[run.channels]]
+    if not cols or min(cols) < 0 or max(cols) >= ds.n_channels:
+        raise ConfigError(
+            f"channel set {run.channels!r} = {cols} is not within the data's "
+            f"{ds.n_channels} channels"
+        )
+    return cols
+
+
+def _run_context(ctx: LearnContext, run: Run, cols, ds) -> LearnContext:
+    params = {k: dict(v) for k, v in ctx.params.items()}
+    run_params = dict(run.params)
+    features = run_params.pop("features", ctx.spike_features)
+    if run_params:
+        params[run.classifier] = {**params.get(run.classifier, {}), **run_params}
+    return replace(
+        ctx,
+        spike_features=tuple([features] if isinstance(features, str) else features),
+        n_channels=ds.n_channels if cols is None else len(cols),
+        grid_shape=ctx.grid_shape if cols is None else None,
+        params=params,
+    )
+
+
+class _Precomputed:
+    """Spike features and spike-train distances of the whole data set, computed once from
+    the encoding fitted on all samples (tasks with ``encode_once``)."""
+
+    def __init__(self, spec: TaskSpec, ds, encoded) -> None:
+        if encoded[0].n_channels != ds.n_channels:
+            raise ConfigError(
+                f"task {spec.id}: encode_once needs one spike train per input channel, the "
+                f"encoder gives {encoded[0].n_channels} for {ds.n_channels}"
+            )
+        self.encoded = encoded
+        self.features = spec.features
+        self._feats = SpikeFeatures(features=spec.features).fit_transform(encoded)
+        self._dist: dict[str, np.ndarray] = {}
+        self.distance_s = 0.0
+
+    @staticmethod
+    def handles(name: str) -> bool:
+        return name in FEATURE_MODELS or name == "std-knn"
+
+    def describe(self) -> dict:
+        return {
+            "features": list(self.features),
+            "feature_matrix": list(self._feats.shape),
+            "distance_matrices": sorted(self._dist),
+            "distance_s": round(self.distance_s, 3),
+        }
+
+    def estimator(self, name: str, ctx: LearnContext, cols):
+        if name in FEATURE_MODELS:
+            nf = len(self.features)
+            missing = [f for f in ctx.spike_features if f not in self.features]
+            if missing:
+                raise ConfigError(
+                    f"spike features {missing} are not among the task's precomputed features "
+                    f"{list(self.features)}"
+                )
+            which = [self.features.index(f) for f in ctx.spike_features]
+            chans = range(self.encoded[0].n_channels) if cols is None else cols
+            sel = [c * nf + j for c in chans for j in which]
+            return OnFeatures(feature_estimator(name, ctx), self._feats[:, sel])
+        metric, params, combine, k = std_knn_params(ctx)
+        key = json.dumps([metric, params, combine, cols], sort_keys=True)
+        if key not in self._dist:
+            t0 = time.perf_counter()
+            trains = self.encoded
+            if cols is not None:
+                trains = [
+                    SpikeTrains(
+                        tuple(s.times[c] for c in cols),
+                        s.t_start,
+                        s.t_end,
+                        tuple(s.channel_names[c] for c in cols),
+                    )
+                    for s in self.encoded
+                ]
+            self._dist[key] = pairwise_multichannel(trains, metric, combine=combine, **params)
+            self.distance_s += time.perf_counter() - t0
+        return OnDistances(self._dist[key], n_neighbors=k)
 
 
 def run_task(
@@ -70,6 +182,8 @@ def run_task(
     """
     log = log or _stderr
     spec = get_task(task_id)
+    if spec.parts:
+        return _run_suite(spec, out_dir, quick, data, classifiers, repeats, seed, log)
     names = _classifier_list(spec, classifiers)
     seed = integer("seed", seed, 0, None)
     if repeats is not None:
@@ -99,21 +213,44 @@ def run_task(
     encoded = Pipeline(spec.encoder(ctx)).fit_transform(ds.data)
     encode_s = time.perf_counter() - t0
 
-    n_rep = {n: repeats or settings.repeats_for(n) for n in names}
-    splits = repeated_splits(ds.labels, spec.split, max(n_rep.values()), _seed(seed, 0))
+    runs = _runs(spec, classifiers, names)
+    n_rep = {r.name: repeats or settings.repeats_for(r.classifier) for r in runs}
+    pre = _Precomputed(spec, ds, encoded) if spec.encode_once else None
+    split_cache: dict[str, list] = {}
     results: dict[str, EvalResult] = {}
     wall: dict[str, float] = {}
     t_cls = time.perf_counter()
-    for k, name in enumerate(names):
-        cs = get_classifier(name)
-        log(f"{task_id}: {name} on {cs.features}, split {spec.split}, {n_rep[name]} repeat(s)")
+    for run in runs:
+        name = run.name
+        cs = get_classifier(run.classifier)
+        k = list(classifier_names()).index(run.classifier)
+        split = spec.split_for(run, quick)
+        cols = _channels(spec, run, ds)
+        if split not in split_cache:
+            split_cache[split] = repeated_splits(
+                ds.labels, split, max(n_rep.values()), _seed(seed, 0)
+            )
+        rctx = _run_context(ctx, run, cols, ds)
+        log(f"{task_id}: {name} on {cs.features}, split {split}, {n_rep[name]} repeat(s)")
         t0 = time.perf_counter()
+        if pre is not None and pre.handles(run.classifier):
+            x, times_s = sample_index(ds.n_samples), ()
+
+            def make(r, run=run, cols=cols, rctx=rctx, k=k):
+                return pre.estimator(run.classifier, rctx, cols)
+        else:
+            x = ds.data if cols is None else ds.data[:, :, cols]
+            times_s = settings.time_points_s
+
+            def make(r, run=run, rctx=rctx, k=k):
+                return make_classifier(run.classifier, rctx, _seed(seed, 1 + k, r))
+
         results[name] = evaluate(
-            lambda r, name=name, k=k: make_classifier(name, ctx, _seed(seed, 1 + k, r)),
-            ds.data,
+            make,
+            x,
             ds.labels,
-            splits[: n_rep[name]],
-            times_s=settings.time_points_s,
+            split_cache[split][: n_rep[name]],
+            times_s=times_s,
             rate_hz=ds.rate_hz,
             anytime=cs.anytime,
             time_repeats=settings.time_repeats,
@@ -126,13 +263,17 @@ def run_task(
     classify_s = time.perf_counter() - t_cls
 
     rows = []
-    for name in names:
+    for run in runs:
+        name = run.name
         r = results[name]
-        cell = spec.paper.get(name)
+        cell = run.paper
         rows.append(
             {
-                "classifier": name,
-                "features": get_classifier(name).features,
+                "classifier": run.classifier,
+                "label": name,
+                "channels": run.channels,
+                "split": spec.split_for(run, quick),
+                "features": get_classifier(run.classifier).features,
                 "accuracy_mean": round(r.mean, 4),
                 "accuracy_std": round(r.std, 4),
                 "paper": cell.to_json() if cell else None,
@@ -159,13 +300,14 @@ def run_task(
         },
         "figures": [],
         "protocol": {
-            "split": spec.split,
+            "split": spec.settings(quick).split or spec.split,
             "repeats": n_rep,
             "time_points_s": list(settings.time_points_s),
             "time_repeats": settings.time_repeats,
             "seed": seed,
             "encoding": spec.encoding,
             "params": {n: dict(settings.params.get(n, {})) for n in names},
+            "precomputed": pre.describe() if pre is not None else None,
         },
         "dataset": ds.describe(),
         "remarks": list(spec.remarks),
@@ -176,8 +318,72 @@ def run_task(
             "machine": platform.machine(),
         },
     }
-    report["figures"] = write_figures(out, spec, ds, encoded, results, names)
+    report["figures"] = write_figures(out, spec, ds, encoded, results, runs)
     report["timing"]["wall_s"] = round(time.perf_counter() - t_start, 2)
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     write_markdown(out / "report.md", report, spec)
+    return report
+
+
+def _run_suite(spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed, log) -> dict:
+    """A task made of parts (one per sensor): each part's report in ``out_dir/<part>``, and
+    one report whose rows are the parts' rows, labelled ``<part>: <row>``."""
+    t0 = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    parts = {}
+    for part in spec.parts:
+        log(f"{spec.id}: part {part}")
+        parts[part] = run_task(
+            part,
+            out / part,
+            quick=quick,
+            data=data,
+            classifiers=classifiers,
+            repeats=repeats,
+            seed=seed,
+            log=log,
+        )
+    rows = [
+        {**r, "label": f"{part}: {r.get('label', r['classifier'])}", "part": part}
+        for part, rep in parts.items()
+        for r in rep["results"]
+    ]
+    timing = {
+        k: round(sum(rep["timing"].get(k, 0.0) for rep in parts.values()), 3)
+        for k in ("simulate_s", "encode_s", "classify_s", "load_s")
+    }
+    timing["wall_s"] = round(time.perf_counter() - t0, 2)
+    report = {
+        "task": spec.id,
+        "title": spec.title,
+        "quick": quick,
+        "results": rows,
+        "timing": timing,
+        "figures": [f for rep in parts.values() for f in rep["figures"]],
+        "parts": {part: str(out / part / "report.json") for part in parts},
+        "protocol": {part: rep["protocol"] for part, rep in parts.items()},
+        "dataset": {part: rep["dataset"] for part, rep in parts.items()},
+        "remarks": list(spec.remarks),
+        "reference": spec.reference,
+        "environment": next(iter(parts.values()))["environment"],
+    }
+    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    lines = [f"# {spec.id}: {spec.title}", ""]
+    if quick:
+        lines += ["**Quick run**: fewer plates, slides, epochs and repeats.", ""]
+    lines += [
+        "| run | accuracy (SD) | paper (SD) | repeats | vs paper |",
+        "|---|---|---|---|---|",
+    ]
+    for r in rows:
+        p = r["paper"]
+        ptxt = "-" if p is None else f"{p['mean']:.3f}" + (f" ({p['std']:.3f})" if p["std"] else "")
+        lines.append(
+            f"| {r['label']} | {r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f}) | {ptxt} | "
+            f"{r['repeats']} | {r['comparison']['message']} |"
+        )
+    lines += ["", "Parts: " + ", ".join(f"[{p}]({p}/report.md)" for p in parts)]
+    lines += [""] + [f"- {x}" for x in spec.remarks]
+    (out / "report.md").write_text("\n".join(lines) + "\n")
     return report

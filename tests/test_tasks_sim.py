@@ -1,0 +1,190 @@
+"""The simulated benchmark tasks (issue 7): slides -> cached recordings -> report."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from sklearn.neighbors import KNeighborsClassifier
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.svm import SVC
+
+from sim_tactile.errors import ConfigError
+from sim_tactile.learn.precomputed import OnDistances, OnFeatures, sample_index
+from sim_tactile.sim.simulate import Protocol
+from sim_tactile.tasks import PaperCell, Run, TaskSpec, get_task, register, task_ids
+from sim_tactile.tasks.synthetic import SlideSet, simulate_slides
+
+EXE = str(Path(sys.executable).with_name("sim-tactile"))
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def _cli(args: list[str], env: dict) -> subprocess.CompletedProcess:
+    return subprocess.run([EXE, *args], env=env, capture_output=True, text=True)
+
+
+def test_sim_tasks_are_registered():
+    ids = set(task_ids())
+    assert {"finger7-v1", "multilayer3-v1", "roughness8-v1", "textures20-v1"} <= ids
+    f7 = get_task("finger7-v1")
+    assert f7.split == "24/8" and f7.full.repeats == 1000 and f7.encode_once
+    assert get_task("multilayer3-v1").split == "10/200"
+    assert get_task("textures20-v1").parts == ("textures20-biotac19-v1", "textures20-icub60-v1")
+
+
+def test_slide_set_validation():
+    proto = Protocol()
+    with pytest.raises(ConfigError, match="at least 2 plates"):
+        SlideSet(("finger7/flat",), "grid3x3", proto, 4, 2)
+    with pytest.raises(ConfigError, match="not a preset"):
+        SlideSet(("finger7/flat", "finger7/nope"), "grid3x3", proto, 4, 2)
+    with pytest.raises(ConfigError, match="sensor 'grid9'"):
+        SlideSet(("finger7/flat", "finger7/ridges-2"), "grid9", proto, 4, 2)
+    with pytest.raises(ConfigError, match="quick_slides"):
+        SlideSet(("finger7/flat", "finger7/ridges-2"), "grid3x3", proto, 4, 5)
+
+
+def test_registry_rejects_bad_runs():
+    base = get_task("finger7-v1")
+    kw = {"title": "t", "get_data": base.get_data, "classifiers": ("svm",)}
+    with pytest.raises(ConfigError, match="channel set 'left'"):
+        register(TaskSpec(id="bad-channels-v1", runs=(Run("svm", channels="left"),), **kw))
+    with pytest.raises(ConfigError, match="share a label"):
+        register(TaskSpec(id="bad-labels-v1", runs=(Run("svm"), Run("svm")), **kw))
+    with pytest.raises(ConfigError, match="already registered"):
+        register(base)
+
+
+def test_slides_are_cached_and_reproducible(cache):
+    """Two slides of two plates: a second call reads the cache and gives identical data; the
+    window is the crossing time at the nominal speed, so every slide has one length."""
+    ss = SlideSet(
+        ("finger7/flat", "finger7/ridges-2"),
+        "grid3x3",
+        Protocol(speed_m_s=0.12, speed_jitter=0.05, force_jitter=0.1),
+        slides=2,
+        quick_slides=2,
+    )
+    jobs = ss.jobs(2, seed=3)
+    assert len({j["seed"] for j in jobs}) == 4
+    recs, stats = simulate_slides(jobs, cache=cache, workers=1)
+    assert stats["slides_simulated"] + stats["slides_cached"] == 4
+    again, stats2 = simulate_slides(jobs, cache=cache, workers=1)
+    assert stats2["slides_simulated"] == 0 and stats2["simulate_s"] == 0.0
+    for a, b in zip(recs, again, strict=True):
+        np.testing.assert_array_equal(a.data, b.data)
+    n = recs[0].data.shape[0]
+    assert n == round(ss.window_protocol().duration_s * 100)
+    # flat ground: no pulses; ridges: load moves with the ridges under the pad
+    assert np.ptp(recs[2].data[:, 4]) > 5 * np.ptp(recs[0].data[:, 4])
+    # a different seed is a different slide (jittered speed and force, sensor noise)
+    other, _ = simulate_slides(ss.jobs(1, seed=4)[:1], cache=cache, workers=1)
+    assert not np.array_equal(other[0].data, recs[0].data)
+
+
+def test_on_features_matches_a_direct_fit():
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(60, 4)) + np.repeat(np.arange(3), 20)[:, None]
+    y = np.repeat(np.arange(3), 20)
+    tr, te = np.arange(0, 60, 2), np.arange(1, 60, 2)
+    est = make_pipeline(StandardScaler(), SVC(kernel="linear"))
+    wrapped = OnFeatures(est, x).fit(sample_index(60)[tr], y[tr])
+    direct = make_pipeline(StandardScaler(), SVC(kernel="linear")).fit(x[tr], y[tr])
+    np.testing.assert_array_equal(wrapped.predict(sample_index(60)[te]), direct.predict(x[te]))
+    with pytest.raises(ConfigError, match="sample indices"):
+        wrapped.predict(np.array([[60]]))
+    with pytest.raises(ConfigError, match="finite"):
+        OnFeatures(est, np.full((3, 2), np.nan)).fit(sample_index(3), [0, 1, 0])
+
+
+def test_on_distances_matches_precomputed_knn():
+    rng = np.random.default_rng(1)
+    pts = rng.normal(size=(40, 2)) + np.repeat([[0, 0], [3, 3]], 20, axis=0)
+    y = np.repeat([0, 1], 20)
+    d = np.linalg.norm(pts[:, None] - pts[None], axis=2)
+    tr, te = np.arange(0, 40, 3), np.setdiff1d(np.arange(40), np.arange(0, 40, 3))
+    wrapped = OnDistances(d, n_neighbors=3).fit(tr[:, None], y[tr])
+    ref = KNeighborsClassifier(3, metric="precomputed").fit(d[np.ix_(tr, tr)], y[tr])
+    np.testing.assert_array_equal(wrapped.predict(te[:, None]), ref.predict(d[np.ix_(te, tr)]))
+    assert wrapped.score(te[:, None], y[te]) > 0.9
+    with pytest.raises(ConfigError, match="n_neighbors = 50"):
+        OnDistances(d, n_neighbors=50).fit(tr[:, None], y[tr])
+
+
+def _check_report(doc: dict, out: Path, task: str) -> None:
+    assert doc["task"] == task
+    assert {"results", "timing", "figures"} <= set(doc)
+    assert {"simulate_s", "encode_s", "classify_s"} <= set(doc["timing"])
+    for r in doc["results"]:
+        assert {"classifier", "features", "accuracy_mean", "accuracy_std", "paper"} <= set(r)
+        assert 0.0 <= r["accuracy_mean"] <= 1.0 and r["accuracy_std"] >= 0.0
+    for f in doc["figures"]:
+        assert Path(f).read_bytes()[:8] == PNG
+    assert (out / "report.json").is_file() and (out / "report.md").is_file()
+
+
+def test_run_finger7_quick_and_rerun_is_exact(tmp_path, cli_env):
+    out1, out2 = tmp_path / "a", tmp_path / "b"
+    p = _cli(["run", "finger7-v1", "--quick", "--out", str(out1), "--json"], cli_env)
+    assert p.returncode == 0, p.stderr
+    doc = json.loads(p.stdout)
+    _check_report(doc, out1, "finger7-v1")
+    by = {r["label"]: r for r in doc["results"]}
+    allt = by["svm all taxels"]
+    singles = [r for r in doc["results"] if r["channels"] != "all"]
+    assert len(singles) == 9 and allt["paper"]["mean"] == pytest.approx(0.9921)
+    # the paper's finding: all taxels together beat any single taxel
+    assert allt["accuracy_mean"] > max(r["accuracy_mean"] for r in singles)
+    assert allt["accuracy_mean"] > 3 / 7  # far above chance (1/7)
+    assert {Path(f).name for f in doc["figures"]} >= {"plates.png", "streams_per_class.png"}
+    # re-run with the same seed: every slide from the cache, the same numbers exactly
+    p2 = _cli(["run", "finger7-v1", "--quick", "--out", str(out2), "--json"], cli_env)
+    assert p2.returncode == 0, p2.stderr
+    doc2 = json.loads(p2.stdout)
+    assert doc2["timing"]["simulate_s"] == 0.0
+    assert [r["accuracies"] for r in doc2["results"]] == [r["accuracies"] for r in doc["results"]]
+
+
+@pytest.mark.parametrize(
+    "task, n_rows",
+    [("multilayer3-v1", 9), ("roughness8-v1", 10)],
+)
+def test_run_quick_feature_tasks(task, n_rows, tmp_path, cli_env):
+    p = _cli(["run", task, "--quick", "--out", str(tmp_path), "--json"], cli_env)
+    assert p.returncode == 0, p.stderr
+    doc = json.loads(p.stdout)
+    _check_report(doc, tmp_path, task)
+    assert len(doc["results"]) == n_rows
+    papers = [r for r in doc["results"] if r["paper"]]
+    assert papers and all(isinstance(r["paper"]["mean"], float) for r in papers)
+    # chance level is 1/3 (multilayer) or 1/8 (roughness): the best row is well above it
+    n_cls = doc["dataset"]["classes"]
+    assert max(r["accuracy_mean"] for r in doc["results"]) > 1.5 / n_cls
+
+
+def test_run_textures20_quick_suite(tmp_path, cli_env):
+    pytest.importorskip("torch")
+    p = _cli(["run", "textures20-v1", "--quick", "--out", str(tmp_path), "--json"], cli_env)
+    assert p.returncode == 0, p.stderr
+    doc = json.loads(p.stdout)
+    _check_report(doc, tmp_path, "textures20-v1")
+    parts = {r["part"] for r in doc["results"]}
+    assert parts == {"textures20-biotac19-v1", "textures20-icub60-v1"}
+    assert {r["classifier"] for r in doc["results"]} == {"svm-raw", "svm-spike", "lstm", "snn"}
+    for part in parts:
+        sub = json.loads((tmp_path / part / "report.json").read_text())
+        assert sub["dataset"]["classes"] == 4 and sub["dataset"]["samples"] == 12
+        assert any(r["over_time"] for r in sub["results"])
+
+
+def test_paper_cells_of_the_sim_tasks():
+    f7 = get_task("finger7-v1")
+    assert any(r.paper == PaperCell(0.9921, None, "paper 002, Fig. 6") for r in f7.runs)
+    r8 = {r.name: r for r in get_task("roughness8-v1").runs}
+    vp = r8["VP q=24/s k=11 film1 9:1"]
+    assert vp.paper.mean == 0.776 and vp.params["q"] == 24.0 and vp.split == "9:1"
