@@ -9,8 +9,23 @@ import pytest
 
 from sim_tactile.cache import ArtefactCache
 
-#: The real data set of the first seed paper, found beside the project (never committed).
-DATASET_DIR = Path(__file__).resolve().parents[2] / "shared" / "datasets" / "biotac_slide_20_50"
+_NAME = "biotac_slide_20_50"
+
+
+def _find_dataset() -> Path:
+    """The real data set of the first seed paper (never committed): ``$SIM_TACTILE_DATASETS``,
+    else ``shared/datasets`` beside the checkout, else the workplace's shared folder. The
+    first that exists; else the first candidate (the tests that need it then skip)."""
+    env = os.environ.get("SIM_TACTILE_DATASETS")
+    cands = [Path(env) / _NAME] if env else []
+    cands += [
+        Path(__file__).resolve().parents[2] / "shared" / "datasets" / _NAME,
+        Path("/work/shared/datasets") / _NAME,
+    ]
+    return next((c for c in cands if c.is_dir()), cands[0])
+
+
+DATASET_DIR = _find_dataset()
 
 
 @pytest.fixture(scope="session")

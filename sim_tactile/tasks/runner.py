@@ -195,7 +195,6 @@ def run_task(
             f"task {task_id} runs on real recordings: pass --data PATH (the folder of the data "
             f"set, e.g. ../shared/datasets/biotac_slide_20_50)"
         )
-    settings = spec.settings(quick)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
@@ -207,6 +206,41 @@ def run_task(
         f"{task_id}: {ds.n_samples} samples x {ds.n_time} steps x {ds.n_channels} channels at "
         f"{ds.rate_hz:g} Hz, {len(ds.class_names)} classes (loaded in {load_s:.1f} s)"
     )
+    return evaluate_task(
+        spec,
+        ds,
+        out,
+        quick=quick,
+        classifiers=classifiers,
+        names=names,
+        repeats=repeats,
+        seed=seed,
+        log=log,
+        load_s=load_s,
+        t_start=t_start,
+    )
+
+
+def evaluate_task(
+    spec: TaskSpec,
+    ds,
+    out: Path,
+    *,
+    quick: bool,
+    classifiers,
+    names: list[str],
+    repeats: int | None,
+    seed: int,
+    log: Callable[[str], None],
+    load_s: float = 0.0,
+    t_start: float | None = None,
+    figures: bool = True,
+) -> dict:
+    """Encode, classify and report a loaded data set under ``spec`` (see :func:`run_task`)."""
+    t_start = time.perf_counter() if t_start is None else t_start
+    task_id = spec.id
+    settings = spec.settings(quick)
+    out.mkdir(parents=True, exist_ok=True)
     ctx = spec.context(ds, quick)
 
     t0 = time.perf_counter()
@@ -318,7 +352,8 @@ def run_task(
             "machine": platform.machine(),
         },
     }
-    report["figures"] = write_figures(out, spec, ds, encoded, results, runs)
+    if figures:
+        report["figures"] = write_figures(out, spec, ds, encoded, results, runs)
     report["timing"]["wall_s"] = round(time.perf_counter() - t_start, 2)
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     write_markdown(out / "report.md", report, spec)

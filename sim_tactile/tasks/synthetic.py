@@ -21,7 +21,7 @@ import time
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, replace
-from multiprocessing import get_context
+from multiprocessing import get_all_start_methods, get_context
 
 import numpy as np
 
@@ -262,7 +262,9 @@ def simulate_slides(
                 if log and (n + 1) % step == 0:
                     log(f"  {n + 1}/{len(todo)} slides ({time.perf_counter() - t0:.0f} s)")
         else:
-            ctx = get_context("spawn")
+            # fork where there is one: spawn would re-import the caller's __main__, which
+            # breaks scripts without a main guard; the parent runs no threads of its own here
+            ctx = get_context("fork" if "fork" in get_all_start_methods() else "spawn")
             with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
                 futs = [pool.submit(_run_job, jobs[i], str(cache.root)) for i in todo]
                 for n, f in enumerate(futs):

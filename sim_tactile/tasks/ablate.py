@@ -1,0 +1,318 @@
+"""Grid sweeps of encoder, neuron and classifier parameters over a task's cached recordings.
+
+``ablate(task, {"gain": [5, 15, 30], "preset": ["RS", "FS"]})`` loads the task's data once
+(simulated slides come from the cache: nothing is simulated again when the task has run
+before), then for every point of the grid re-encodes and re-runs the task's protocol with the
+changed parameters, and writes a table and one plot of accuracy over each swept parameter.
+
+Parameters (what each changes):
+
+========================= ================================================================
+``gain``                  Izhikevich / LIF input gain (replaces a max-rate calibration)
+``max_rate_hz``           Izhikevich gain calibrated for this maximum rate [Hz]
+``preset``                Izhikevich preset (RS, FS, SA, RA, ...)
+``a``, ``b``, ``c``, ``d`` one Izhikevich parameter (the others from the task's preset)
+``K``                     threshold encoding: the number of thresholds (2K + 1 spike
+                          channels): K levels 1 SD apart around 0 for per-slide standardised
+                          encodings, at 1 .. K of a [0, K + 1] range for range encodings
+``q``                     Victor-Purpura cost [1/s] of the STD-kNN rows
+``tau``                   van Rossum time constant [s] of the STD-kNN rows
+``k``                     neighbours of the kNN and STD-kNN rows
+``C``                     the linear SVMs' regularisation
+========================= ================================================================
+
+A parameter that no step of the task uses is an error that names the parameter and the
+valid ones, rather than a sweep that silently changes nothing.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import time
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..encoders import IzhikevichEncoder, ThresholdEncoder
+from ..encoders.neurons import izhikevich_preset
+from ..errors import ConfigError
+from .registry import DataRequest, Run, TaskSpec, get_task
+
+ENCODER_PARAMS = ("gain", "max_rate_hz", "preset", "a", "b", "c", "d", "K")
+CLASSIFIER_PARAMS = ("q", "tau", "k", "C")
+PARAMS = ENCODER_PARAMS + CLASSIFIER_PARAMS
+_NUMERIC = {"gain", "max_rate_hz", "a", "b", "c", "d", "q", "tau", "C"}
+
+
+def parse_sets(items: Sequence[str]) -> dict[str, list]:
+    """``["gain=5,15", "preset=RS,FS"]`` -> ``{"gain": [5.0, 15.0], "preset": ["RS", "FS"]}``."""
+    out: dict[str, list] = {}
+    for item in items:
+        name, sep, values = str(item).partition("=")
+        name = name.strip()
+        if not sep or not name or not values.strip():
+            raise ConfigError(f"--set {item!r} is not NAME=v1,v2,...; valid names: {PARAMS}")
+        if name not in PARAMS:
+            raise ConfigError(f"--set {name}: unknown parameter; valid: {', '.join(PARAMS)}")
+        if name in out:
+            raise ConfigError(f"--set {name} is given twice")
+        vals = [v.strip() for v in values.split(",") if v.strip()]
+        out[name] = [_value(name, v) for v in vals]
+    if not out:
+        raise ConfigError("ablate needs at least one --set NAME=v1,v2")
+    return out
+
+
+def _value(name: str, text: str):
+    if name in ("K", "k"):
+        try:
+            v = int(text)
+        except ValueError:
+            raise ConfigError(f"--set {name}: {text!r} is not an integer") from None
+        if v < 1 or v > (10 if name == "K" else 500):
+            raise ConfigError(f"--set {name} = {v}; valid: 1..{10 if name == 'K' else 500}")
+        return v
+    if name in _NUMERIC:
+        try:
+            v = float(text)
+        except ValueError:
+            raise ConfigError(f"--set {name}: {text!r} is not a number") from None
+        if not np.isfinite(v) or (name in ("gain", "max_rate_hz", "q", "tau", "C") and v <= 0):
+            raise ConfigError(f"--set {name} = {text}; valid: a finite number > 0")
+        return v
+    izhikevich_preset(text)  # names the valid presets when unknown
+    return text
+
+
+def _izh_params(enc: IzhikevichEncoder, point: Mapping) -> None:
+    kw = {}
+    if "preset" in point:
+        kw["preset"] = point["preset"]
+    abcd = {k: point[k] for k in "abcd" if k in point}
+    if abcd:
+        base = kw.get("preset", enc.preset)
+        bases = base if isinstance(base, list | tuple) else [base]
+        new = [replace(izhikevich_preset(b), **abcd) for b in bases]
+        kw["preset"] = new if isinstance(base, list | tuple) else new[0]
+    if "gain" in point:
+        kw.update(gain=point["gain"], max_rate_hz=None)
+    if "max_rate_hz" in point:
+        kw["max_rate_hz"] = point["max_rate_hz"]
+    enc.set_params(**kw)
+
+
+def _threshold_params(steps: list, enc: ThresholdEncoder, k: int) -> None:
+    scaler = next((s for _, s in steps if type(s).__name__ == "RangeScaler"), None)
+    if scaler is not None:
+        scaler.set_params(span=float(k + 1))
+        enc.set_params(thresholds=np.arange(1.0, k + 1.0))
+    else:
+        enc.set_params(thresholds=np.arange(k) - (k - 1) / 2.0)
+
+
+def _used(spec: TaskSpec) -> set[str]:
+    """The parameters of PARAMS that some step of ``spec`` uses."""
+    from ..learn.classifiers import LearnContext
+
+    used = set()
+    steps = spec.encoder(LearnContext(rate_hz=100.0, n_channels=1, encoder=spec.encoder))
+    for _, est in steps:
+        if isinstance(est, IzhikevichEncoder):
+            used |= {"gain", "max_rate_hz", "preset", "a", "b", "c", "d"}
+        if isinstance(est, ThresholdEncoder):
+            used.add("K")
+    classes = {r.classifier for r in spec.all_runs()}
+    if "std-knn" in classes:
+        used |= {"q", "tau", "k"}
+    if "knn" in classes:
+        used.add("k")
+    if classes & {"svm", "svm-raw", "svm-spike"}:
+        used.add("C")
+    return used
+
+
+def _point_spec(spec: TaskSpec, point: Mapping) -> TaskSpec:
+    enc_point = {k: v for k, v in point.items() if k in ENCODER_PARAMS}
+    base_encoder = spec.encoder
+
+    def encoder(ctx, base=base_encoder, p=enc_point):
+        steps = base(ctx)
+        for _, est in steps:
+            if isinstance(est, IzhikevichEncoder):
+                _izh_params(est, p)
+            if isinstance(est, ThresholdEncoder) and "K" in p:
+                _threshold_params(steps, est, int(p["K"]))
+        return steps
+
+    runs = []
+    for r in spec.all_runs():
+        params = dict(r.params)
+        if r.classifier == "std-knn":
+            metric = params.get("metric", "victor_purpura")
+            if "q" in point and metric in ("victor_purpura", "vp"):
+                params["q"] = point["q"]
+            if "tau" in point and metric in ("van_rossum", "vr"):
+                params["tau"] = point["tau"]
+        if "k" in point and r.classifier in ("knn", "std-knn"):
+            params["n_neighbors"] = point["k"]
+        if "C" in point and r.classifier in ("svm", "svm-raw", "svm-spike"):
+            params["C"] = point["C"]
+        runs.append(replace(r, params=params, paper=None))
+    return replace(spec, encoder=encoder, runs=tuple(runs), encode_once=spec.encode_once)
+
+
+def ablate(
+    task_id: str,
+    sets: Mapping[str, Sequence],
+    out_dir: str | Path,
+    *,
+    quick: bool = False,
+    data: str | Path | None = None,
+    classifiers: Sequence[str] | str | None = None,
+    repeats: int | None = None,
+    seed: int = 0,
+    log: Callable[[str], None] | None = None,
+) -> dict:
+    """Sweep the grid ``sets`` (name -> values) over the task's data; returns
+    ``{task, rows: [{params, classifier, label, accuracy_mean, accuracy_std}], figures}``."""
+    from .runner import _classifier_list, _stderr, evaluate_task
+
+    log = log or _stderr
+    spec = get_task(task_id)
+    if spec.parts:
+        raise ConfigError(
+            f"task {task_id} is made of parts; ablate one of them: {', '.join(spec.parts)}"
+        )
+    if spec.needs_data_path and data is None:
+        raise ConfigError(f"task {task_id} runs on real recordings: pass --data PATH")
+    sets = {k: list(v) for k, v in sets.items()}
+    for k, v in sets.items():
+        if k not in PARAMS:
+            raise ConfigError(f"ablate: unknown parameter {k!r}; valid: {', '.join(PARAMS)}")
+        if not v:
+            raise ConfigError(f"ablate: parameter {k} has no values")
+    names = _classifier_list(spec, classifiers)
+    unused = sorted(set(sets) - _used(spec))
+    if unused:
+        raise ConfigError(
+            f"task {task_id} does not use {', '.join(unused)}; it uses: "
+            f"{', '.join(p for p in PARAMS if p in _used(spec))}"
+        )
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    ds = spec.get_data(DataRequest(None if data is None else Path(data), quick, seed, log))
+    load_s = time.perf_counter() - t0
+    keys = list(sets)
+    grid = [dict(zip(keys, vals, strict=True)) for vals in itertools.product(*sets.values())]
+    rows = []
+    for n, point in enumerate(grid):
+        log(f"ablate {task_id}: point {n + 1}/{len(grid)}: {point}")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            rep = evaluate_task(
+                _point_spec(spec, point),
+                ds,
+                out / f"point-{n:03d}",
+                quick=quick,
+                classifiers=classifiers,
+                names=names,
+                repeats=repeats,
+                seed=seed,
+                log=lambda m: None,
+                figures=False,
+            )
+        notes = sorted({str(w.message) for w in caught})
+        for msg in notes:
+            log(f"  warning: {msg}")
+        for r in rep["results"]:
+            rows.append(
+                {
+                    "params": point,
+                    "classifier": r["classifier"],
+                    "label": r.get("label", r["classifier"]),
+                    "accuracy_mean": r["accuracy_mean"],
+                    "accuracy_std": r["accuracy_std"],
+                    "repeats": r["repeats"],
+                    "warnings": notes,
+                }
+            )
+        best = max(rep["results"], key=lambda r: r["accuracy_mean"])
+        log(f"  best: {best.get('label')} {best['accuracy_mean']:.3f}")
+    report = {
+        "task": task_id,
+        "quick": quick,
+        "sets": sets,
+        "rows": rows,
+        "timing": {"load_s": round(load_s, 3), "wall_s": round(time.perf_counter() - t0, 2)},
+        "figures": [],
+    }
+    f = out / "ablation.png"
+    plot_ablation(rows, sets, task_id, f)
+    report["figures"].append(str(f))
+    (out / "ablation.json").write_text(json.dumps(report, indent=2) + "\n")
+    _markdown(out / "ablation.md", report)
+    return report
+
+
+def _markdown(path: Path, report: dict) -> None:
+    keys = list(report["sets"])
+    lines = [
+        f"# Ablation of {report['task']}" + (" (quick)" if report["quick"] else ""),
+        "",
+        "| " + " | ".join(keys) + " | run | accuracy (SD) | repeats |",
+        "|" + "---|" * (len(keys) + 3),
+    ]
+    for r in report["rows"]:
+        vals = " | ".join(str(r["params"][k]) for k in keys)
+        lines.append(
+            f"| {vals} | {r['label']} | {r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f}) | "
+            f"{r['repeats']} |"
+        )
+    path.write_text("\n".join(lines) + "\n")
+
+
+def plot_ablation(rows: list[dict], sets: Mapping[str, Sequence], title: str, out: Path) -> None:
+    """One panel per swept parameter: accuracy against its values, the other parameters at
+    their first value, one line per run of the task."""
+    from matplotlib.figure import Figure
+
+    keys = list(sets)
+    fig = Figure(figsize=(5.0 * len(keys), 3.8), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(keys), squeeze=False)).ravel()
+    labels = list(dict.fromkeys(r["label"] for r in rows))
+    for ax, key in zip(axes, keys, strict=True):
+        others = {k: sets[k][0] for k in keys if k != key}
+        values = list(sets[key])
+        numeric = all(isinstance(v, int | float) for v in values)
+        xs = values if numeric else list(range(len(values)))
+        for lab in labels[:12]:
+            sel = [
+                r
+                for r in rows
+                if r["label"] == lab and all(r["params"][k] == v for k, v in others.items())
+            ]
+            by = {str(r["params"][key]): r for r in sel}
+            m = [by[str(v)]["accuracy_mean"] if str(v) in by else np.nan for v in values]
+            s = [by[str(v)]["accuracy_std"] if str(v) in by else np.nan for v in values]
+            ax.errorbar(xs, m, yerr=s, marker="o", capsize=2, label=lab)
+        if not numeric:
+            ax.set_xticks(xs, [str(v) for v in values])
+        elif len(values) > 2 and min(values) > 0 and max(values) / min(values) >= 20:
+            ax.set_xscale("log")
+        ax.set_xlabel(key)
+        ax.set_ylabel("accuracy")
+        ax.set_ylim(0, 1.02)
+        ax.grid(alpha=0.3)
+        if others:
+            ax.set_title(", ".join(f"{k} = {v}" for k, v in others.items()), fontsize=8)
+    axes[0].legend(fontsize=6, loc="lower left")
+    fig.suptitle(f"ablation of {title}", fontsize=10)
+    fig.savefig(out, dpi=110)
+
+
+__all__ = ["PARAMS", "ablate", "parse_sets", "plot_ablation", "Run"]
