@@ -24,8 +24,9 @@ $(STAMP_TEST): pyproject.toml | $(BIN)/python
 	$(BIN)/pip install -q -e '.[test,learn]'
 	touch $@ $(STAMP_RUN)
 
+# the main job: the soft-finger paper's task in simulation, quick (about a minute here)
 demo: $(STAMP_RUN)
-	$(BIN)/sim-tactile demo
+	$(BIN)/sim-tactile run finger7-v1 --quick --out demo-out
 
 test: $(STAMP_TEST)
 	$(BIN)/ruff check sim_tactile tests benchmarks docs

@@ -148,6 +148,10 @@ def test_run_finger7_quick_and_rerun_is_exact(tmp_path, cli_env):
     doc2 = json.loads(p2.stdout)
     assert doc2["timing"]["simulate_s"] == 0.0
     assert [r["accuracies"] for r in doc2["results"]] == [r["accuracies"] for r in doc["results"]]
+    # the table for people (what `make demo` prints)
+    p3 = _cli(["run", "finger7-v1", "--quick", "--out", str(out2)], cli_env)
+    assert p3.returncode == 0, p3.stderr
+    assert "svm all taxels" in p3.stdout and "0.992" in p3.stdout and "figure:" in p3.stdout
 
 
 @pytest.mark.parametrize(
