@@ -2,12 +2,14 @@
 
     python benchmarks/bench_finger.py [--json] [--quick]
 
-Scene: finger7/ridges-4, grid3x3, 60 mm/s, 1 N (the soft-finger paper's setup). Every level
-runs at its auto time step and at 2x and 0.5x of it; the reference is L2 (half the node
-pitch, a quarter of the time step). Errors:
+Scene: finger7/ridges-4, grid3x3, 60 mm/s, 1 N (the soft-finger paper's setup). L0 and L1 run
+at their auto time step and at 2x and 0.5x of it; the reference is L2 (half the node pitch, a
+quarter of the time step). The sweep, the errors and the Hertz rows come from
+:mod:`sim_tactile.bench.speed_error` (``sim-tactile bench speed-error`` runs the same code on
+every task's scene):
 
 - error_vs_reference: ||d - d_L2|| / ||d_L2|| over the whole (time x taxel) recording;
-- error_vs_analytic: the pulse period of the middle taxel against ridge pitch / speed.
+- error_vs_analytic: the period of the middle taxel's pulses against ridge pitch / pad speed.
 
 RTF is simulated seconds of the slide per wall second of the slide loop (one core). The loop
 overhead compares the full step against bare MuJoCo calls on the same models (mj_step on the
@@ -24,111 +26,48 @@ import time
 
 import mujoco
 import numpy as np
-from scipy import ndimage
 from threadpoolctl import threadpool_limits
 
-from sim_tactile.scene.finger import Finger
-from sim_tactile.sim.press import hertz, press
+from sim_tactile.bench.speed_error import Sweep, run_speed_error
 from sim_tactile.sim.simulate import Protocol, simulate
 
 V = 0.06
 PLATE = "finger7/ridges-4"
 
 
-def _period(rec) -> float:
-    i = 4  # middle taxel of grid3x3
-    t, y = rec.times, rec.data[:, i].astype(float)
-    x = rec.meta["x_start_m"] + V * t
-    over = np.abs(x) < 15.75e-3
-    lab, n = ndimage.label(y[over] > 1e-3 * y.max())
-    c = [
-        np.sum(t[over][lab == k] * y[over][lab == k]) / np.sum(y[over][lab == k])
-        for k in range(1, n + 1)
-    ]
-    return float(np.median(np.diff(c))) if len(c) > 1 else float("nan")
-
-
 def run_levels(quick: bool) -> list[dict]:
-    ref = simulate(
-        PLATE, "grid3x3", protocol=Protocol(speed_m_s=V), fidelity="L2", ideal=True
-    ).recording
-    rows = []
-    factors = (1.0,) if quick else (2.0, 1.0, 0.5)
-    for level in ("L0", "L1"):
-        for f in factors:
-            base = simulate(
-                PLATE,
-                "grid3x3",
-                protocol=Protocol(speed_m_s=V, duration_s=0.05),
-                fidelity=level,
-                ideal=True,
-            )
-            dt = base.fidelity.dt_s * f
-            try:
-                r = simulate(
-                    PLATE,
-                    "grid3x3",
-                    protocol=Protocol(speed_m_s=V),
-                    fidelity=level,
-                    dt_s=dt,
-                    ideal=True,
-                )
-            except Exception as exc:  # a too coarse step is a result too
-                rows.append(
-                    {"scene": PLATE, "fidelity": level, "dt_s": dt, "outcome": f"error: {exc}"}
-                )
-                continue
-            rec = r.recording
-            n = min(len(rec.data), len(ref.data))
-            err = float(np.linalg.norm(rec.data[:n] - ref.data[:n]) / np.linalg.norm(ref.data[:n]))
-            rows.append(
-                {
-                    "scene": PLATE,
-                    "fidelity": level,
-                    "dt_s": r.fidelity.dt_s,
-                    "node_pitch_m": r.fidelity.pitch_m,
-                    "rtf": rec.meta["sim_s"] / rec.meta["slide_wall_s"],
-                    "error_vs_reference": err,
-                    "error_vs_analytic": abs(_period(rec) / (9e-3 / V) - 1),
-                    "outcome": "ok",
-                }
-            )
-    rows.append(
-        {
-            "scene": PLATE,
-            "fidelity": "L2",
-            "dt_s": ref.meta["dt_s"],
-            "node_pitch_m": ref.meta["fidelity"]["pitch_m"],
-            "rtf": ref.meta["sim_s"] / ref.meta["slide_wall_s"],
-            "error_vs_reference": 0.0,
-            "error_vs_analytic": abs(_period(ref) / (9e-3 / V) - 1),
-            "outcome": "ok",
-        }
+    """Rows of L0 and L1 (auto step, and 2x and 0.5x of it unless quick) and the L2 reference."""
+    sweep = Sweep(
+        scenes=("finger7",),
+        levels=("L0", "L1"),
+        dt_factors=(1.0,) if quick else (2.0, 1.0, 0.5),
+        pitch_factors=(1.0,),
     )
-    return rows
+    return run_speed_error(sweep)["rows"]
 
 
-def hertz_rows() -> list[dict]:
-    f = Finger(
-        shape="sphere",
-        radius_m=8e-3,
-        size_m=(12e-3, 12e-3),
-        young_pa=0.3e6,
-        poisson=0.5,
-        thickness_m=5e-3,
+def hertz_rows(quick: bool = False) -> list[dict]:
+    """The Hertz press (sphere R 8 mm, E 0.3 MPa, 1 N) at 0.2 mm node pitch, L0 and L1."""
+    sweep = Sweep(
+        scenes=("hertz",),
+        levels=("L0", "L1"),
+        press_pitches_m=(0.2e-3,),
+        press_ref_pitch_m=0.15e-3 if quick else 0.1e-3,
     )
-    ref = hertz(8e-3, f.e_star_pa, 1.0)
     out = []
-    for level, coupled in (("L0", False), ("L1", True)):
-        r = press(f, 1.0, pitch_m=0.25e-3, coupled=coupled)
+    for r in run_speed_error(sweep)["rows"]:
+        if r["fidelity"] == "L2" or r["outcome"] != "ok":
+            continue
+        a = r["analytic"]
         out.append(
             {
-                "fidelity": level,
-                "contact_radius_mm": r.contact_radius_m * 1e3,
-                "radius_error": r.contact_radius_m / ref["contact_radius_m"] - 1,
-                "peak_kpa": r.peak_pressure_pa / 1e3,
-                "peak_error": r.peak_pressure_pa / ref["peak_pressure_pa"] - 1,
-                "force_error": r.total_force_n - 1.0,
+                "fidelity": r["fidelity"],
+                "contact_radius_mm": a["contact_radius_m"] * 1e3,
+                "radius_error": a["radius_error"],
+                "peak_kpa": a["peak_pressure_pa"] / 1e3,
+                "peak_error": a["peak_error"],
+                "force_error": a["force_error_n"],
+                "error_vs_reference": r["error_vs_reference"],
             }
         )
     return out
@@ -200,7 +139,11 @@ def main() -> int:
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args()
     with threadpool_limits(limits=1, user_api="blas"):
-        doc = {"rows": run_levels(args.quick), "hertz": hertz_rows(), "loop": loop_overhead()}
+        doc = {
+            "rows": run_levels(args.quick),
+            "hertz": hertz_rows(args.quick),
+            "loop": loop_overhead(),
+        }
     if args.json:
         print(json.dumps(doc, indent=2))
         return 0
@@ -209,11 +152,12 @@ def main() -> int:
     )
     for r in doc["rows"]:
         if r["outcome"] != "ok":
-            print(f"{r['fidelity']:6s} {r['dt_s'] * 1e3:8.3f}  {r['outcome']}")
+            print(f"{r['fidelity']:6s} {r['dt_s'] * 1e3:8.3f}  {r['outcome']}: {r['error']}")
             continue
+        ana = r["error_vs_analytic"]
         print(
-            f"{r['fidelity']:6s} {r['dt_s'] * 1e3:8.3f} {r['node_pitch_m'] * 1e3:10.3f} {r['rtf']:7.2f} "
-            f"{r['error_vs_reference']:10.3%} {r['error_vs_analytic']:10.3%}"
+            f"{r['fidelity']:6s} {r['dt_s'] * 1e3:8.3f} {r['pitch_m'] * 1e3:10.3f} {r['rtf']:7.2f} "
+            f"{r['error_vs_reference']:10.3%} {'-' if ana is None else format(ana, '10.3%'):>10s}"
         )
     for h in doc["hertz"]:
         print(

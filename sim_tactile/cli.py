@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -277,6 +278,85 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+# ---------------------------------------------------------------- bench
+def _finite_json(obj: object) -> object:
+    """The document with non-finite floats as None: stdout must stay valid JSON."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite_json(v) for v in obj]
+    return obj
+
+
+def _names_arg(value: str | None, option: str, valid: Sequence[str]) -> list[str] | None:
+    from .errors import ConfigError
+
+    if value is None:
+        return None
+    names = [n.strip() for n in value.split(",") if n.strip()]
+    bad = [n for n in names if n not in valid]
+    if bad or not names:
+        raise ConfigError(
+            f"{option} {value!r}: {bad[0] if bad else 'nothing'} is not valid; valid: "
+            f"a comma-separated list of {', '.join(valid)}"
+        )
+    return names
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .errors import ConfigError
+
+    raise ConfigError(
+        "bench: give a benchmark: 'sim-tactile bench speed-error [--quick] --out DIR' or "
+        "'sim-tactile bench stability'"
+    )
+
+
+def cmd_bench_speed_error(args: argparse.Namespace) -> int:
+    """Speed against error of the fidelity levels on each task's scene."""
+    from . import _validate as v
+    from .bench.speed_error import SCENES, markdown, run_speed_error, sweep_for
+    from .errors import ConfigError
+    from .sim.fidelity import LEVELS
+
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {args.out!r} exists and is not a directory")
+    if args.duration is not None:
+        v.in_range("--duration", args.duration, 0.05, 60.0, unit="s")
+    sweep = sweep_for(
+        args.quick,
+        scenes=_names_arg(args.scenes, "--scenes", list(SCENES)),
+        levels=_names_arg(args.levels, "--levels", list(LEVELS)),
+        duration_s=args.duration,
+    )
+    doc = _finite_json(run_speed_error(sweep, out, log=_log))
+    _emit(
+        args, doc, lambda: markdown(doc) + "\n" + "\n".join(f"figure: {f}" for f in doc["figures"])
+    )
+    if doc["crashes"]:
+        _log(f"sim-tactile: error: bench speed-error: {doc['crashes']} configuration(s) crashed")
+        return 1
+    return 0
+
+
+def cmd_bench_stability(args: argparse.Namespace) -> int:
+    """The hard cases: each must end in a measured result or a named error."""
+    from .bench.stability import case_names, run_stability, table
+
+    doc = _finite_json(run_stability(_names_arg(args.cases, "--cases", case_names()), log=_log))
+    _emit(args, doc, lambda: table(doc))
+    if doc["failures"]:
+        _log(
+            f"sim-tactile: error: bench stability: {doc['failures']} case(s) crashed or gave a "
+            f"wrong number: {', '.join(doc['failed'])}"
+        )
+        return 1
+    return 0
+
+
 # ---------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="sim-tactile", description=__doc__.splitlines()[0])
@@ -348,6 +428,51 @@ def build_parser() -> argparse.ArgumentParser:
     rn.add_argument("--repeats", type=int, default=None, help="splits per classifier")
     rn.add_argument("--seed", type=int, default=0, help="seed of the splits and models")
     rn.add_argument("--out", required=True, help="output directory")
+
+    bn = sub.add_parser(
+        "bench",
+        help="benchmarks: speed against error, stability",
+        description="benchmarks: speed against error of the fidelity levels, stability",
+    )
+    bn.add_argument("--json", dest="bench_json", action="store_true", help=argparse.SUPPRESS)
+    bn.set_defaults(func=cmd_bench)
+    bsub = bn.add_subparsers(dest="bench_command")
+    se = add(
+        bsub,
+        "speed-error",
+        cmd_bench_speed_error,
+        "real-time factor against error (vs the finest level and the closed forms) of every "
+        "fidelity level, time step and node pitch on each task's scene; table and Pareto figure",
+    )
+    se.add_argument(
+        "--quick", action="store_true", help="three scenes, fewer settings, short slides (~1 min)"
+    )
+    se.add_argument("--out", required=True, help="output directory")
+    se.add_argument(
+        "--scenes",
+        default=None,
+        help="comma-separated scenes: finger7, multilayer3, textures20, textures20-icub, "
+        "roughness8, hertz (default: all but textures20-icub; --quick: finger7, textures20, "
+        "hertz)",
+    )
+    se.add_argument(
+        "--levels", default=None, help="comma-separated levels to sweep: L0, L1, L2 (default: all)"
+    )
+    se.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        help="slide duration [s] (default: cross the texture; --quick: until the probe taxel "
+        "has crossed 5 features)",
+    )
+    st = add(
+        bsub,
+        "stability",
+        cmd_bench_stability,
+        "hard cases (fast slides, high forces, coarse steps, extreme neuron inputs, dead taxels, "
+        "empty spike trains): each must end in a measured result or a named error",
+    )
+    st.add_argument("--cases", default=None, help="comma-separated case names (default: all)")
 
     d = add(sub, "demo", cmd_demo, "run the main demo job")
     d.add_argument("--out", default="demo-out", help="output directory (default: demo-out)")

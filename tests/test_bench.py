@@ -1,0 +1,205 @@
+"""The contract's bench commands: stability (every hard case ends in a measured result or a
+named error, and the checker can fail) and speed-error (a tiny sweep)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from test_cli import run
+
+from sim_tactile import cli
+from sim_tactile.bench import stability
+from sim_tactile.bench.speed_error import Sweep, pareto_front, pulse_period, run_speed_error
+from sim_tactile.errors import ConfigError, PhysicsError
+from sim_tactile.plates import get_plate
+from sim_tactile.records import Recording
+
+# ---------------------------------------------------------------- stability
+
+#: Cases that must stop with a named error, and words of the cause their message must hold.
+EXPECTED_ERRORS = {
+    "too_coarse_time_step": ("PhysicsError", "time step too coarse"),
+    "skin_pressed_to_bottom": ("PhysicsError", "pressed to the bottom"),
+    "static_press_beyond_skin": ("PhysicsError", "pressed to the bottom"),
+    "neuron_nan_input": ("ConfigError", "must be finite"),
+    "dead_taxel_rate_calibration": ("ConfigError", "max_rate_hz"),
+}
+
+
+def test_bench_stability_cli(cli_env):
+    res = run(["bench", "stability", "--json"], cli_env, check=False)
+    assert res.returncode == 0, res.stderr
+    doc = json.loads(res.stdout)
+    cases = {c["name"]: c for c in doc["cases"]}
+    assert set(cases) == set(stability.case_names())
+    assert doc["failures"] == 0
+    for name, c in cases.items():
+        assert c["outcome"] in ("ok", "error"), (name, c["detail"])
+        assert c["detail"], name
+    for name, (cls, cause) in EXPECTED_ERRORS.items():
+        c = cases[name]
+        assert c["outcome"] == "error" and c["as_expected"], (name, c["detail"])
+        assert c["detail"].startswith(cls) and cause in c["detail"], c["detail"]
+    for name, c in cases.items():
+        if c["outcome"] != "ok":
+            continue
+        assert c["values"] and all(
+            isinstance(v, float) and math.isfinite(v) for v in c["values"].values()
+        ), (name, c["values"])
+        assert c["checks"] and all(c["checks"].values()), (name, c["checks"])
+    # the slides that must give a measured result did, with their figures in the detail
+    for name in ("fast_slide_200mm_s", "fast_slide_400mm_s", "high_force_5n", "sharp_edges"):
+        assert cases[name]["outcome"] == "ok", cases[name]["detail"]
+        assert cases[name]["values"]["rtf"] > 0 and "RTF" in cases[name]["detail"]
+    assert "smeared" in cases["features_below_node_pitch"]["detail"]
+    assert "NeuronStepWarning" in cases["izhikevich_huge_current"]["detail"]
+
+
+def _nan_case() -> stability.Measured:
+    return stability.Measured("a number that is not one", {"rtf": float("nan")}, {})
+
+
+def _bad_check() -> stability.Measured:
+    return stability.Measured("negative load", {"load": -1.0}, {"load is not negative": False})
+
+
+def _inf_in_train() -> stability.Measured:
+    return stability.Measured("trains", {"trains": [np.array([0.1]), np.array([np.inf])]}, {})
+
+
+def _not_a_number() -> stability.Measured:
+    return stability.Measured("text", {"rtf": "fast"}, {})
+
+
+def _crash() -> stability.Measured:
+    raise TypeError("unexpected")
+
+
+def _named() -> stability.Measured:
+    raise PhysicsError("the skin load is not finite (NaN or infinity)")
+
+
+def test_the_checker_fails_nan_failed_checks_and_crashes():
+    out = {
+        name: stability.run_case(stability.Case(name, f))
+        for name, f in (
+            ("nan", _nan_case),
+            ("bad_check", _bad_check),
+            ("inf_in_train", _inf_in_train),
+            ("not_a_number", _not_a_number),
+            ("crash", _crash),
+            ("named", _named),
+        )
+    }
+    assert out["nan"]["outcome"] == "wrong" and "rtf is not finite" in out["nan"]["detail"]
+    assert (
+        out["bad_check"]["outcome"] == "wrong"
+        and "load is not negative" in (out["bad_check"]["detail"])
+    )
+    assert out["inf_in_train"]["outcome"] == "wrong"
+    assert out["not_a_number"]["outcome"] == "wrong"
+    assert out["crash"]["outcome"] == "crash" and "TypeError" in out["crash"]["detail"]
+    assert out["named"]["outcome"] == "error" and out["named"]["detail"].startswith("PhysicsError")
+    doc = stability.run_stability(
+        cases=[stability.Case("nan", _nan_case), stability.Case("named", _named)]
+    )
+    assert doc["failures"] == 1 and doc["failed"] == ["nan"]
+
+
+def test_bench_stability_exits_nonzero_on_a_wrong_number(monkeypatch, capsys):
+    monkeypatch.setattr(stability, "CASES", (stability.Case("nan", _nan_case),))
+    assert cli.main(["bench", "stability", "--json"]) == 1
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)  # still valid JSON: NaN is written as null
+    assert doc["cases"][0]["outcome"] == "wrong"
+    assert "nan" in captured.err.strip().splitlines()[-1]
+
+
+def test_bench_without_a_name_is_a_one_line_error(cli_env):
+    res = run(["bench"], cli_env, check=False)
+    assert res.returncode != 0 and res.stdout == ""
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "speed-error" in lines[0] and "stability" in lines[0]
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["--scenes", "nope"], "--scenes 'nope'"),
+        (["--levels", "L3"], "L0, L1, L2"),
+        (["--duration", "-1"], "--duration = -1 s is out of range"),
+    ],
+)
+def test_bench_speed_error_bad_input_names_the_option(args, needle, tmp_path, capsys):
+    rc = cli.main(["bench", "speed-error", "--out", str(tmp_path), *args, "--json"])
+    captured = capsys.readouterr()
+    assert rc != 0 and captured.out == ""
+    assert needle in captured.err
+
+
+# ---------------------------------------------------------------- speed-error
+def test_pareto_front():
+    err = [0.0, 0.1, 0.2, 0.15, 0.5]
+    cost = [10.0, 1.0, 0.5, 2.0, 0.5]
+    assert pareto_front(err, cost) == [2, 1, 0]
+
+
+def test_pulse_period_of_a_known_pulse_train():
+    plate = get_plate("finger7/ridges-4")
+    rate, v, spacing = 100.0, 0.058, 9e-3
+    t = (np.arange(110) + 0.5) / rate
+    x_pad = -0.03 + v * t
+    phase = 2 * np.pi * x_pad / spacing
+    data = np.maximum(np.cos(phase), 0.0) ** 3 + 0.2 + 0.5 * t  # pulses on a drifting load
+    rec = Recording(
+        data[:, None],
+        t,
+        np.zeros((1, 3)),
+        meta={"rate_hz": rate, "x_pad_m": x_pad.tolist()},
+    )
+    m = pulse_period(rec, 0, plate, spacing, 0.06, 16e-3)  # commanded 60 mm/s, runs at 58
+    assert m["pad_speed_m_s"] == pytest.approx(v, rel=1e-9)
+    assert m["period_s"] == pytest.approx(spacing / v, rel=2e-3)
+    assert m["periods"] > 2
+
+
+def test_speed_error_tiny_sweep(tmp_path, cache):
+    sweep = Sweep(
+        scenes=("finger7",),
+        levels=("L0", "L1"),
+        dt_factors=(1.0,),
+        pitch_factors=(1.0,),
+        l2_dt_factors=(),
+        l2_pitch_factors=(),
+    )
+    doc = run_speed_error(sweep, tmp_path, cache=cache)
+    rows = doc["rows"]
+    assert [(r["fidelity"], r["setting"]) for r in rows] == [
+        ("L2", "reference"),
+        ("L0", "auto"),
+        ("L1", "auto"),
+    ]
+    for r in rows:
+        assert r["outcome"] == "ok", r
+        assert r["rtf"] > 0 and math.isfinite(r["rtf"])
+        assert math.isfinite(r["error_vs_reference"]) and r["error_vs_reference"] >= 0
+        assert math.isfinite(r["error_vs_analytic"]) and r["error_vs_analytic"] < 0.05
+        assert r["dt_s"] > 0 and r["pitch_m"] > 0 and r["scene"].startswith("finger7/ridges-4")
+    assert rows[0]["error_vs_reference"] == 0.0
+    assert rows[1]["error_vs_reference"] > rows[2]["error_vs_reference"] > 0  # L0 worse than L1
+    png = tmp_path / "speed_error.png"
+    assert doc["figures"] == [str(png)] and png.read_bytes()[:4] == b"\x89PNG"
+    assert json.loads((tmp_path / "speed_error.json").read_text())["rows"][0]["fidelity"] == "L2"
+    assert "| finger7/ridges-4" in (tmp_path / "speed_error.md").read_text()
+
+
+def test_sweep_rejects_bad_settings():
+    with pytest.raises(ConfigError, match="scene = 'nope' is not valid"):
+        Sweep(scenes=("nope",))
+    with pytest.raises(ConfigError, match="finer than the L2 reference"):
+        Sweep(l2_dt_factors=(0.5,))
+    with pytest.raises(ConfigError, match="duration_s"):
+        Sweep(duration_s=0.0)
