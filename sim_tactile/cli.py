@@ -248,14 +248,22 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- run (benchmark tasks)
 def _run_table(report: dict) -> str:
-    lines = [f"{'classifier':10s} {'accuracy':>15s} {'paper':>15s}  vs paper"]
-    for r in report["results"]:
+    labels = [r.get("label", r["classifier"]) for r in report["results"]]
+    w = max(10, *(len(x) for x in labels))
+    lines = [f"{report['task']}" + (" (quick)" if report.get("quick") else ""), ""]
+    lines.append(f"{'run':{w}s} {'accuracy':>15s} {'paper':>15s}  vs paper")
+    for lab, r in zip(labels, report["results"], strict=True):
         p = r["paper"]
-        paper = "-" if p is None else f"{p['mean']:.3f} ({p['std']:.3f})"
+        paper = "-"
+        if p is not None:
+            paper = f"{p['mean']:.3f}" + (f" ({p['std']:.3f})" if p["std"] is not None else "")
         acc = f"{r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f})"
-        lines.append(f"{r['classifier']:10s} {acc:>15s} {paper:>15s}  {r['comparison']['message']}")
+        lines.append(f"{lab:{w}s} {acc:>15s} {paper:>15s}  {r['comparison']['message']}")
     t = report["timing"]
-    lines.append(f"\nencode {t['encode_s']:.1f} s, classify {t['classify_s']:.1f} s")
+    lines.append(
+        f"\nsimulate {t['simulate_s']:.1f} s, encode {t['encode_s']:.1f} s, classify "
+        f"{t['classify_s']:.1f} s, wall {t.get('wall_s', 0.0):.1f} s"
+    )
     lines += [f"figure: {f}" for f in report["figures"]]
     return "\n".join(lines)
 
