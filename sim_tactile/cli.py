@@ -286,6 +286,38 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_ablate(args: argparse.Namespace) -> int:
+    """Sweep encoder / neuron / classifier parameters over a task's cached recordings."""
+    from .tasks.ablate import ablate, parse_sets
+
+    sets = parse_sets(args.sets)
+    rep = ablate(
+        args.task,
+        sets,
+        args.out,
+        quick=args.quick,
+        data=args.data,
+        classifiers=args.classifiers,
+        repeats=args.repeats,
+        seed=args.seed,
+        log=_log,
+    )
+
+    def table() -> str:
+        keys = list(rep["sets"])
+        lines = [" ".join(f"{k:>8s}" for k in keys) + "  accuracy (SD)   run"]
+        for r in rep["rows"]:
+            vals = " ".join(f"{r['params'][k]!s:>8s}" for k in keys)
+            lines.append(
+                f"{vals}  {r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f})  {r['label']}"
+            )
+        lines += [f"figure: {f}" for f in rep["figures"]]
+        return "\n".join(lines)
+
+    _emit(args, rep, table)
+    return 0
+
+
 # ---------------------------------------------------------------- bench
 def _finite_json(obj: object) -> object:
     """The document with non-finite floats as None: stdout must stay valid JSON."""
@@ -436,6 +468,29 @@ def build_parser() -> argparse.ArgumentParser:
     rn.add_argument("--repeats", type=int, default=None, help="splits per classifier")
     rn.add_argument("--seed", type=int, default=0, help="seed of the splits and models")
     rn.add_argument("--out", required=True, help="output directory")
+
+    ab = add(
+        sub,
+        "ablate",
+        cmd_ablate,
+        "grid sweep of encoder, neuron and classifier parameters over a task's cached slides",
+    )
+    ab.add_argument("task", help="task id, e.g. roughness8-v1")
+    ab.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        required=True,
+        metavar="PARAM=v1,v2",
+        help="a swept parameter: gain, max_rate_hz, preset, a, b, c, d, K, q, tau, k, C "
+        "(repeat --set for a grid)",
+    )
+    ab.add_argument("--quick", action="store_true", help="the task's quick data and repeats")
+    ab.add_argument("--data", default=None, help="folder of the real data set (*-real tasks)")
+    ab.add_argument("--classifiers", default=None, help="comma-separated names")
+    ab.add_argument("--repeats", type=int, default=None, help="splits per run")
+    ab.add_argument("--seed", type=int, default=0, help="seed of the splits and models")
+    ab.add_argument("--out", required=True, help="output directory")
 
     bn = sub.add_parser(
         "bench",

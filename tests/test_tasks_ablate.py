@@ -46,9 +46,10 @@ def test_point_spec_changes_the_encoders_and_classifiers():
     assert isinstance(enc, IzhikevichEncoder) and enc.gain == 40.0 and enc.max_rate_hz is None
     assert {p.d for p in enc.preset} == {4.0} and {p.a for p in enc.preset} == {0.1, 0.02}
     r8 = {r.name: r for r in _point_spec(get_task("roughness8-v1"), {"q": 6.0, "k": 3}).runs}
-    assert r8["VP q=24/s k=11 film1 9:1"].params["q"] == 6.0
-    assert r8["VP q=24/s k=11 film1 9:1"].params["n_neighbors"] == 3
-    assert "q" not in r8["ISI k=11 film1 9:1"].params  # q belongs to Victor-Purpura only
+    # the swept values are written into the labels
+    assert r8["VP q=6/s k=3 film1 9:1"].params["q"] == 6.0
+    assert r8["VP q=6/s k=3 film1 9:1"].params["n_neighbors"] == 3
+    assert "q" not in r8["ISI k=3 film1 9:1"].params  # q belongs to Victor-Purpura only
 
 
 def test_ablate_roughness_reuses_the_slides(tmp_path, cache_dir, monkeypatch):
@@ -59,10 +60,11 @@ def test_ablate_roughness_reuses_the_slides(tmp_path, cache_dir, monkeypatch):
     rep = ablate("roughness8-v1", sets, tmp_path / "a", quick=True, repeats=5, log=lines.append)
     assert len(rep["rows"]) == 2 * len(get_task("roughness8-v1").runs)
     acc = {
-        (r["params"]["gain"], r["label"]): r["accuracy_mean"]
+        (r["params"]["gain"], r["run"]): r["accuracy_mean"]
         for r in rep["rows"]
-        if r["label"].startswith("VP")
+        if r["run"].startswith("VP")
     }
+    assert all("k=3" in r["label"] for r in rep["rows"] if r["run"].startswith("VP"))
     # the gain reaches the neurons: ten times the input changes the spike trains
     assert any(acc[(60.0, lab)] != acc[(600.0, lab)] for _, lab in acc)
     assert Path(rep["figures"][0]).read_bytes()[:4] == b"\x89PNG"
@@ -72,6 +74,21 @@ def test_ablate_roughness_reuses_the_slides(tmp_path, cache_dir, monkeypatch):
     lines.clear()
     ablate("roughness8-v1", {"q": [12.0]}, tmp_path / "b", quick=True, repeats=2, log=lines.append)
     assert not any(line.startswith("simulating") for line in lines)
+
+
+def test_cli_ablate_table_and_errors(tmp_path, cli_env):
+    import subprocess
+    import sys
+
+    exe = str(Path(sys.executable).with_name("sim-tactile"))
+    bad = subprocess.run(
+        [exe, "ablate", "roughness8-v1", "--set", "gian=3", "--out", str(tmp_path)],
+        env=cli_env,
+        capture_output=True,
+        text=True,
+    )
+    assert bad.returncode == 2 and "--set gian: unknown parameter; valid: gain" in bad.stderr
+    assert not list(tmp_path.iterdir())  # nothing written before the input is valid
 
 
 def test_ablate_errors(tmp_path):

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import re
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -135,6 +136,18 @@ def _used(spec: TaskSpec) -> set[str]:
     return used
 
 
+def _relabel(label: str, point: Mapping) -> str:
+    """A run's label with the swept values written into it (``q=24/s`` -> ``q=6/s``)."""
+    out = label
+    if "q" in point:
+        out = re.sub(r"q=[0-9.]+/s", f"q={point['q']:g}/s", out)
+    if "tau" in point:
+        out = re.sub(r"tau=[0-9.]+ms", f"tau={point['tau'] * 1e3:g}ms", out)
+    if "k" in point:
+        out = re.sub(r"\bk=[0-9]+", f"k={point['k']}", out)
+    return out
+
+
 def _point_spec(spec: TaskSpec, point: Mapping) -> TaskSpec:
     enc_point = {k: v for k, v in point.items() if k in ENCODER_PARAMS}
     base_encoder = spec.encoder
@@ -161,7 +174,7 @@ def _point_spec(spec: TaskSpec, point: Mapping) -> TaskSpec:
             params["n_neighbors"] = point["k"]
         if "C" in point and r.classifier in ("svm", "svm-raw", "svm-spike"):
             params["C"] = point["C"]
-        runs.append(replace(r, params=params, paper=None))
+        runs.append(replace(r, params=params, paper=None, label=_relabel(r.name, point)))
     return replace(spec, encoder=encoder, runs=tuple(runs), encode_once=spec.encode_once)
 
 
@@ -179,7 +192,7 @@ def ablate(
 ) -> dict:
     """Sweep the grid ``sets`` (name -> values) over the task's data; returns
     ``{task, rows: [{params, classifier, label, accuracy_mean, accuracy_std}], figures}``."""
-    from .runner import _classifier_list, _stderr, evaluate_task
+    from .runner import _classifier_list, _runs, _stderr, evaluate_task
 
     log = log or _stderr
     spec = get_task(task_id)
@@ -207,6 +220,7 @@ def ablate(
     t0 = time.perf_counter()
     ds = spec.get_data(DataRequest(None if data is None else Path(data), quick, seed, log))
     load_s = time.perf_counter() - t0
+    base_runs = _runs(spec, classifiers, names)
     keys = list(sets)
     grid = [dict(zip(keys, vals, strict=True)) for vals in itertools.product(*sets.values())]
     rows = []
@@ -229,10 +243,11 @@ def ablate(
         notes = sorted({str(w.message) for w in caught})
         for msg in notes:
             log(f"  warning: {msg}")
-        for r in rep["results"]:
+        for base, r in zip(base_runs, rep["results"], strict=True):
             rows.append(
                 {
                     "params": point,
+                    "run": base.name,
                     "classifier": r["classifier"],
                     "label": r.get("label", r["classifier"]),
                     "accuracy_mean": r["accuracy_mean"],
@@ -284,7 +299,7 @@ def plot_ablation(rows: list[dict], sets: Mapping[str, Sequence], title: str, ou
     keys = list(sets)
     fig = Figure(figsize=(5.0 * len(keys), 3.8), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, len(keys), squeeze=False)).ravel()
-    labels = list(dict.fromkeys(r["label"] for r in rows))
+    labels = list(dict.fromkeys(r["run"] for r in rows))
     for ax, key in zip(axes, keys, strict=True):
         others = {k: sets[k][0] for k in keys if k != key}
         values = list(sets[key])
@@ -294,7 +309,7 @@ def plot_ablation(rows: list[dict], sets: Mapping[str, Sequence], title: str, ou
             sel = [
                 r
                 for r in rows
-                if r["label"] == lab and all(r["params"][k] == v for k, v in others.items())
+                if r["run"] == lab and all(r["params"][k] == v for k, v in others.items())
             ]
             by = {str(r["params"][key]): r for r in sel}
             m = [by[str(v)]["accuracy_mean"] if str(v) in by else np.nan for v in values]
