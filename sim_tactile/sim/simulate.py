@@ -280,6 +280,7 @@ def _simulate(
         x_pad[s] = x_start + d_dyn.qpos[scene.jx] - 0.5 * vcmd / proto.rate_hz
         runner.check_warnings()
     slide_wall = time.perf_counter() - t_slide
+    warnings += _force_warnings(forces, F, proto.speed_m_s)
     # micro-roughness acts through the contact patch on top of the finger's simulation
     micro = micro_loads(plate, layout, x_pad, out > 1e-9, finger.e_star_pa, proto.rate_hz)
     if micro.any():
@@ -322,6 +323,32 @@ def _simulate(
     }
     rec = Recording(out.astype(np.float32), times, layout.positions, units=units, meta=meta)
     return SimResult(rec, fid, sim_s, wall, warnings)
+
+
+#: a slide whose mean normal force strays further than this from the target is flagged
+FORCE_TOLERANCE = 0.05
+
+
+def _force_warnings(forces: np.ndarray, target_n: float, speed_m_s: float) -> list[str]:
+    """Say when the press force was not held during the slide: the force loop lets the pad
+    leave the plate behind sharp features and skim their tops at high speed, so the taxels
+    then feel another load than the protocol's (measured, not hidden)."""
+    out = []
+    mean = float(np.mean(forces))
+    off = float(np.mean(forces < 0.1 * target_n))
+    if abs(mean / target_n - 1.0) > FORCE_TOLERANCE:
+        out.append(
+            f"mean normal force over the slide {mean:.3g} N is {100 * (mean / target_n - 1):+.0f}% "
+            f"off the target {target_n:g} N at {speed_m_s * 1e3:g} mm/s: the force loop does not "
+            f"hold the press (the pad skims the features or bounces); slow down or compare "
+            f"recordings by their per-sample normal force (meta normal_force_n)"
+        )
+    if off > 0.02:
+        out.append(
+            f"the pad was off the plate (normal force < 10% of {target_n:g} N) in "
+            f"{100 * off:.1f}% of the samples"
+        )
+    return out
 
 
 def _plate_heights(plate: Plate, grid, x: float, y: float) -> np.ndarray:
