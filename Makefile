@@ -41,6 +41,11 @@ bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_plates.py
 	$(BIN)/python benchmarks/plate_views.py
 	$(BIN)/python benchmarks/bench_spikes.py
+	$(BIN)/python benchmarks/bench_finger.py
+	$(BIN)/python benchmarks/bench_sensors.py
+	$(BIN)/python benchmarks/bench_learn.py
+	$(BIN)/sim-tactile bench speed-error --out build/bench/speed-error
+	$(BIN)/sim-tactile bench stability
 
 clean:
 	rm -rf $(VENV) build demo-out .pytest_cache .ruff_cache
