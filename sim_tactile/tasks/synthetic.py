@@ -114,7 +114,7 @@ class SlideSet:
 
     @property
     def class_names(self) -> tuple[str, ...]:
-        return tuple(p.split("/", 1)[-1] for p in self.plates)
+        return tuple(_class_name(p) for p in self.plates)
 
     def window_protocol(self):
         """The protocol with its window length fixed."""
@@ -181,33 +181,30 @@ class SlideSet:
             meta["grid_shape"] = list(GRID_SHAPES[self.sensor])
         from ..sensors import get_sensor
 
-        sensor = get_sensor(self.sensor)
-        ds = TactileDataset.from_recordings(
-            recs,
-            labels,
-            self.class_names,
-            meta={**meta, "channel_names": list(sensor.layout.names)},
-        )
+        layout = get_sensor(self.sensor).layout
         return TactileDataset(
-            ds.data,
-            ds.labels,
-            ds.rate_hz,
-            tuple(sensor.layout.names),
-            tuple(p.split("/", 1)[-1] for p in plates),
-            ds.taxel_positions,
-            ds.units,
+            np.stack([r.data for r in recs]),
+            labels,
+            first.rate_hz,
+            tuple(layout.names),
+            tuple(_class_name(p) for p in plates),
+            first.taxels,
+            first.units,
             meta,
         )
 
 
-def _run_job(job: dict, cache_root: str) -> tuple[str, float, list[str]]:
-    """Simulate one slide into the cache; returns (cache key, wall s, warnings)."""
+def _class_name(plate: str) -> str:
+    return plate.split("/", 1)[-1]
+
+
+def _run_job(job: dict, cache_root: str) -> list[str]:
+    """Simulate one slide into the cache; returns its warnings."""
     from ..plates import get_plate
     from ..sim.simulate import Protocol, simulate
 
     cache = ArtefactCache(cache_root)
     key = ArtefactCache.key(job)
-    t0 = time.perf_counter()
     try:
         res = simulate(
             get_plate(job["plate"]),
@@ -221,7 +218,7 @@ def _run_job(job: dict, cache_root: str) -> tuple[str, float, list[str]]:
     except SimTactileError as exc:
         raise type(exc)(f"slide of {job['plate']} (seed {job['seed']}): {exc}") from exc
     res.recording.save(cache.path(key, "slide.npz"))
-    return key, time.perf_counter() - t0, list(res.warnings)
+    return list(res.warnings)
 
 
 def default_workers() -> int:
@@ -257,7 +254,7 @@ def simulate_slides(
         step = max(1, len(todo) // 10)
         if workers == 1 or len(todo) == 1:
             for n, i in enumerate(todo):
-                _, _, w = _run_job(jobs[i], str(cache.root))
+                w = _run_job(jobs[i], str(cache.root))
                 warns.update(w)
                 if log and (n + 1) % step == 0:
                     log(f"  {n + 1}/{len(todo)} slides ({time.perf_counter() - t0:.0f} s)")
@@ -268,7 +265,7 @@ def simulate_slides(
             with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
                 futs = [pool.submit(_run_job, jobs[i], str(cache.root)) for i in todo]
                 for n, f in enumerate(futs):
-                    _, _, w = f.result()
+                    w = f.result()
                     warns.update(w)
                     if log and (n + 1) % step == 0:
                         log(f"  {n + 1}/{len(todo)} slides ({time.perf_counter() - t0:.0f} s)")
