@@ -248,15 +248,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- run (benchmark tasks)
 def _run_table(report: dict) -> str:
+    from .tasks.report import paper_text
+
     labels = [r.get("label", r["classifier"]) for r in report["results"]]
     w = max(10, *(len(x) for x in labels))
     lines = [f"{report['task']}" + (" (quick)" if report.get("quick") else ""), ""]
     lines.append(f"{'run':{w}s} {'accuracy':>15s} {'paper':>15s}  vs paper")
     for lab, r in zip(labels, report["results"], strict=True):
-        p = r["paper"]
-        paper = "-"
-        if p is not None:
-            paper = f"{p['mean']:.3f}" + (f" ({p['std']:.3f})" if p["std"] is not None else "")
+        paper = paper_text(r["paper"])
         acc = f"{r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f})"
         lines.append(f"{lab:{w}s} {acc:>15s} {paper:>15s}  {r['comparison']['message']}")
     t = report["timing"]

@@ -44,6 +44,14 @@ def compare(mean: float, cell: PaperCell | None, note: str | None, *, quick: boo
     return out
 
 
+def paper_text(cell: dict | None) -> str:
+    """A paper cell (``PaperCell.to_json()``) as ``mean (SD)``, ``mean`` without an SD, or ``-``."""
+    if cell is None:
+        return "-"
+    sd = cell["std"]
+    return f"{cell['mean']:.3f}" + ("" if sd is None else f" ({sd:.3f})")
+
+
 def write_markdown(path: Path, report: dict, spec: TaskSpec) -> None:
     """``report.md``: the table next to the paper's, the timing and the figures."""
     lines = [f"# {report['task']}: {spec.title}", ""]
@@ -65,10 +73,7 @@ def write_markdown(path: Path, report: dict, spec: TaskSpec) -> None:
         "|---|---|---|---|---|---|---|",
     ]
     for r in report["results"]:
-        paper = r["paper"]
-        ptxt = "-" if paper is None else f"{paper['mean']:.3f}"
-        if paper is not None and paper["std"] is not None:
-            ptxt += f" ({paper['std']:.3f})"
+        ptxt = paper_text(r["paper"])
         label = r.get("label", r["classifier"])
         lines.append(
             f"| {label} | {r['features']} | {r['accuracy_mean']:.3f} "

@@ -36,7 +36,7 @@ from ..spikes import SpikeFeatures
 from ..spikes.multichannel import pairwise_multichannel
 from ..spikes.trains import SpikeTrains
 from .registry import DataRequest, Run, TaskSpec, get_task
-from .report import compare, write_figures, write_markdown
+from .report import compare, paper_text, write_figures, write_markdown
 
 
 def _stderr(msg: str) -> None:
@@ -412,8 +412,7 @@ def _run_suite(spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed,
         "|---|---|---|---|---|",
     ]
     for r in rows:
-        p = r["paper"]
-        ptxt = "-" if p is None else f"{p['mean']:.3f}" + (f" ({p['std']:.3f})" if p["std"] else "")
+        ptxt = paper_text(r["paper"])
         lines.append(
             f"| {r['label']} | {r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f}) | {ptxt} | "
             f"{r['repeats']} | {r['comparison']['message']} |"
