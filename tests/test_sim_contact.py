@@ -81,14 +81,43 @@ def test_numba_readout_equals_numpy_reference():
     np.testing.assert_array_equal(pen, penetration_map_reference(geom, dist, node_of_geom, 5))
 
 
-def test_factor_cache_gives_the_same_pressures():
-    from sim_tactile.sim.contact import FactorCache
+@pytest.mark.parametrize("with_k", [False, True])
+def test_active_set_updates_agree_with_the_fresh_solve(with_k):
+    """The incrementally updated inverse gives the fresh solve's pressures while the contact
+    set grows, shrinks, jumps and empties, including through its periodic rebuilds."""
+    from sim_tactile.sim.contact import ActiveSet
 
-    C, pen = _problem(1)
-    cache = FactorCache(size=2)
-    K = np.linalg.inv(C)
-    for shift in (0.0, 1e-6, 0.0, 3e-4, 3e-4 + 1e-7):  # small shifts keep the contact set
-        p_ref, _ = halfspace(pen + shift, C, K=K)
-        p, _ = halfspace(pen + shift, C, K=K, cache=cache)
-        np.testing.assert_allclose(p, p_ref, rtol=1e-9, atol=1e-12 * p_ref.max())
-    assert cache.hits > 0 and cache.misses > 0
+    C, pen = _problem(1, n=11)
+    K = np.linalg.inv(C) if with_k else None
+    solver = ActiveSet(C, K, refresh=7)  # small refresh: the rebuild path runs too
+    rng = np.random.default_rng(0)
+    X = (np.arange(C.shape[0]) % 11) * 1e-3
+    shifts = list(np.linspace(-1e-4, 4e-4, 12)) + [0.0, -1.0, 2e-4]  # -1: no contact at all
+    for k, shift in enumerate(shifts):
+        # a ridge edge sweeping across the grid changes the set by whole columns
+        edge = 0.5e-3 * k
+        step = np.where(X < edge, 5e-5, 0.0)
+        pen_k = pen + shift + step + 1e-6 * rng.standard_normal(pen.size)
+        p_ref, a_ref = halfspace(pen_k, C)
+        p, a = solver.solve(pen_k)
+        scale = max(p_ref.max(), 1e-30)
+        np.testing.assert_allclose(p, p_ref, rtol=0, atol=1e-9 * scale)
+        assert (a == a_ref).all()
+        if a.any():
+            # the pad's contact stiffness is 1' inv(C_SS) 1
+            S = np.flatnonzero(a)
+            want = np.linalg.solve(C[np.ix_(S, S)], np.ones(S.size)).sum()
+            assert solver.stiffness_per_area() == pytest.approx(want, rel=1e-8)
+    assert solver.rebuilds > 1 and solver.updates >= 0
+
+
+def test_active_set_is_deterministic():
+    from sim_tactile.sim.contact import ActiveSet
+
+    C, pen = _problem(2)
+    outs = []
+    for _ in range(2):
+        solver = ActiveSet(C, np.linalg.inv(C), refresh=5)
+        outs.append([solver.solve(pen + s)[0] for s in np.linspace(-5e-5, 3e-4, 9)])
+    for a, b in zip(*outs, strict=True):
+        np.testing.assert_array_equal(a, b)

@@ -54,7 +54,7 @@ class Scene:
     K: np.ndarray | None  # inv(C) [Pa/m]
     jx: int  # dof index of slide_x
     jz: int  # dof index of press_z
-    factors: object = None  # a sim.contact.FactorCache for C, set by the simulation
+    solver: object = None  # a sim.contact.ActiveSet for C, set by the simulation
 
     @property
     def n_nodes(self) -> int:

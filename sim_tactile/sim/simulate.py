@@ -94,24 +94,19 @@ class SimResult:
     warnings: list[str] = field(default_factory=list)
 
 
-def _skin_pressure(scene, fid: Fidelity, pen: np.ndarray, active):
+def _skin_pressure(scene, fid: Fidelity, pen: np.ndarray):
     if scene.C is None:
-        p = contact.winkler(pen, fid.winkler_k_pa_per_m)
-        return p, None
-    return contact.halfspace(pen, scene.C, active, scene.K, scene.factors)
+        return contact.winkler(pen, fid.winkler_k_pa_per_m)
+    p, _ = scene.solver.solve(pen)
+    return p
 
 
-def _contact_stiffness(scene, fid: Fidelity, p: np.ndarray, active) -> float:
+def _contact_stiffness(scene, fid: Fidelity, p: np.ndarray) -> float:
     """dF/dz of the skin at the current contact set [N/m]."""
     A = scene.grid.area_m2
     if scene.C is None:
         return fid.winkler_k_pa_per_m * A * float(np.count_nonzero(p))
-    if active is None or not active.any():
-        return 0.0
-    S = np.flatnonzero(active)
-    return A * float(
-        contact._solve_subset(scene.C, scene.K, S, np.ones(S.size), scene.factors).sum()
-    )
+    return A * scene.solver.stiffness_per_area()
 
 
 def simulate(
@@ -205,7 +200,7 @@ def _simulate(
         coupled=fid.coupled,
         cache=cache,
     )
-    scene.factors = contact.FactorCache() if fid.coupled else None
+    scene.solver = contact.ActiveSet(scene.C, scene.K) if fid.coupled else None
     scene.m_col.body("bone")  # validate name
     d_col = mujoco.MjData(scene.m_col)
     d_dyn = mujoco.MjData(scene.m_dyn)
@@ -364,7 +359,6 @@ class _Runner:
         self.s, self.fid, self.finger = scene, fid, finger
         self.d_col, self.d_dyn, self.dt = d_col, d_dyn, dt
         self.pen = np.zeros(scene.n_nodes)
-        self.active = None
         self.loads = np.zeros(scene.n_nodes)
         self.drag_sum = 0.0
         self.n_slide_steps = 0
@@ -394,7 +388,7 @@ class _Runner:
             penetration_map(con.geom, con.dist, s.node_of_geom, pen)
         else:
             pen[:] = -np.inf
-        p, self.active = _skin_pressure(s, self.fid, pen, self.active)
+        p = _skin_pressure(s, self.fid, pen)
         loads = self.loads
         np.multiply(p, s.grid.area_m2, out=loads)
         Fs = float(loads.sum())
@@ -407,7 +401,7 @@ class _Runner:
             )
         self._stiff_check -= 1
         if self._stiff_check <= 0 and Fs > 0:
-            k = _contact_stiffness(s, self.fid, p, self.active)
+            k = _contact_stiffness(s, self.fid, p)
             w_dt = math.sqrt(k / self.finger.bone_mass_kg) * self.dt
             if w_dt > MAX_OMEGA_DT:
                 raise PhysicsError(
