@@ -80,3 +80,17 @@ def test_skin_pressed_to_the_bottom_stops(cache):
             ideal=True,
             cache=cache,
         )
+
+
+def test_press_beyond_what_the_skin_carries_stops_as_bottomed_not_runaway(cache):
+    """20 N on the 4 mm skin over 2.5 mm ridges: the nodes end up inside the narrow ridges
+    and the base box, where the collider reads depth from the nearest other face, so only the
+    pad's own depth shows the skin bottomed out (it once fell through as a 'runaway')."""
+    with pytest.raises(PhysicsError, match=r"pressed to the bottom.*half the plate's 5 mm base"):
+        simulate(
+            "finger7/ridges-4",
+            "grid3x3",
+            protocol=Protocol(force_n=20.0, duration_s=0.3),
+            ideal=True,
+            cache=cache,
+        )

@@ -426,9 +426,9 @@ CASES: tuple[Case, ...] = (
         high_force_20n,
         "error",
         "20 N on the 4 mm skin (E 0.3 MPa) over 2.5 mm ridges: beyond what the skin carries. "
-        "It stops as a runaway, not as a bottomed skin: a node's depth is read against the "
-        "nearest face of the plate's 5 mm base box, so past about 2.75 mm (half the base plus "
-        "the node radius) contacts vanish and the pad falls through the plate",
+        "It stops as a bottomed skin once the pad is 2.5 mm below the base surface: past half "
+        "the plate's 5 mm base box the collider reads a node's depth from the bottom face, so "
+        "that depth, not the skin's 4 mm, is the limit",
     ),
     Case("sharp_edges", sharp_edges, "ok", "a pad without edge roll-off over sharp box ridges"),
     Case(

@@ -210,7 +210,7 @@ def _simulate(
     scene.m_dyn.body_pos[scene.m_dyn.body("bone").id, 1] = bone_y
     scene.m_col.body_pos[scene.m_col.body("bone").id, 1] = bone_y
 
-    runner = _Runner(scene, fid, finger, d_col, d_dyn, dt)
+    runner = _Runner(scene, fid, finger, d_col, d_dyn, dt, z0_m=z0, plate=plate)
     # --- approach (kinematic descent) and press (force ramp), then settle
     F = proto.force_n
     t = 0.0
@@ -355,7 +355,17 @@ def _plate_heights(plate: Plate, grid, x: float, y: float) -> np.ndarray:
 class _Runner:
     """One simulation step: collision query, skin solve, forces on the bone, MuJoCo step."""
 
-    def __init__(self, scene, fid: Fidelity, finger: Finger, d_col, d_dyn, dt: float):
+    def __init__(
+        self,
+        scene,
+        fid: Fidelity,
+        finger: Finger,
+        d_col,
+        d_dyn,
+        dt: float,
+        z0_m: float = 0.0,
+        plate: Plate | None = None,
+    ):
         self.s, self.fid, self.finger = scene, fid, finger
         self.d_col, self.d_dyn, self.dt = d_col, d_dyn, dt
         self.pen = np.zeros(scene.n_nodes)
@@ -364,6 +374,19 @@ class _Runner:
         self.n_slide_steps = 0
         self.z_ref = None
         self.max_pen_allowed = finger.thickness_m
+        # The pad's lowest point starts at z0 (qpos 0); the plate's base surface is at 0. A
+        # node pressed into a feature narrower than the skin is thick, or deeper than half the
+        # base box, is measured to the nearest other face, so its depth is no longer read
+        # right; the pad's own depth below the base is checked against both limits.
+        self.z0 = z0_m
+        self.max_depth = finger.thickness_m
+        self.depth_limit = "the skin thickness"
+        if plate is not None and plate.thickness_m / 2 < self.max_depth:
+            self.max_depth = plate.thickness_m / 2
+            self.depth_limit = (
+                f"half the plate's {plate.thickness_m * 1e3:g} mm base, below which the "
+                "collider reads depths from the base's bottom face"
+            )
         self._stiff_check = 0
 
     def step(
@@ -419,6 +442,15 @@ class _Runner:
         dd.qfrc_applied[s.jx] = drag
         dd.ctrl[0] = slide_v
         mujoco.mj_step(s.m_dyn, dd)
+        low = self.z0 + dd.qpos[s.jz]
+        if low < -self.max_depth:
+            raise PhysicsError(
+                f"skin pressed to the bottom: the pad's lowest point is {-low * 1e3:.3g} mm below "
+                f"the plate's base surface, beyond {self.max_depth * 1e3:.3g} mm "
+                f"({self.depth_limit}; the skin is {self.max_pen_allowed * 1e3:.3g} mm thick): "
+                f"{force_cmd:g} N is more than this pad carries here; lower the force or use a "
+                "thicker or stiffer skin"
+            )
         if not (math.isfinite(dd.qpos[s.jz]) and abs(dd.qpos[s.jz]) < 0.05):
             raise PhysicsError(
                 f"the finger ran away (z = {dd.qpos[s.jz]:.3g} m): the simulation diverged"
