@@ -72,10 +72,7 @@ class ActiveSet:
         if self.updates >= self.refresh:
             self._rebuild(self.S[keep])
             return
-        M = self.M
-        Mkr = M[np.ix_(keep, drop)]
-        Mrr = M[np.ix_(drop, drop)]
-        self.M = M[np.ix_(keep, keep)] - Mkr @ np.linalg.solve(Mrr, Mkr.T)
+        self.M = _inverse_without(self.M, np.flatnonzero(keep), np.flatnonzero(drop))
         self._in[self.S[drop]] = False
         self.S = self.S[keep]
         self.updates += int(drop.sum())
@@ -84,21 +81,10 @@ class ActiveSet:
         if self.S.size == 0 or self.updates >= self.refresh:
             self._rebuild(np.concatenate([self.S, A]))
             return
-        C, M, S = self.C, self.M, self.S
-        B = C[np.ix_(S, A)]
-        MB = M @ B
-        Zi = np.linalg.inv(C[np.ix_(A, A)] - B.T @ MB)
-        G = MB @ Zi
-        n, a = S.size, A.size
-        out = np.empty((n + a, n + a))
-        out[:n, :n] = M + G @ MB.T
-        out[:n, n:] = -G
-        out[n:, :n] = -G.T
-        out[n:, n:] = Zi
-        self.M = out
-        self.S = np.concatenate([S, A])
+        self.M = _inverse_with(self.M, self.C, self.S, A)
+        self.S = np.concatenate([self.S, A])
         self._in[A] = True
-        self.updates += a
+        self.updates += A.size
 
     # -- the contact problem
     def solve(self, pen_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -184,6 +170,48 @@ def _kkt_same_set(M, S, pen, C, in_set, tol_rel, p) -> bool:
     for k in range(m):
         p[S[k]] = pS[k]
     return True
+
+
+@numba.njit(cache=True)
+def _inverse_without(M, keep, drop):
+    """inv(C_KK) from M = inv(C_SS), S = K + R: the Schur complement M_KK - M_KR inv(M_RR) M_RK."""
+    Mkr = np.empty((keep.size, drop.size))
+    Mrr = np.empty((drop.size, drop.size))
+    Mkk = np.empty((keep.size, keep.size))
+    for i in range(keep.size):
+        for j in range(drop.size):
+            Mkr[i, j] = M[keep[i], drop[j]]
+        for j in range(keep.size):
+            Mkk[i, j] = M[keep[i], keep[j]]
+    for i in range(drop.size):
+        for j in range(drop.size):
+            Mrr[i, j] = M[drop[i], drop[j]]
+    X = np.linalg.solve(Mrr, np.ascontiguousarray(Mkr.T))
+    return Mkk - Mkr @ X
+
+
+@numba.njit(cache=True)
+def _inverse_with(M, C, S, A):
+    """inv(C_TT) for T = S + A from M = inv(C_SS), through the Schur complement of C_SS:
+    Z = C_AA - C_AS M C_SA, inv = [[M + M B Z^-1 B' M, -M B Z^-1], [-Z^-1 B' M, Z^-1]]."""
+    n, a = S.size, A.size
+    B = np.empty((n, a))
+    for i in range(n):
+        for j in range(a):
+            B[i, j] = C[S[i], A[j]]
+    D = np.empty((a, a))
+    for i in range(a):
+        for j in range(a):
+            D[i, j] = C[A[i], A[j]]
+    MB = M @ B
+    Zi = np.linalg.inv(D - np.ascontiguousarray(B.T) @ MB)
+    G = MB @ Zi
+    out = np.empty((n + a, n + a))
+    out[:n, :n] = M + G @ np.ascontiguousarray(MB.T)
+    out[:n, n:] = -G
+    out[n:, :n] = -G.T
+    out[n:, n:] = Zi
+    return out
 
 
 def _inverse_subset(C: np.ndarray, K: np.ndarray | None, S: np.ndarray) -> np.ndarray:
