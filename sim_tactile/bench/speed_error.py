@@ -210,12 +210,12 @@ QUICK = Sweep(
 #: Why a sweep leaves a scene out (printed in its document, never silent).
 LEFT_OUT = {
     "multilayer3": "left out of --quick: its L2 reference (0.4 mm nodes under 5 N) runs at "
-    "about 1/100 of real time, minutes",
+    "about 1/40 of real time, minutes",
     "roughness8": "left out of --quick: no closed form to check; its 1 kHz L2 reference "
     "takes about 10 s",
     "textures20-icub": "left out by default: the iCub patch (32 x 22 mm, about 600 nodes at "
-    "L1) runs at about 1/20 of real time at L1 and 1/40 at L2, some 15 minutes for its "
-    "sweep; run it with --scenes textures20-icub",
+    "L1) runs at about half of real time at L1 and its L2 reference has four times the "
+    "nodes, many minutes for its sweep; run it with --scenes textures20-icub",
 }
 
 
