@@ -21,7 +21,7 @@ $(STAMP_RUN): pyproject.toml | $(BIN)/python
 
 $(STAMP_TEST): pyproject.toml | $(BIN)/python
 	$(BIN)/pip install -q $(TORCH_PIN)
-	$(BIN)/pip install -q -e '.[test,learn]'
+	$(BIN)/pip install -q -e '.[test,learn,ray]'
 	touch $@ $(STAMP_RUN)
 
 # the main job: the soft-finger paper's task in simulation, quick (about a minute here)

@@ -198,18 +198,23 @@ def _class_name(plate: str) -> str:
     return plate.split("/", 1)[-1]
 
 
-def _run_job(job: dict, cache_root: str) -> list[str]:
-    """Simulate one slide into the cache; returns its warnings."""
+def simulate_job(job: dict, cache: ArtefactCache):
+    """Simulate the slide of one job (:meth:`SlideSet.jobs`; a ``finger`` key, the fields of
+    a :class:`~sim_tactile.scene.finger.Finger`, replaces the sensor's pad); a
+    :class:`~sim_tactile.sim.simulate.SimResult`. An error names the plate and the seed."""
     from ..plates import get_plate
+    from ..scene.finger import Finger
     from ..sim.simulate import Protocol, simulate
 
-    cache = ArtefactCache(cache_root)
-    key = ArtefactCache.key(job)
+    finger = job.get("finger")
+    if finger is not None:
+        finger = Finger(**{k: tuple(x) if isinstance(x, list) else x for k, x in finger.items()})
     try:
-        res = simulate(
+        return simulate(
             get_plate(job["plate"]),
             job["sensor"],
             protocol=Protocol(**job["protocol"]),
+            finger=finger,
             fidelity=job["fidelity"],
             seed=job["seed"],
             ideal=job["ideal"],
@@ -217,7 +222,13 @@ def _run_job(job: dict, cache_root: str) -> list[str]:
         )
     except SimTactileError as exc:
         raise type(exc)(f"slide of {job['plate']} (seed {job['seed']}): {exc}") from exc
-    res.recording.save(cache.path(key, "slide.npz"))
+
+
+def _run_job(job: dict, cache_root: str) -> list[str]:
+    """Simulate one slide into the cache; returns its warnings."""
+    cache = ArtefactCache(cache_root)
+    res = simulate_job(job, cache)
+    res.recording.save(cache.path(ArtefactCache.key(job), "slide.npz"))
     return list(res.warnings)
 
 
