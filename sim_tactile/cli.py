@@ -280,6 +280,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         repeats=args.repeats,
         seed=args.seed,
         log=_log,
+        store=args.store,
     )
     _emit(args, report, lambda: _run_table(report))
     return 0
@@ -300,6 +301,7 @@ def cmd_ablate(args: argparse.Namespace) -> int:
         repeats=args.repeats,
         seed=args.seed,
         log=_log,
+        store=args.store,
     )
 
     def table() -> str:
@@ -507,6 +509,9 @@ def build_parser() -> argparse.ArgumentParser:
     rn.add_argument("--repeats", type=int, default=None, help="splits per classifier")
     rn.add_argument("--seed", type=int, default=0, help="seed of the splits and models")
     rn.add_argument("--out", required=True, help="output directory")
+    rn.add_argument(
+        "--store", default=None, help="read the data from a store made by 'generate TASK'"
+    )
 
     ab = add(
         sub,
@@ -530,6 +535,9 @@ def build_parser() -> argparse.ArgumentParser:
     ab.add_argument("--repeats", type=int, default=None, help="splits per run")
     ab.add_argument("--seed", type=int, default=0, help="seed of the splits and models")
     ab.add_argument("--out", required=True, help="output directory")
+    ab.add_argument(
+        "--store", default=None, help="read the data from a store made by 'generate TASK'"
+    )
 
     gn = add(
         sub,

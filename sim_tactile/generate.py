@@ -626,7 +626,7 @@ def generate(
     writers: list[SlideWriter] = []
     todo: list[tuple[int, int]] = []
     root = None
-    interrupted = False
+    interrupted = checked = False
     sim_s = write_s = 0.0
     warns: list[Counter] = [Counter() for _ in plans]
     try:
@@ -643,10 +643,12 @@ def generate(
                 root_attrs["config_hash"] = config_hash({p.group: p.spec.hash for p in plans})
             create_store(out, {p.group: p.spec for p in plans}, root_attrs)
             root = zarr.open_group(str(out), mode="r+")
+        for plan in plans:  # all checks before anything is written
+            if resumed:
+                _check_same(root[plan.group] if plan.group else root, plan, out)
+        checked = True
         for k, plan in enumerate(plans):
             group = root[plan.group] if plan.group else root
-            if resumed:
-                _check_same(group, plan, out)
             w = SlideWriter(group)
             writers.append(w)
             done = w.done() if resumed else np.zeros(plan.spec.n_slides, bool)
@@ -695,6 +697,8 @@ def generate(
                         x, w_list, wall, drawn = (
                             h.result() if isinstance(h, _Done) else runner.result(h)
                         )
+                    except StoreError:
+                        raise
                     except SimTactileError as exc:
                         raise SimTactileError(
                             f"{plans[k].spec.name} slide {i}: {str(exc).splitlines()[0]}"
@@ -720,7 +724,7 @@ def generate(
     finally:
         if not interrupted:
             runner.close(cancel=True)
-        if root is not None:
+        if checked:
             _record_run(
                 root,
                 plans,

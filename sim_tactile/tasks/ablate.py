@@ -189,10 +189,12 @@ def ablate(
     repeats: int | None = None,
     seed: int = 0,
     log: Callable[[str], None] | None = None,
+    store: str | Path | None = None,
 ) -> dict:
-    """Sweep the grid ``sets`` (name -> values) over the task's data; returns
-    ``{task, rows: [{params, classifier, label, accuracy_mean, accuracy_std}], figures}``."""
-    from .runner import _classifier_list, _runs, _stderr, evaluate_task
+    """Sweep the grid ``sets`` (name -> values) over the task's data (or the data set in
+    ``store``); returns ``{task, rows: [{params, classifier, label, accuracy_mean,
+    accuracy_std}], figures}``."""
+    from .runner import _classifier_list, _path, _runs, _stderr, evaluate_task, task_data
 
     log = log or _stderr
     spec = get_task(task_id)
@@ -200,7 +202,7 @@ def ablate(
         raise ConfigError(
             f"task {task_id} is made of parts; ablate one of them: {', '.join(spec.parts)}"
         )
-    if spec.needs_data_path and data is None:
+    if spec.needs_data_path and data is None and store is None:
         raise ConfigError(f"task {task_id} runs on real recordings: pass --data PATH")
     sets = {k: list(v) for k, v in sets.items()}
     for k, v in sets.items():
@@ -218,7 +220,7 @@ def ablate(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    ds = spec.get_data(DataRequest(None if data is None else Path(data), quick, seed, log))
+    ds = task_data(spec, DataRequest(_path(data), quick, seed, log, _path(store)))
     load_s = time.perf_counter() - t0
     base_runs = _runs(spec, classifiers, names)
     keys = list(sets)

@@ -41,6 +41,9 @@ class DataRequest:
     quick: bool
     seed: int
     log: Callable[[str], None]
+    #: a store written by ``sim-tactile generate`` to read the data from (see
+    #: :func:`sim_tactile.tasks.stored.task_data`)
+    store: Path | None = None
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,11 @@ from ..spikes.multichannel import pairwise_multichannel
 from ..spikes.trains import SpikeTrains
 from .registry import DataRequest, Run, TaskSpec, get_task
 from .report import compare, paper_text, write_figures, write_markdown
+from .stored import task_data
+
+
+def _path(p: str | Path | None) -> Path | None:
+    return None if p is None else Path(p)
 
 
 def _stderr(msg: str) -> None:
@@ -170,6 +175,7 @@ def run_task(
     repeats: int | None = None,
     seed: int = 0,
     log: Callable[[str], None] | None = None,
+    store: str | Path | None = None,
 ) -> dict:
     """Run ``task_id`` and write its report into ``out_dir``; returns the report dict.
 
@@ -179,18 +185,19 @@ def run_task(
         classifiers: names (list or ``"a,b"``) instead of the task's default set.
         repeats: number of splits for every classifier instead of the task's numbers.
         seed: seeds the splits and every model.
+        store: read the data from this store (``sim-tactile generate``) instead.
     """
     log = log or _stderr
     spec = get_task(task_id)
     if spec.parts:
-        return _run_suite(spec, out_dir, quick, data, classifiers, repeats, seed, log)
+        return _run_suite(spec, out_dir, quick, data, classifiers, repeats, seed, log, store)
     names = _classifier_list(spec, classifiers)
     seed = integer("seed", seed, 0, None)
     if repeats is not None:
         repeats = integer("repeats", repeats, 1, None)
     if any(get_classifier(n).needs_torch for n in names):
         require("torch", "learn")
-    if spec.needs_data_path and data is None:
+    if spec.needs_data_path and data is None and store is None:
         raise ConfigError(
             f"task {task_id} runs on real recordings: pass --data PATH (the folder of the data "
             f"set, e.g. ../shared/datasets/biotac_slide_20_50)"
@@ -200,7 +207,7 @@ def run_task(
     t_start = time.perf_counter()
 
     t0 = time.perf_counter()
-    ds = spec.get_data(DataRequest(None if data is None else Path(data), quick, seed, log))
+    ds = task_data(spec, DataRequest(_path(data), quick, seed, log, _path(store)))
     load_s = time.perf_counter() - t0
     log(
         f"{task_id}: {ds.n_samples} samples x {ds.n_time} steps x {ds.n_channels} channels at "
@@ -360,7 +367,9 @@ def evaluate_task(
     return report
 
 
-def _run_suite(spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed, log) -> dict:
+def _run_suite(
+    spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed, log, store
+) -> dict:
     """A task made of parts (one per sensor): each part's report in ``out_dir/<part>``, and
     one report whose rows are the parts' rows, labelled ``<part>: <row>``."""
     t0 = time.perf_counter()
@@ -378,6 +387,7 @@ def _run_suite(spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed,
             repeats=repeats,
             seed=seed,
             log=log,
+            store=store,
         )
     rows = [
         {**r, "label": f"{part}: {r.get('label', r['classifier'])}", "part": part}
