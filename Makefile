@@ -44,6 +44,7 @@ bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_finger.py
 	$(BIN)/python benchmarks/bench_sensors.py
 	$(BIN)/python benchmarks/bench_learn.py
+	$(BIN)/python benchmarks/bench_generate.py
 	$(BIN)/sim-tactile bench speed-error --out build/bench/speed-error
 	$(BIN)/sim-tactile bench stability
 
