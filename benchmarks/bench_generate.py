@@ -8,7 +8,7 @@ load on this shared machine hits them alike; medians over the repeats. Memory: a
 process per size writes short slides (0.2 s) with 2 workers; the parent's resident set at
 the end and its peak.
 
-    python benchmarks/bench_generate.py [--repeats 5] [--slides 3] [--out build/bench/generate]
+    python benchmarks/bench_generate.py [--repeats 5] [--slides 6] [--out build/bench/generate]
 """
 
 from __future__ import annotations
@@ -103,7 +103,7 @@ def baseline(cfg_path: Path) -> tuple[float, float]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--slides", type=int, default=3, help="slides per plate in a timed run")
+    ap.add_argument("--slides", type=int, default=6, help="slides per plate in a timed run")
     ap.add_argument("--sizes", default="6,60", help="slides per plate of the memory runs")
     ap.add_argument("--out", default="build/bench/generate")
     ap.add_argument("--memory-child", nargs=2, metavar=("STORE", "SLIDES"), help=argparse.SUPPRESS)

@@ -424,3 +424,37 @@ def test_tasks_read_their_data_from_a_store(tiny_task, tmp_path):
     )
     assert rep["results"][0]["classifier"] == "svm-raw"
     assert rep["timing"]["simulate_s"] == 0.0
+
+
+def _fake_slide(job: dict):
+    """Zeros of the slide's shape and the protocol's own draw (no physics): for layouts."""
+    from sim_tactile.sensors import get_sensor
+    from sim_tactile.sim.simulate import Protocol
+
+    proto = Protocol(**job["protocol"])
+    p = proto.varied(np.random.default_rng(job["seed"]))
+    n = get_sensor(job["sensor"]).layout.n
+    x = np.full((round(proto.duration_s * proto.rate_hz), n), job["seed"] % 97, np.float32)
+    return x, [], 0.0, (p.speed_m_s, p.force_n, p.offset_y_m)
+
+
+def test_a_suite_gets_one_group_per_part(tmp_path):
+    out = tmp_path / "t20.zarr"
+    res = _quiet("textures20-v1", out, quick=True, workers=1, _simulate=_fake_slide)
+    assert res["parts"] == ["textures20-biotac19-v1", "textures20-icub60-v1"]
+    assert res["trials"] == 2 * 4 * 3
+    with pytest.raises(StoreError, match="holds the parts of textures20-v1"):
+        datasets.open(out)
+    bio = datasets.open(out, part="textures20-biotac19-v1")
+    icub = datasets.open(out / "textures20-icub60-v1")
+    assert len(bio.channel_names) == 19 and len(icub.channel_names) == 60
+    assert bio.class_names == ("flat", "grating-4.0mm", "boxes-4.5mm", "hemispheres-6.0mm")
+    assert bio.meta["config"]["task"] == "textures20-biotac19-v1" and icub.complete
+    doc = datasets.export(out, tmp_path / "npy")
+    assert (
+        doc["slides"] == 24 and (tmp_path / "npy" / "textures20-icub60-v1" / "data.npy").is_file()
+    )
+    with pytest.raises(StoreError, match="already exists"):
+        _quiet("textures20-v1", out, quick=True, _simulate=_fake_slide)
+    res = _quiet("textures20-v1", out, quick=True, resume=True, _simulate=_fake_slide)
+    assert res["reused"] == 24 and res["written"] == 0

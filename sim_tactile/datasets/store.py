@@ -165,7 +165,10 @@ def _create_group(root, path: str, spec: StoreSpec) -> None:
         return a
 
     g.create_array("data", shape=(n, t, c), dtype="float32", chunks=(1, t, c), fill_value=np.nan)
-    g.create_array("checksum", shape=(n,), dtype="uint64", chunks=(1,), fill_value=0)
+    # 8 bytes a chunk: compressing them would only cost time
+    g.create_array(
+        "checksum", shape=(n,), dtype="uint64", chunks=(1,), fill_value=0, compressors=None
+    )
     arr("lengths", spec.lengths.astype(np.int64), "int64")
     arr("labels", spec.labels.astype(np.int64), "int64")
     arr("slide", spec.slide.astype(np.int64), "int64")
@@ -212,8 +215,10 @@ class SlideWriter:
             )
         if not np.isfinite(x).all():
             raise StoreError(f"slide {i} holds non-finite samples; not written")
-        row = np.full((self.n_time, self.n_channels), np.nan, np.float32)
-        row[: want[0]] = x
+        row = x
+        if want[0] < self.n_time:  # pad a shorter slide with the fill value
+            row = np.full((self.n_time, self.n_channels), np.nan, np.float32)
+            row[: want[0]] = x
         self.data[i] = row  # the data chunk first...
         self.checksum[i] = np.uint64(slide_digest(x))  # ...then the mark that it is whole
 
