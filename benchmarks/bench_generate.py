@@ -28,15 +28,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-PLATES = [
-    "finger7/flat",
-    "finger7/ridges-2",
-    "finger7/ridges-4",
-    "finger7/ridges-8",
-    "finger7/bumps-3x3",
-    "finger7/bumps-4x4",
-    "finger7/bumps-6x6",
-]
+from sim_tactile.tasks.sim_tasks import FINGER7_PLATES
+
 RANDOMISE = {"speed_jitter": 0.05, "force_jitter": 0.10, "offset_jitter_m": 0.5e-3}
 
 
@@ -46,7 +39,7 @@ def config(seed: int, slides: int, duration_s: float | None = None) -> dict:
         proto["duration_s"] = duration_s
     return {
         "seed": seed,
-        "plates": PLATES,
+        "plates": list(FINGER7_PLATES),
         "sensor": "grid3x3",
         "slides_per_plate": slides,
         "protocol": proto,
