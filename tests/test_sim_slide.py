@@ -42,11 +42,16 @@ def _xcorr_lag(a: np.ndarray, b: np.ndarray, dt: float) -> float:
     return (k - (len(a) - 1) + frac) * dt
 
 
-@pytest.fixture(scope="module", params=[0.03, 0.06, 0.12], ids=lambda v: f"{v * 1e3:.0f}mm/s")
+@pytest.fixture(
+    scope="module",
+    params=[(v, fc) for fc in ("dynamic", "quasi-static") for v in (0.03, 0.06, 0.12)],
+    ids=lambda p: f"{p[0] * 1e3:.0f}mm/s-{p[1]}",
+)
 def ridges4(request, cache):
-    v = request.param
+    v, fc = request.param
+    proto = Protocol(speed_m_s=v, force_control=fc)
     return v, simulate(
-        "finger7/ridges-4", "grid3x3", protocol=Protocol(speed_m_s=v), ideal=True, cache=cache
+        "finger7/ridges-4", "grid3x3", protocol=proto, ideal=True, cache=cache
     ).recording
 
 

@@ -129,6 +129,46 @@ class ActiveSet:
             f"({int(touching.sum())} nodes)"
         )
 
+    def solve_force(
+        self, pen_m: np.ndarray, total_pa: float, max_iter: int = _MAX_ITER
+    ) -> tuple[np.ndarray, float]:
+        """The pad held at a given normal force: the downward shift ``dz`` [m] of the pad
+        and the pressures [Pa] at it, such that ``sum(p) = total_pa`` (the force over the
+        node area). Moving the pad down by ``dz`` deepens every node by ``dz`` (a negative
+        ``dz`` lifts the pad): exact for depths measured to a horizontal face; a node
+        against a feature's side wall is taken to clear it as the pad rises, so the pad
+        climbs a step's edge instead of sticking to its wall.
+
+        On a fixed contact set the total is linear in ``dz``, so each iteration solves it
+        exactly on the current set, then re-solves the contact problem at that shift; the
+        total is increasing and convex in ``dz`` (nodes join as the pad sinks), so this
+        Newton iteration converges, in one pass whenever the set holds. Nodes at ``-inf``
+        (no contact within the collider's margin) cannot join."""
+        if not total_pa > 0:
+            raise PhysicsError(f"solve_force needs a positive total pressure, got {total_pa!r}")
+        dz = 0.0
+        finite = np.isfinite(pen_m)
+        if not finite.any():
+            raise PhysicsError("no skin node lies within the collider's margin of the plate")
+        for _ in range(max_iter):
+            pS = pen_m[self.S]
+            if pS.size and np.isfinite(pS).all():  # else the solve below updates the set first
+                k = float(self.M.sum())
+                if k > 0:
+                    dz = (total_pa - float((self.M @ pS).sum())) / k
+            p, _ = self.solve(pen_m + dz)
+            got = float(p.sum())
+            if abs(got - total_pa) <= 1e-9 * total_pa:
+                return p, dz
+            if self.S.size == 0:  # nothing touches at this shift: sink to the first touch
+                dz = float(-pen_m[finite].max())
+                dz += 1e-9 * max(abs(dz), 1e-6)
+                p, _ = self.solve(pen_m + dz)
+        raise PhysicsError(
+            f"the force-holding contact solve did not converge in {max_iter} iterations "
+            f"(target {total_pa:.4g} Pa summed over the nodes)"
+        )
+
     def stiffness_per_area(self) -> float:
         """d(total pressure integral)/d(uniform indentation) on the current set [Pa/m]:
         ``1' inv(C_SS) 1``; times the node area it is the pad's contact stiffness."""

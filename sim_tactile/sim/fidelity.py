@@ -111,9 +111,11 @@ def choose_fidelity(
     dt_need = DT_MAX_S if scale is None else min(DT_MAX_S, scale / (v * STEPS_PER_FEATURE))
     level = "L1" if fidelity == "auto" else fidelity
     k_w = finger.e_star_pa / finger.thickness_m
-    # the skin-bone coupling is explicit: keep omega * dt at half its limit (1.0)
-    omega = math.sqrt(flat_stiffness(finger, level != "L0", k_w) / finger.bone_mass_kg)
-    dt_need = min(dt_need, 0.5 / omega)
+    # the dynamic skin-bone coupling is explicit: keep omega * dt at half its limit (1.0);
+    # quasi-static force control has no such coupling
+    if getattr(protocol, "force_control", "dynamic") == "dynamic":
+        omega = math.sqrt(flat_stiffness(finger, level != "L0", k_w) / finger.bone_mass_kg)
+        dt_need = min(dt_need, 0.5 / omega)
     px, py = finger.patch_m
     floor = math.sqrt(px * py / MAX_NODES["L1" if level == "L2" else level])
     if auto_pitch < floor:

@@ -38,6 +38,26 @@ APPROACH_CLEARANCE_M = 0.3e-3
 V_STICK = 1e-3
 
 
+#: How the press force is held during press, settle and slide (``Protocol.force_control``):
+#:
+#: - ``dynamic``: the bone is a mass on the press joint, pushed by the commanded force against
+#:   the skin's load, with damping critical at the flat pad's stiffness (MuJoCo integrates
+#:   it). The force overshoots where the load changes fast (a ridge's edge) and the pad leaves
+#:   the plate behind tall features; the coupling limits the time step (omega * dt).
+#: - ``quasi-static``: an ideal force controller: every step the pad is moved to the height at
+#:   which the skin carries exactly the commanded force (:meth:`contact.ActiveSet.solve_force`
+#:   on the collider's depths, a margin of :data:`QS_MARGIN_M` lets nodes join), so the
+#:   load is a function of the pad's position alone: no transients and no step limit from
+#:   the coupling. Needs the coupled skin (L1, L2).
+FORCE_CONTROLS = ("dynamic", "quasi-static")
+#: Collider margin [m] of the skin nodes under quasi-static force control: nodes this far
+#: above the plate are reported, so they can join the contact when the pad sinks; a step
+#: that would move the pad further than this is re-collided at the new height.
+QS_MARGIN_M = 0.5e-3
+#: Collision queries one quasi-static step may take before it gives up.
+_QS_COLLISIONS = 20
+
+
 @dataclass(frozen=True)
 class Protocol:
     """The slide protocol, SI units. ``duration_s`` None: cross the whole textured area,
@@ -55,6 +75,7 @@ class Protocol:
     speed_jitter: float = 0.0  # relative standard deviation, per repetition
     force_jitter: float = 0.0
     offset_jitter_m: float = 0.0
+    force_control: str = "dynamic"
 
     def __post_init__(self) -> None:
         v.in_range("speed_m_s", self.speed_m_s, 0.0, 1.0, unit="m/s")
@@ -69,6 +90,7 @@ class Protocol:
         v.in_range("speed_jitter", self.speed_jitter, 0.0, 0.5)
         v.in_range("force_jitter", self.force_jitter, 0.0, 0.5)
         v.in_range("offset_jitter_m", self.offset_jitter_m, 0.0, 0.01, unit="m")
+        v.one_of("force_control", self.force_control, FORCE_CONTROLS)
 
     def varied(self, rng: np.random.Generator) -> Protocol:
         """This protocol with speed, force and offset drawn around their nominal values."""
@@ -167,6 +189,11 @@ def _simulate(
             f"+-({px / 2:g}, {py / 2:g}) m; valid: taxels on the pad"
         )
     fid = choose_fidelity(plate, layout, finger, proto, fidelity, pitch_m=pitch_m, dt_s=dt_s)
+    if proto.force_control == "quasi-static" and not fid.coupled:
+        raise ConfigError(
+            f"force_control = 'quasi-static' needs the coupled skin, not {fid.level}; valid: "
+            "fidelity L1, L2 or auto (L0's Winkler bed has no force-holding solve)"
+        )
     warnings = list(fid.warnings)
     grid = skin_grid(finger, fid.pitch_m)
     n_sub = fid.steps_per_sample
@@ -210,7 +237,17 @@ def _simulate(
     scene.m_dyn.body_pos[scene.m_dyn.body("bone").id, 1] = bone_y
     scene.m_col.body_pos[scene.m_col.body("bone").id, 1] = bone_y
 
-    runner = _Runner(scene, fid, finger, d_col, d_dyn, dt, z0_m=z0, plate=plate)
+    runner = _Runner(
+        scene,
+        fid,
+        finger,
+        d_col,
+        d_dyn,
+        dt,
+        z0_m=z0,
+        plate=plate,
+        quasi_static=proto.force_control == "quasi-static",
+    )
     # --- approach (kinematic descent) and press (force ramp), then settle
     F = proto.force_n
     t = 0.0
@@ -365,8 +402,18 @@ class _Runner:
         dt: float,
         z0_m: float = 0.0,
         plate: Plate | None = None,
+        quasi_static: bool = False,
     ):
         self.s, self.fid, self.finger = scene, fid, finger
+        self.quasi_static = quasi_static
+        if quasi_static:
+            if scene.solver is None:
+                raise ConfigError(
+                    "force_control = 'quasi-static' needs the coupled skin; valid: fidelity "
+                    "L1, L2 or auto (L0's Winkler bed has no force-holding solve)"
+                )
+            nodes = scene.node_of_geom >= 0
+            scene.m_col.geom_margin[nodes] = QS_MARGIN_M
         self.d_col, self.d_dyn, self.dt = d_col, d_dyn, dt
         self.pen = np.zeros(scene.n_nodes)
         self.loads = np.zeros(scene.n_nodes)
@@ -401,17 +448,37 @@ class _Runner:
         if z_vel is not None:  # kinematic approach
             dd.qpos[s.jz] += z_vel * self.dt
             dd.qvel[s.jz] = 0.0
-        dc.qpos[:] = dd.qpos
-        mujoco.mj_kinematics(s.m_col, dc)
-        mujoco.mj_collision(s.m_col, dc)
+        quasi = self.quasi_static and z_vel is None and force_cmd > 0
         pen = self.pen
-        n = dc.ncon
-        if n:
+        for _ in range(_QS_COLLISIONS):
+            dc.qpos[:] = dd.qpos
+            mujoco.mj_kinematics(s.m_col, dc)
+            mujoco.mj_collision(s.m_col, dc)
+            n = dc.ncon
+            if not quasi:
+                if n:
+                    con = dc.contact
+                    penetration_map(con.geom, con.dist, s.node_of_geom, pen)
+                else:
+                    pen[:] = -np.inf
+                p = _skin_pressure(s, self.fid, pen)
+                break
+            if not n:  # nothing within the margin: sink by most of it and look again
+                dd.qpos[s.jz] -= 0.9 * QS_MARGIN_M
+                continue
             con = dc.contact
             penetration_map(con.geom, con.dist, s.node_of_geom, pen)
+            p, dz = s.solver.solve_force(pen, force_cmd / s.grid.area_m2)
+            dd.qpos[s.jz] -= dz
+            pen += dz  # the depths at the new height (for the checks below)
+            if abs(dz) <= QS_MARGIN_M:
+                break
         else:
-            pen[:] = -np.inf
-        p = _skin_pressure(s, self.fid, pen)
+            raise PhysicsError(
+                f"quasi-static force control: the pad found no height carrying {force_cmd:g} N "
+                f"within {_QS_COLLISIONS} collision queries (it fell more than "
+                f"{_QS_COLLISIONS * QS_MARGIN_M * 1e3:g} mm in one step)"
+            )
         loads = self.loads
         np.multiply(p, s.grid.area_m2, out=loads)
         Fs = float(loads.sum())
@@ -423,7 +490,7 @@ class _Runner:
                 f"skin thickness {self.max_pen_allowed * 1e3:.3g} mm (lower the force or use a thicker skin)"
             )
         self._stiff_check -= 1
-        if self._stiff_check <= 0 and Fs > 0:
+        if self._stiff_check <= 0 and Fs > 0 and not self.quasi_static:
             k = _contact_stiffness(s, self.fid, p)
             w_dt = math.sqrt(k / self.finger.bone_mass_kg) * self.dt
             if w_dt > MAX_OMEGA_DT:
@@ -438,7 +505,11 @@ class _Runner:
             drag = -self.finger.friction * Fs * math.tanh(dd.qvel[s.jx] / V_STICK)
             self.drag_sum += abs(drag)
             self.n_slide_steps += 1
-        dd.qfrc_applied[s.jz] = 0.0 if z_vel is not None else Fs - force_cmd
+        if quasi:  # the pad holds the height found above
+            dd.qvel[s.jz] = 0.0
+            dd.qfrc_applied[s.jz] = 0.0
+        else:
+            dd.qfrc_applied[s.jz] = 0.0 if z_vel is not None else Fs - force_cmd
         dd.qfrc_applied[s.jx] = drag
         dd.ctrl[0] = slide_v
         mujoco.mj_step(s.m_dyn, dd)
