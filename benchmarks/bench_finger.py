@@ -36,14 +36,23 @@ PLATE = "finger7/ridges-4"
 
 
 def run_levels(quick: bool) -> list[dict]:
-    """Rows of L0 and L1 (auto step, and 2x and 0.5x of it unless quick) and the L2 reference."""
+    """Rows of L0 and L1 (auto step, and 2x and 0.5x of it unless quick) and the L2 reference,
+    under the dynamic force loop; then L1 (auto, 2x, 2.5x and 0.5x of its step) and its own
+    L2 reference under quasi-static force control."""
     sweep = Sweep(
         scenes=("finger7",),
         levels=("L0", "L1"),
         dt_factors=(1.0,) if quick else (2.0, 1.0, 0.5),
         pitch_factors=(1.0,),
     )
-    return run_speed_error(sweep)["rows"]
+    qs = Sweep(
+        scenes=("finger7",),
+        levels=("L1",),
+        dt_factors=(1.0,) if quick else (2.5, 2.0, 1.0, 0.5),
+        pitch_factors=(1.0,),
+        force_control="quasi-static",
+    )
+    return run_speed_error(sweep)["rows"] + run_speed_error(qs)["rows"]
 
 
 def hertz_rows(quick: bool = False) -> list[dict]:
@@ -169,15 +178,17 @@ def main() -> int:
         print(json.dumps(doc, indent=2))
         return 0
     print(
-        f"{'level':6s} {'dt [ms]':>8s} {'pitch [mm]':>10s} {'RTF':>7s} {'err vs L2':>10s} {'period err':>10s}"
+        f"{'force':12s} {'level':6s} {'dt [ms]':>8s} {'pitch [mm]':>10s} {'RTF':>7s} {'err vs L2':>10s} {'period err':>10s}"
     )
     for r in doc["rows"]:
         if r["outcome"] != "ok":
-            print(f"{r['fidelity']:6s} {r['dt_s'] * 1e3:8.3f}  {r['outcome']}: {r['error']}")
+            print(
+                f"{r['force_control']:12s} {r['fidelity']:6s} {r['dt_s'] * 1e3:8.3f}  {r['outcome']}: {r['error']}"
+            )
             continue
         ana = r["error_vs_analytic"]
         print(
-            f"{r['fidelity']:6s} {r['dt_s'] * 1e3:8.3f} {r['pitch_m'] * 1e3:10.3f} {r['rtf']:7.2f} "
+            f"{r['force_control']:12s} {r['fidelity']:6s} {r['dt_s'] * 1e3:8.3f} {r['pitch_m'] * 1e3:10.3f} {r['rtf']:7.2f} "
             f"{r['error_vs_reference']:10.3%} {'-' if ana is None else format(ana, '10.3%'):>10s}"
         )
     for h in doc["hertz"]:

@@ -52,7 +52,7 @@ from ..scene.finger import Finger, skin_grid
 from ..scene.layouts import Layout
 from ..sim.fidelity import LEVELS, choose_fidelity
 from ..sim.press import hertz, press
-from ..sim.simulate import Protocol, simulate
+from ..sim.simulate import FORCE_CONTROLS, Protocol, simulate
 
 #: Margin [m] between the pad and the textured area where a slide starts (as in simulate).
 _START_MARGIN_M = 2e-3
@@ -157,6 +157,7 @@ class Sweep:
     press_pitches_m: tuple[float, ...] = (0.5e-3, 0.35e-3, 0.25e-3, 0.2e-3)
     press_ref_pitch_m: float = 0.1e-3
     quick: bool = False
+    force_control: str = "dynamic"
 
     def __post_init__(self) -> None:
         if not self.scenes:
@@ -167,6 +168,11 @@ class Sweep:
             raise ConfigError(f"scenes = {list(self.scenes)} names a scene twice")
         for lv in self.levels:
             v.one_of("level", lv, LEVELS)
+        v.one_of("force_control", self.force_control, FORCE_CONTROLS)
+        if self.force_control != "dynamic" and "L0" in self.levels:
+            raise ConfigError(
+                f"force_control = {self.force_control!r} needs the coupled skin; valid levels: L1, L2"
+            )
         for name in ("dt_factors", "pitch_factors", "l2_dt_factors", "l2_pitch_factors"):
             for f in getattr(self, name):
                 v.in_range(name, f, 0.0, 16.0, lo_open=True)
@@ -444,6 +450,7 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
         force_n=scene.force_n,
         duration_s=duration,
         rate_hz=layout.rate_hz,
+        force_control=sweep.force_control,
     )
     ref_rec: Recording | None = None
     ref_error = None
@@ -454,6 +461,7 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
             "scene_key": scene.key,
             "task": scene.task,
             "fidelity": cfg.level,
+            "force_control": sweep.force_control,
             "setting": cfg.setting,
             "dt_s": cfg.expect_dt_s,
             "pitch_m": cfg.expect_pitch_m,

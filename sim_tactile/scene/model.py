@@ -73,9 +73,13 @@ def build_scene(
     z_damping: float,
     coupled: bool,
     inverse: bool = True,
+    node_margin_m: float = 0.0,
     cache=None,
 ) -> Scene:
-    """Compose the plate's MJCF with the finger; x0, z0 place the pad's lowest point."""
+    """Compose the plate's MJCF with the finger; x0, z0 place the pad's lowest point.
+    ``node_margin_m``: the collider reports nodes this far above the plate too (with their
+    positive distance); it must be compiled in, as MuJoCo's broad phase sizes its bounding
+    boxes from it."""
     xml = build_plate(plate, kinds=("mjcf",), cache=cache).files["mjcf"].read_text()
     spec = mujoco.MjSpec.from_string(xml)
     spec.modelname = f"sim_tactile {plate.name or plate.hash}"
@@ -113,6 +117,7 @@ def build_scene(
             conaffinity=0,
             density=0.0,
             group=3,
+            margin=node_margin_m,
         )
         first = first if first is not None else g
     spec.add_actuator(

@@ -26,6 +26,7 @@ from ..scene.layouts import Layout, get_layout
 from ..scene.model import build_scene
 from . import contact
 from ._readout import penetration_map
+from .collide import PrimitiveCollider
 from .fidelity import Fidelity, choose_fidelity, flat_stiffness
 
 #: Largest omega * dt of the explicit skin-to-bone coupling before the run is refused; the
@@ -225,6 +226,7 @@ def _simulate(
         z0_m=z0,
         z_damping=z_damp,
         coupled=fid.coupled,
+        node_margin_m=QS_MARGIN_M if proto.force_control == "quasi-static" else 0.0,
         cache=cache,
     )
     scene.solver = contact.ActiveSet(scene.C, scene.K) if fid.coupled else None
@@ -403,6 +405,7 @@ class _Runner:
         z0_m: float = 0.0,
         plate: Plate | None = None,
         quasi_static: bool = False,
+        use_primitive_collider: bool = True,
     ):
         self.s, self.fid, self.finger = scene, fid, finger
         self.quasi_static = quasi_static
@@ -412,9 +415,16 @@ class _Runner:
                     "force_control = 'quasi-static' needs the coupled skin; valid: fidelity "
                     "L1, L2 or auto (L0's Winkler bed has no force-holding solve)"
                 )
-            nodes = scene.node_of_geom >= 0
-            scene.m_col.geom_margin[nodes] = QS_MARGIN_M
+
         self.d_col, self.d_dyn, self.dt = d_col, d_dyn, dt
+        bone = scene.m_col.body("bone").id
+        self.collider = (
+            PrimitiveCollider.from_model(scene.m_col, scene.node_of_geom, bone)
+            if use_primitive_collider
+            else None
+        )
+        self._bone0 = scene.m_col.body_pos[bone].copy()
+        self._bone_pos = self._bone0.copy()
         self.pen = np.zeros(scene.n_nodes)
         self.loads = np.zeros(scene.n_nodes)
         self.drag_sum = 0.0
@@ -444,30 +454,20 @@ class _Runner:
         z_vel: float | None = None,
         taxel_acc: np.ndarray | None = None,
     ) -> float:
-        s, dc, dd = self.s, self.d_col, self.d_dyn
+        s, dd = self.s, self.d_dyn
         if z_vel is not None:  # kinematic approach
             dd.qpos[s.jz] += z_vel * self.dt
             dd.qvel[s.jz] = 0.0
         quasi = self.quasi_static and z_vel is None and force_cmd > 0
         pen = self.pen
         for _ in range(_QS_COLLISIONS):
-            dc.qpos[:] = dd.qpos
-            mujoco.mj_kinematics(s.m_col, dc)
-            mujoco.mj_collision(s.m_col, dc)
-            n = dc.ncon
+            n = self._depths(pen)
             if not quasi:
-                if n:
-                    con = dc.contact
-                    penetration_map(con.geom, con.dist, s.node_of_geom, pen)
-                else:
-                    pen[:] = -np.inf
                 p = _skin_pressure(s, self.fid, pen)
                 break
             if not n:  # nothing within the margin: sink by most of it and look again
                 dd.qpos[s.jz] -= 0.9 * QS_MARGIN_M
                 continue
-            con = dc.contact
-            penetration_map(con.geom, con.dist, s.node_of_geom, pen)
             p, dz = s.solver.solve_force(pen, force_cmd / s.grid.area_m2)
             dd.qpos[s.jz] -= dz
             pen += dz  # the depths at the new height (for the checks below)
@@ -529,6 +529,28 @@ class _Runner:
         if taxel_acc is not None:
             taxel_acc += s.W @ loads
         return Fs
+
+    def _depths(self, pen: np.ndarray) -> bool:
+        """The skin's penetration-depth map at the bone's current position into ``pen``;
+        whether any node lies within the collider's margin. The primitive collider when the
+        plate allows it (equal to MuJoCo's, tested), else MuJoCo's."""
+        s, dd = self.s, self.d_dyn
+        if self.collider is not None:
+            b = self._bone_pos
+            b[0] = self._bone0[0] + dd.qpos[s.jx]
+            b[2] = self._bone0[2] + dd.qpos[s.jz]
+            self.collider.depths(b, pen)
+            return bool(np.isfinite(pen).any())
+        dc = self.d_col
+        dc.qpos[:] = dd.qpos
+        mujoco.mj_kinematics(s.m_col, dc)
+        mujoco.mj_collision(s.m_col, dc)
+        if dc.ncon:
+            con = dc.contact
+            penetration_map(con.geom, con.dist, s.node_of_geom, pen)
+            return True
+        pen[:] = -np.inf
+        return False
 
     def check_warnings(self) -> None:
         for d in (self.d_dyn, self.d_col):
