@@ -297,22 +297,49 @@ def _simulate(
     t_ramp = 0.02  # speed ramp at the start of each stroke [s]
     t_stroke = 0.0
     t_slide = time.perf_counter()
+    # Each sample is the mean load over its period by the trapezoid rule on the steps: half
+    # the load at the period's start, the steps inside, half the load at its end (the next
+    # period's first step); so a sample is centred on its time at any step.
+    now = np.zeros(layout.n)  # this step's taxel loads
+    first = np.zeros(layout.n)  # the load at the start of the current sample period
+    prev_sum = np.zeros(layout.n)
+    prev_first = np.zeros(layout.n)
+    f_first = f_prev_first = f_prev_sum = 0.0
+
+    def slide_step() -> float:
+        nonlocal stroke_i, xa, xb, sgn, t_stroke, vcmd
+        x = x_start + d_dyn.qpos[scene.jx]
+        if sgn * (x - xb) >= 0 and stroke_i + 1 < len(strokes):
+            stroke_i += 1
+            xa, xb, sgn = strokes[stroke_i]
+            t_stroke = 0.0
+        vcmd = sgn * v_slide * min(1.0, t_stroke / t_ramp)
+        f = runner.step(force_cmd=F, slide_v=vcmd, taxel_out=now)
+        t_stroke += dt
+        return f
+
+    def close(s: int, f_end: float) -> None:  # sample s ends where the current step starts
+        out[s] = (prev_sum + 0.5 * (now - prev_first)) / n_sub
+        forces[s] = (f_prev_sum + 0.5 * (f_end - f_prev_first)) / n_sub
+
+    vcmd = 0.0
     for s in range(n_samples):
         acc[:] = 0.0
         fsum = 0.0
-        for _ in range(n_sub):
-            x = x_start + d_dyn.qpos[scene.jx]
-            if sgn * (x - xb) >= 0 and stroke_i + 1 < len(strokes):
-                stroke_i += 1
-                xa, xb, sgn = strokes[stroke_i]
-                t_stroke = 0.0
-            vcmd = sgn * v_slide * min(1.0, t_stroke / t_ramp)
-            fsum += runner.step(force_cmd=F, slide_v=vcmd, taxel_acc=acc)
-            t_stroke += dt
-        out[s] = acc / n_sub
-        forces[s] = fsum / n_sub
+        for k in range(n_sub):
+            f = slide_step()
+            if k == 0:
+                if s:
+                    close(s - 1, f)
+                first[:] = now
+                f_first = f
+            acc += now
+            fsum += f
+        prev_sum[:], prev_first[:] = acc, first
+        f_prev_sum, f_prev_first = fsum, f_first
         x_pad[s] = x_start + d_dyn.qpos[scene.jx] - 0.5 * vcmd / proto.rate_hz
         runner.check_warnings()
+    close(n_samples - 1, slide_step())  # the last period's end point
     slide_wall = time.perf_counter() - t_slide
     warnings += _force_warnings(forces, F, proto.speed_m_s)
     # micro-roughness acts through the contact patch on top of the finger's simulation
@@ -453,6 +480,7 @@ class _Runner:
         slide_v: float = 0.0,
         z_vel: float | None = None,
         taxel_acc: np.ndarray | None = None,
+        taxel_out: np.ndarray | None = None,
     ) -> float:
         s, dd = self.s, self.d_dyn
         if z_vel is not None:  # kinematic approach
@@ -528,6 +556,8 @@ class _Runner:
             )
         if taxel_acc is not None:
             taxel_acc += s.W @ loads
+        if taxel_out is not None:
+            np.matmul(s.W, loads, out=taxel_out)
         return Fs
 
     def _depths(self, pen: np.ndarray) -> bool:
