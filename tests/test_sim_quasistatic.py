@@ -8,7 +8,7 @@ import pytest
 
 from sim_tactile.errors import ConfigError, PhysicsError
 from sim_tactile.scene.elastic import compliance_matrix
-from sim_tactile.sim.contact import ActiveSet, halfspace
+from sim_tactile.sim.contact import ActiveSet, halfspace, winkler_force
 from sim_tactile.sim.simulate import Protocol, simulate
 
 QS = "quasi-static"
@@ -118,8 +118,30 @@ def test_no_coupling_step_limit_but_the_coarse_step_warns(cache):
 def test_bad_force_control_is_refused(cache):
     with pytest.raises(ConfigError, match="force_control.*dynamic, quasi-static"):
         Protocol(force_control="pid")
-    with pytest.raises(ConfigError, match="force_control.*L0"):
-        simulate("finger7/flat", "grid3x3", fidelity="L0", protocol=Protocol(force_control=QS))
+
+
+def test_the_winkler_bed_holds_the_force_too(cache):
+    res = simulate(
+        "finger7/ridges-4",
+        "grid3x3",
+        fidelity="L0",
+        protocol=Protocol(force_control=QS, duration_s=0.6),
+        ideal=True,
+        cache=cache,
+    )
+    np.testing.assert_allclose(res.recording.meta["normal_force_n"], 1.0, rtol=1e-9)
+    assert res.recording.data.max() > 0
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_winkler_force_is_the_water_level(seed):
+    rng = np.random.default_rng(seed)
+    pen = rng.normal(0, 1e-4, 60)
+    pen[rng.random(60) < 0.2] = -np.inf
+    total = rng.uniform(10, 1e6)
+    p, dz = winkler_force(pen, 1e8, total)
+    assert p.sum() == pytest.approx(total, rel=1e-10)
+    np.testing.assert_array_equal(p, 1e8 * np.maximum(pen + dz, 0))
 
 
 def test_same_seed_same_bits(cache):

@@ -169,10 +169,7 @@ class Sweep:
         for lv in self.levels:
             v.one_of("level", lv, LEVELS)
         v.one_of("force_control", self.force_control, FORCE_CONTROLS)
-        if self.force_control != "dynamic" and "L0" in self.levels:
-            raise ConfigError(
-                f"force_control = {self.force_control!r} needs the coupled skin; valid levels: L1, L2"
-            )
+
         for name in ("dt_factors", "pitch_factors", "l2_dt_factors", "l2_pitch_factors"):
             for f in getattr(self, name):
                 v.in_range(name, f, 0.0, 16.0, lo_open=True)

@@ -29,6 +29,31 @@ def winkler(pen_m: np.ndarray, k_pa_per_m: float) -> np.ndarray:
     return k_pa_per_m * np.maximum(pen_m, 0.0)
 
 
+def winkler_force(
+    pen_m: np.ndarray, k_pa_per_m: float, total_pa: float
+) -> tuple[np.ndarray, float]:
+    """The Winkler bed held at a given force: the downward shift ``dz`` [m] of the pad and
+    the pressures [Pa] at it such that ``sum(p) = total_pa``, where ``p = k max(pen + dz,
+    0)``. The sum is piecewise linear and increasing in ``dz``: the nodes are taken deepest
+    first until the shift that carries the total lies within the last node's segment."""
+    if not total_pa > 0:
+        raise PhysicsError(f"winkler_force needs a positive total pressure, got {total_pa!r}")
+    finite = np.isfinite(pen_m)
+    if not finite.any():
+        raise PhysicsError("no skin node lies within the collider's margin of the plate")
+    d = np.sort(pen_m[finite])[::-1]  # deepest first
+    need = total_pa / k_pa_per_m  # sum of (pen + dz) over the touching nodes
+    csum = np.cumsum(d)
+    m = np.arange(1, d.size + 1)
+    dz_m = (need - csum) / m  # the shift if exactly the m deepest nodes touch
+    # the first m whose shift keeps the (m+1)-th node out of contact
+    nxt = np.append(d[1:], -np.inf)
+    ok = dz_m + nxt <= 0
+    j = int(np.argmax(ok))
+    dz = float(dz_m[j])
+    return k_pa_per_m * np.maximum(pen_m + dz, 0.0), dz
+
+
 class ActiveSet:
     """The half-space contact problem of one compliance ``C``, solved step after step with the
     inverse of ``C`` on the contact set kept up to date.

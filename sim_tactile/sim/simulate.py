@@ -190,11 +190,6 @@ def _simulate(
             f"+-({px / 2:g}, {py / 2:g}) m; valid: taxels on the pad"
         )
     fid = choose_fidelity(plate, layout, finger, proto, fidelity, pitch_m=pitch_m, dt_s=dt_s)
-    if proto.force_control == "quasi-static" and not fid.coupled:
-        raise ConfigError(
-            f"force_control = 'quasi-static' needs the coupled skin, not {fid.level}; valid: "
-            "fidelity L1, L2 or auto (L0's Winkler bed has no force-holding solve)"
-        )
     warnings = list(fid.warnings)
     grid = skin_grid(finger, fid.pitch_m)
     n_sub = fid.steps_per_sample
@@ -436,13 +431,6 @@ class _Runner:
     ):
         self.s, self.fid, self.finger = scene, fid, finger
         self.quasi_static = quasi_static
-        if quasi_static:
-            if scene.solver is None:
-                raise ConfigError(
-                    "force_control = 'quasi-static' needs the coupled skin; valid: fidelity "
-                    "L1, L2 or auto (L0's Winkler bed has no force-holding solve)"
-                )
-
         self.d_col, self.d_dyn, self.dt = d_col, d_dyn, dt
         bone = scene.m_col.body("bone").id
         self.collider = (
@@ -496,7 +484,12 @@ class _Runner:
             if not n:  # nothing within the margin: sink by most of it and look again
                 dd.qpos[s.jz] -= 0.9 * QS_MARGIN_M
                 continue
-            p, dz = s.solver.solve_force(pen, force_cmd / s.grid.area_m2)
+            if s.solver is None:  # L0: the Winkler bed
+                p, dz = contact.winkler_force(
+                    pen, self.fid.winkler_k_pa_per_m, force_cmd / s.grid.area_m2
+                )
+            else:
+                p, dz = s.solver.solve_force(pen, force_cmd / s.grid.area_m2)
             dd.qpos[s.jz] -= dz
             pen += dz  # the depths at the new height (for the checks below)
             if abs(dz) <= QS_MARGIN_M:
