@@ -66,3 +66,34 @@ def test_surface_weights_are_area_overlap_and_conserve_load():
     W = subsurface_weights(nodes, 0.5e-3, taxels, np.full((25, 2), 2e-3), np.zeros(25))
     inside = (np.abs(nodes) <= 5e-3 - 1e-12).all(axis=1)
     np.testing.assert_allclose(W.sum(axis=0)[inside], 1.0, atol=1e-12)
+
+
+def test_a_rectangular_patch_deflects_as_its_square_halves():
+    """Superposition: a 1 x 2 mm patch under uniform pressure deflects every point as its two
+    1 x 1 mm halves together (the anisotropic skin grid's compliance)."""
+    pts = np.array([[0.0, 0.0], [0.3e-3, 0.7e-3], [2e-3, -1e-3], [5e-3, 4e-3]])
+    rect = np.vstack([np.zeros(2), pts])
+    C_rect = compliance_matrix(rect, 1e-3, 0.4e6, pitch_y_m=2e-3)[1:, 0]
+    halves = np.array([[0.0, -0.5e-3], [0.0, 0.5e-3]])
+    sq = np.vstack([halves, pts])
+    C_sq = compliance_matrix(sq, 1e-3, 0.4e6)[2:, :2].sum(axis=1)
+    np.testing.assert_allclose(C_rect, C_sq, rtol=1e-12)
+
+
+def test_rectangular_nodes_are_area_overlap_and_conserve_load():
+    xs = np.arange(-10, 11) * 0.5e-3
+    ys = np.arange(-5, 6) * 1e-3
+    X, Y = np.meshgrid(xs, ys)
+    nodes = np.column_stack([X.ravel(), Y.ravel()])
+    t = np.arange(-2, 3) * 2e-3
+    TX, TY = np.meshgrid(t, t)
+    taxels = np.column_stack([TX.ravel(), TY.ravel()])
+    W = subsurface_weights(
+        nodes, 0.5e-3, taxels, np.full((25, 2), 2e-3), np.zeros(25), pitch_y_m=1e-3
+    )
+    inside = (np.abs(nodes) <= 5e-3 - 1e-12).all(axis=1)
+    np.testing.assert_allclose(W.sum(axis=0)[inside], 1.0, atol=1e-12)
+    # a node whose 1 mm row straddles a taxel's edge gives it half its load
+    k = np.flatnonzero((np.abs(nodes[:, 0]) < 1e-9) & (np.abs(nodes[:, 1] - 1e-3) < 1e-9))[0]
+    centre = np.flatnonzero((np.abs(taxels) < 1e-9).all(axis=1))[0]
+    assert W[centre, k] == pytest.approx(0.5, abs=1e-12)

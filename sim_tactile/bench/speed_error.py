@@ -363,6 +363,11 @@ class _Config:
     expect_pitch_m: float = 0.0
     expect_dt_s: float = 0.0
     same_as: list[str] = field(default_factory=list)
+    aspect: float = 1.0  # node pitch across the slide / along it
+
+    @property
+    def expect_pitch_y_m(self) -> float | None:
+        return None if self.aspect == 1.0 else self.expect_pitch_m * self.aspect
 
 
 def _configs(plate, layout, finger, proto, sweep: Sweep) -> list[_Config]:
@@ -380,8 +385,10 @@ def _configs(plate, layout, finger, proto, sweep: Sweep) -> list[_Config]:
             plan.append((level, sweep.dt_factors, sweep.pitch_factors))
     if "L2" in sweep.levels:
         plan.append(("L2", sweep.l2_dt_factors, sweep.l2_pitch_factors))
+    out[0].aspect = (fid2.pitch_y_m or fid2.pitch_m) / fid2.pitch_m
     for level, dtf, pf in plan:
         fid = fid2 if level == "L2" else choose_fidelity(plate, layout, finger, proto, level)
+        n0 = len(out)
         for f in dtf:
             if f == 1.0:
                 out.append(_Config(level, "auto", None, None, fid.pitch_m, fid.dt_s))
@@ -392,6 +399,8 @@ def _configs(plate, layout, finger, proto, sweep: Sweep) -> list[_Config]:
             if g != 1.0:
                 p = fid.pitch_m * g
                 out.append(_Config(level, f"pitch x{g:g}", p, None, p, fid.dt_s))
+        for c in out[n0:]:
+            c.aspect = (fid.pitch_y_m or fid.pitch_m) / fid.pitch_m
     # different factors can round to the same step (a whole number of steps per sample, at
     # most one sample period): run each setting once, named "auto" if auto is among them
     groups: dict[tuple, list[_Config]] = {}
@@ -462,7 +471,8 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
             "setting": cfg.setting,
             "dt_s": cfg.expect_dt_s,
             "pitch_m": cfg.expect_pitch_m,
-            "n_nodes": skin_grid(finger, cfg.expect_pitch_m).n,
+            "pitch_y_m": cfg.expect_pitch_y_m,
+            "n_nodes": skin_grid(finger, cfg.expect_pitch_m, cfg.expect_pitch_y_m).n,
             "duration_s": duration,
         }
         if cfg.same_as:
@@ -500,7 +510,8 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
             **base,
             "dt_s": res.fidelity.dt_s,
             "pitch_m": res.fidelity.pitch_m,
-            "n_nodes": skin_grid(finger, res.fidelity.pitch_m).n,
+            "pitch_y_m": res.fidelity.pitch_y_m,
+            "n_nodes": skin_grid(finger, res.fidelity.pitch_m, res.fidelity.pitch_y_m).n,
             "outcome": "ok",
             "rtf": rtf,
             "cost_s_per_s": 1.0 / rtf,

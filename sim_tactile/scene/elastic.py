@@ -36,12 +36,15 @@ def rect_integral(x: np.ndarray, y: np.ndarray, half_x: float, half_y: float) ->
     )
 
 
-def compliance_matrix(xy: np.ndarray, pitch_m: float, e_star_pa: float) -> np.ndarray:
-    """(N, N) surface compliance [m/Pa] of square patches of side ``pitch_m`` centred at
-    ``xy`` (N, 2), for a half-space of plane-strain modulus ``E* = E / (1 - nu^2)``."""
+def compliance_matrix(
+    xy: np.ndarray, pitch_m: float, e_star_pa: float, pitch_y_m: float | None = None
+) -> np.ndarray:
+    """(N, N) surface compliance [m/Pa] of rectangular patches ``pitch_m`` by ``pitch_y_m``
+    (default: square) centred at ``xy`` (N, 2), for a half-space of plane-strain modulus
+    ``E* = E / (1 - nu^2)``."""
     d = xy[:, None, :] - xy[None, :, :]
-    h = pitch_m / 2
-    return rect_integral(d[..., 0], d[..., 1], h, h) / (np.pi * e_star_pa)
+    hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
+    return rect_integral(d[..., 0], d[..., 1], hx, hy) / (np.pi * e_star_pa)
 
 
 def _corner(X: np.ndarray, Y: np.ndarray, z: float) -> np.ndarray:
@@ -59,6 +62,7 @@ def subsurface_weights(
     taxel_xy: np.ndarray,
     taxel_size: np.ndarray,
     depth_m: np.ndarray,
+    pitch_y_m: float | None = None,
 ) -> np.ndarray:
     """(M, N) weights W so that taxel loads [N] = W @ node loads [N].
 
@@ -70,16 +74,16 @@ def subsurface_weights(
     """
     M, N = len(taxel_xy), len(node_xy)
     W = np.zeros((M, N))
-    h = pitch_m / 2
+    hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
     for m in range(M):
         sx, sy = taxel_size[m] / 2
         d = float(depth_m[m])
         X = node_xy[:, 0] - taxel_xy[m, 0]
         Y = node_xy[:, 1] - taxel_xy[m, 1]
         if d <= 0:
-            ox = np.clip(np.minimum(X + h, sx) - np.maximum(X - h, -sx), 0, None)
-            oy = np.clip(np.minimum(Y + h, sy) - np.maximum(Y - h, -sy), 0, None)
-            W[m] = ox * oy / (pitch_m * pitch_m)
+            ox = np.clip(np.minimum(X + hx, sx) - np.maximum(X - hx, -sx), 0, None)
+            oy = np.clip(np.minimum(Y + hy, sy) - np.maximum(Y - hy, -sy), 0, None)
+            W[m] = ox * oy / (4 * hx * hy)
         else:
             W[m] = (
                 _corner(sx - X, sy - Y, d)

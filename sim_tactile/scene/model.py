@@ -105,7 +105,7 @@ def build_scene(
         conaffinity=0,
         rgba=(0.85, 0.75, 0.65, 1),
     )
-    r = PROBE_RADIUS_FRACTION * grid.pitch_m
+    r = PROBE_RADIUS_FRACTION * min(grid.pitch_xy)
     first = None
     for i, ((x, y), z) in enumerate(zip(grid.xy, grid.z, strict=True)):
         g = bone.add_geom(
@@ -136,9 +136,18 @@ def build_scene(
     g0 = mujoco.mj_name2id(m_col, mujoco.mjtObj.mjOBJ_GEOM, "node0")
     node_of_geom[g0 : g0 + grid.n] = np.arange(grid.n)
     W = subsurface_weights(
-        grid.xy, grid.pitch_m, layout.positions[:, :2], layout.sizes, layout.depth_m
+        grid.xy,
+        grid.pitch_m,
+        layout.positions[:, :2],
+        layout.sizes,
+        layout.depth_m,
+        pitch_y_m=grid.pitch_y_m,
     )
-    C = compliance_matrix(grid.xy, grid.pitch_m, finger.e_star_pa) if coupled else None
+    C = (
+        compliance_matrix(grid.xy, grid.pitch_m, finger.e_star_pa, pitch_y_m=grid.pitch_y_m)
+        if coupled
+        else None
+    )
     K = np.linalg.inv(C) if coupled and inverse else None  # for large contact sets
     jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]
     jz = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "press_z")]

@@ -171,6 +171,11 @@ class ActiveSet:
         (no contact within the collider's margin) cannot join."""
         if not total_pa > 0:
             raise PhysicsError(f"solve_force needs a positive total pressure, got {total_pa!r}")
+        if self.S.size:  # the common case: the set holds at the shift it implies
+            p = np.empty_like(pen_m)
+            dz = _force_same_set(self.M, self.S, pen_m, self.C, self._in, _TOL_REL, total_pa, p)
+            if dz == dz:  # not NaN
+                return p, dz
         dz = 0.0
         finite = np.isfinite(pen_m)
         if not finite.any():
@@ -235,6 +240,60 @@ def _kkt_same_set(M, S, pen, C, in_set, tol_rel, p) -> bool:
     for k in range(m):
         p[S[k]] = pS[k]
     return True
+
+
+@numba.njit(cache=True)
+def _force_same_set(M, S, pen, C, in_set, tol_rel, total, p) -> float:
+    """:meth:`ActiveSet.solve_force` on the set S alone: the shift ``dz`` at which the set's
+    pressures sum to ``total``, and the pressures (into ``p``) if S still solves the contact
+    problem at ``pen + dz`` (the checks of :func:`_kkt_same_set`); NaN if it does not."""
+    n = pen.shape[0]
+    m = S.shape[0]
+    a = np.empty(m)  # M pen_S
+    b = np.empty(m)  # M 1
+    ra = 0.0
+    rb = 0.0
+    for i in range(m):
+        if not np.isfinite(pen[S[i]]):
+            return np.nan
+    for i in range(m):
+        sa = 0.0
+        sb = 0.0
+        for k in range(m):
+            sa += M[i, k] * pen[S[k]]
+            sb += M[i, k]
+        a[i] = sa
+        b[i] = sb
+        ra += sa
+        rb += sb
+    if not rb > 0.0:
+        return np.nan
+    dz = (total - ra) / rb
+    big = 0.0
+    for j in range(n):
+        if pen[j] + dz > big:
+            big = pen[j] + dz
+    for k in range(m):
+        if pen[S[k]] + dz <= 0.0:
+            return np.nan
+    pS = np.empty(m)
+    for i in range(m):
+        pS[i] = a[i] + dz * b[i]
+        if pS[i] < 0.0:
+            return np.nan
+    tol = tol_rel * big
+    for j in range(n):
+        if pen[j] + dz > 0.0 and not in_set[j]:
+            u = 0.0
+            for k in range(m):
+                u += C[j, S[k]] * pS[k]
+            if pen[j] + dz - u > tol:
+                return np.nan
+    for j in range(n):
+        p[j] = 0.0
+    for k in range(m):
+        p[S[k]] = pS[k]
+    return dz
 
 
 @numba.njit(cache=True)

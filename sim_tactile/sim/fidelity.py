@@ -29,6 +29,8 @@ PITCH_MAX_M = 1.0e-3
 PITCH_MIN_M = 0.25e-3
 #: Most skin nodes auto may use per level (the dense half-space solve grows as nodes^3).
 MAX_NODES = {"L0": 2500, "L1": 700, "L2": 2800}
+#: Coarsest node pitch across the slide auto may pick over ridges along y [m].
+PITCH_MAX_Y_M = 2.0e-3
 #: Steps to cross the smallest feature, at least.
 STEPS_PER_FEATURE = 20
 #: Longest time step auto may pick [s].
@@ -45,6 +47,8 @@ class Fidelity:
     winkler_k_pa_per_m: float
     reason: str = ""
     warnings: tuple[str, ...] = field(default=())
+    #: node pitch across the slide [m]; None: square nodes (``pitch_m``)
+    pitch_y_m: float | None = None
 
     def to_json(self) -> dict:
         d = asdict(self)
@@ -84,6 +88,7 @@ def choose_fidelity(
     warnings: list[str] = []
     scale = feature_scale_m(plate)
     taxel = float(layout.sizes.min())
+    taxel_x, taxel_y = (float(layout.sizes[:, k].min()) for k in (0, 1))
     need = min([taxel / 2] + ([scale / 2.5] if scale else []))
     auto_pitch = min(PITCH_MAX_M, max(PITCH_MIN_M, need))
     if scale is not None and auto_pitch > scale / 2:
@@ -117,7 +122,14 @@ def choose_fidelity(
         omega = math.sqrt(flat_stiffness(finger, level != "L0", k_w) / finger.bone_mass_kg)
         dt_need = min(dt_need, 0.5 / omega)
     px, py = finger.patch_m
-    floor = math.sqrt(px * py / MAX_NODES["L1" if level == "L2" else level])
+    # Ridges along y under a flat pad: the load varies along the slide only, so the nodes
+    # go where it varies: x at 1/5 of the smallest feature, y as coarse as the taxels allow.
+    ridges = _varies_along_x_only(plate, finger)
+    aspect = 1.0
+    if ridges:
+        auto_pitch = min(PITCH_MAX_M, max(PITCH_MIN_M, min(taxel_x / 2, scale / 5)))
+        aspect = max(1.0, min(taxel_y, PITCH_MAX_Y_M) / auto_pitch)
+    floor = math.sqrt(px * py / MAX_NODES["L1" if level == "L2" else level] / aspect)
     if auto_pitch < floor:
         warnings.append(
             f"node pitch raised from {auto_pitch * 1e3:.3g} to {floor * 1e3:.3g} mm to keep the skin "
@@ -128,6 +140,7 @@ def choose_fidelity(
     dt_target = dt_s or dt_need
     if level == "L2":
         pitch, dt_target = (pitch_m or auto_pitch / 2), (dt_s or dt_need / 4)
+    pitch_y = pitch * aspect
     if dt_s is not None and scale is not None and dt_s > scale / (v * 10):
         warnings.append(
             f"time step {dt_s:g} s is too coarse for {v:g} m/s: a {scale * 1e3:.3g} mm feature "
@@ -139,13 +152,36 @@ def choose_fidelity(
         )
     sample = 1.0 / protocol.rate_hz
     n_sub = max(1, math.ceil(sample / dt_target - 1e-9))
+    shape = f"{pitch * 1e3:.3g} mm" if aspect == 1.0 else (
+        f"{pitch * 1e3:.3g} x {pitch_y * 1e3:.3g} mm (x x y: ridges along y)"
+    )
     reason = (
-        f"{level}: node pitch {pitch * 1e3:.3g} mm (smallest feature "
+        f"{level}: node pitch {shape} (smallest feature "
         f"{'-' if scale is None else f'{scale * 1e3:.3g} mm'}, taxel {taxel * 1e3:.3g} mm), "
         f"dt {sample / n_sub * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample)"
     )
     return Fidelity(
-        level, level != "L0", float(pitch), n_sub, sample / n_sub, k_w, reason, tuple(warnings)
+        level,
+        level != "L0",
+        float(pitch),
+        n_sub,
+        sample / n_sub,
+        k_w,
+        reason,
+        tuple(warnings),
+        None if aspect == 1.0 else float(pitch_y),
+    )
+
+
+def _varies_along_x_only(plate: Plate, finger) -> bool:
+    """Whether the plate's features are ridges along y across the whole textured width (boxes
+    or drafted prisms) and the pad is flat: then the load under the pad varies along the slide
+    only, but for the pad's own edges."""
+    if getattr(finger, "shape", None) != "flat":
+        return False
+    fs = features(plate)
+    return bool(fs) and all(
+        f.kind in ("box", "prism") and 2 * f.hy >= plate.area_width_m - 1e-9 for f in fs
     )
 
 

@@ -191,7 +191,7 @@ def _simulate(
         )
     fid = choose_fidelity(plate, layout, finger, proto, fidelity, pitch_m=pitch_m, dt_s=dt_s)
     warnings = list(fid.warnings)
-    grid = skin_grid(finger, fid.pitch_m)
+    grid = skin_grid(finger, fid.pitch_m, fid.pitch_y_m)
     n_sub = fid.steps_per_sample
     dt = 1.0 / (proto.rate_hz * n_sub)
 
