@@ -79,7 +79,11 @@ def test_the_force_is_held_exactly_and_the_pulses_repeat(v, cache):
     spread = _peak_spread(rec, v)
     assert spread < 0.05
     dyn = simulate(
-        "finger7/ridges-4", "grid3x3", protocol=Protocol(speed_m_s=v), ideal=True, cache=cache
+        "finger7/ridges-4",
+        "grid3x3",
+        protocol=Protocol(speed_m_s=v, force_control="dynamic"),
+        ideal=True,
+        cache=cache,
     ).recording
     assert _peak_spread(dyn, v) > spread
     # the pad comes back down to the flat ground after the last ridge (the dynamic pad
@@ -103,7 +107,14 @@ def test_no_coupling_step_limit_but_the_coarse_step_warns(cache):
     """The dynamic loop refuses dt = 10 ms (omega * dt); quasi-static force control has no
     bone coupling, so it runs and only warns that features take too few steps."""
     with pytest.raises(PhysicsError, match="time step too coarse"):
-        simulate("finger7/ridges-4", "grid3x3", dt_s=0.01, ideal=True, cache=cache)
+        simulate(
+            "finger7/ridges-4",
+            "grid3x3",
+            dt_s=0.01,
+            protocol=Protocol(force_control="dynamic"),
+            ideal=True,
+            cache=cache,
+        )
     res = simulate(
         "finger7/ridges-4",
         "grid3x3",

@@ -157,7 +157,7 @@ class Sweep:
     press_pitches_m: tuple[float, ...] = (0.5e-3, 0.35e-3, 0.25e-3, 0.2e-3)
     press_ref_pitch_m: float = 0.1e-3
     quick: bool = False
-    force_control: str = "dynamic"
+    force_control: str = "quasi-static"
 
     def __post_init__(self) -> None:
         if not self.scenes:

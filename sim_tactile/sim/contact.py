@@ -64,7 +64,7 @@ class ActiveSet:
     node leaves through the Schur complement of ``M``, a node joins through the Schur
     complement of ``C``. A step that keeps its set costs one matrix-vector product, and the
     pad's contact stiffness is ``sum(M)`` times the node area. ``M`` is recomputed from ``C``
-    after ``refresh`` updates, which bounds round-off drift; the schedule is deterministic, so
+    after ``refresh`` updates (a block of nodes joining or leaving is one), which bounds round-off drift; the schedule is deterministic, so
     equal inputs give bit-identical outputs. Same answer as :func:`halfspace` (tested).
     """
 
@@ -100,7 +100,7 @@ class ActiveSet:
         self.M = _inverse_without(self.M, np.flatnonzero(keep), np.flatnonzero(drop))
         self._in[self.S[drop]] = False
         self.S = self.S[keep]
-        self.updates += int(drop.sum())
+        self.updates += 1
 
     def _add(self, A: np.ndarray) -> None:
         if self.S.size == 0 or self.updates >= self.refresh:
@@ -109,7 +109,7 @@ class ActiveSet:
         self.M = _inverse_with(self.M, self.C, self.S, A)
         self.S = np.concatenate([self.S, A])
         self._in[A] = True
-        self.updates += A.size
+        self.updates += 1
 
     # -- the contact problem
     def solve(self, pen_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -118,40 +118,27 @@ class ActiveSet:
         p = np.empty_like(pen_m)
         if self.S.size and _kkt_same_set(self.M, self.S, pen_m, self.C, self._in, _TOL_REL, p):
             return p, self._in.copy()  # the common case: the set holds, one product
-        p[:] = 0.0
-        touching = pen_m > 0
-        if not touching.any():
-            if self.S.size:
-                self._rebuild(self.S[:0])
-            return p, np.zeros(pen_m.shape, bool)
-        tol = _TOL_REL * float(pen_m[touching].max())
-        gone = ~touching[self.S]
-        if gone.any():
-            self._remove(gone)
-        if self.S.size == 0:
-            self._add(np.flatnonzero(touching))
-        for _ in range(_MAX_ITER):
-            pS = self.M @ pen_m[self.S]
-            neg = pS < 0
-            if neg.any():  # nodes pulled into tension leave the set
-                self._remove(neg)
-                if self.S.size == 0:
-                    break
-                continue
-            rest = np.flatnonzero(touching & ~self._in)
-            if rest.size:
-                gap = pen_m[rest] - self.C[np.ix_(rest, self.S)] @ pS
-                add = rest[gap > tol]
-                if add.size:  # nodes still inside the plate join the set
-                    self._add(add)
-                    continue
-            p[self.S] = pS
+        K = self.K if self.K is not None else _NO_K
+        status, M, S, updates, rebuilds = _solve_loop(
+            self.M,
+            self.S,
+            self._in,
+            self.C,
+            K,
+            pen_m,
+            _TOL_REL,
+            self.updates,
+            self.refresh,
+            _MAX_ITER,
+            p,
+        )
+        self.M, self.S, self.updates = M, S, updates
+        self.rebuilds += rebuilds
+        if status:
             return p, self._in.copy()
-        if self.S.size == 0:
-            return p, np.zeros(pen_m.shape, bool)
         raise PhysicsError(
             f"half-space contact solve did not converge in {_MAX_ITER} iterations "
-            f"({int(touching.sum())} nodes)"
+            f"({int((pen_m > 0).sum())} nodes)"
         )
 
     def solve_force(
@@ -240,6 +227,131 @@ def _kkt_same_set(M, S, pen, C, in_set, tol_rel, p) -> bool:
     for k in range(m):
         p[S[k]] = pS[k]
     return True
+
+
+_NO_K = np.zeros((0, 0))
+
+
+@numba.njit(cache=True)
+def _inverse_subset_nb(C, K, S):
+    """:func:`_inverse_subset` in numba; ``K`` of shape (0, 0) stands for no inverse."""
+    n = C.shape[0]
+    m = S.size
+    if K.shape[0] == 0 or 2 * m <= n:
+        A = np.empty((m, m))
+        for i in range(m):
+            for j in range(m):
+                A[i, j] = C[S[i], S[j]]
+        return np.ascontiguousarray(np.linalg.inv(A))
+    mask = np.ones(n, np.bool_)
+    for i in range(m):
+        mask[S[i]] = False
+    T = np.flatnonzero(mask)
+    t = T.size
+    KSS = np.empty((m, m))
+    for i in range(m):
+        for j in range(m):
+            KSS[i, j] = K[S[i], S[j]]
+    if t == 0:
+        return KSS
+    KST = np.empty((m, t))
+    for i in range(m):
+        for j in range(t):
+            KST[i, j] = K[S[i], T[j]]
+    KTT = np.empty((t, t))
+    for i in range(t):
+        for j in range(t):
+            KTT[i, j] = K[T[i], T[j]]
+    return np.ascontiguousarray(KSS - KST @ np.linalg.solve(KTT, np.ascontiguousarray(KST.T)))
+
+
+@numba.njit(cache=True)
+def _solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p):
+    """The active-set iteration of :meth:`ActiveSet.solve` from the current set: nodes that
+    stop touching or carry tension leave, touching nodes left inside the plate join; the
+    inverse ``M`` follows by block updates, rebuilt every ``refresh`` updates. Returns
+    ``(converged, M, S, updates, rebuilds)`` and writes the pressures to ``p``."""
+    n = pen.shape[0]
+    rebuilds = 0
+    for j in range(n):
+        p[j] = 0.0
+    touching = pen > 0.0
+    if not touching.any():
+        if S.size:
+            M = np.zeros((0, 0))
+            S = S[:0]
+            updates = 0
+            rebuilds += 1
+            in_set[:] = False
+        return True, M, S, updates, rebuilds
+    big = 0.0
+    for j in range(n):
+        if touching[j] and pen[j] > big:
+            big = pen[j]
+    tol = tol_rel * big
+    for it in range(max_iter + 2):
+        if it == 0:  # nodes that no longer touch leave
+            drop = np.empty(S.size, np.bool_)
+            for k in range(S.size):
+                drop[k] = not touching[S[k]]
+        elif S.size == 0:  # start from every touching node
+            drop = np.zeros(0, np.bool_)
+        else:
+            pS = M @ np.ascontiguousarray(pen[S])
+            drop = pS < 0.0
+        if drop.any():
+            keep = ~drop
+            if not keep.any() or updates >= refresh:
+                S = np.sort(S[keep])
+                M = _inverse_subset_nb(C, K, S) if S.size else np.zeros((0, 0))
+                updates = 0
+                rebuilds += 1
+                in_set[:] = False
+                in_set[S] = True
+            else:
+                M = _inverse_without(M, np.flatnonzero(keep), np.flatnonzero(drop))
+                in_set[S[drop]] = False
+                S = S[keep]
+                updates += 1
+            if S.size == 0 and it > 0:
+                return True, M, S, updates, rebuilds  # everything left: no load
+            continue
+        if it == 0:
+            continue
+        if S.size == 0:
+            A = np.flatnonzero(touching)
+        else:
+            rest = np.flatnonzero(touching & ~in_set)
+            m = S.size
+            cnt = 0
+            A = np.empty(rest.size, np.int64)
+            for r in range(rest.size):
+                j = rest[r]
+                u = 0.0
+                for k in range(m):
+                    u += C[j, S[k]] * pS[k]
+                if pen[j] - u > tol:
+                    A[cnt] = j
+                    cnt += 1
+            A = A[:cnt]
+        if A.size:  # nodes still inside the plate join the set
+            if S.size == 0 or updates >= refresh:
+                S = np.sort(np.concatenate((S, A)))
+                M = _inverse_subset_nb(C, K, S)
+                updates = 0
+                rebuilds += 1
+                in_set[:] = False
+                in_set[S] = True
+            else:
+                M = _inverse_with(M, C, S, A)
+                S = np.concatenate((S, A))
+                in_set[A] = True
+                updates += 1
+            continue
+        for k in range(S.size):
+            p[S[k]] = pS[k]
+        return True, M, S, updates, rebuilds
+    return False, M, S, updates, rebuilds
 
 
 @numba.njit(cache=True)

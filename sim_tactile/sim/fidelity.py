@@ -152,8 +152,10 @@ def choose_fidelity(
         )
     sample = 1.0 / protocol.rate_hz
     n_sub = max(1, math.ceil(sample / dt_target - 1e-9))
-    shape = f"{pitch * 1e3:.3g} mm" if aspect == 1.0 else (
-        f"{pitch * 1e3:.3g} x {pitch_y * 1e3:.3g} mm (x x y: ridges along y)"
+    shape = (
+        f"{pitch * 1e3:.3g} mm"
+        if aspect == 1.0
+        else (f"{pitch * 1e3:.3g} x {pitch_y * 1e3:.3g} mm (x x y: ridges along y)")
     )
     reason = (
         f"{level}: node pitch {shape} (smallest feature "

@@ -76,7 +76,7 @@ class Protocol:
     speed_jitter: float = 0.0  # relative standard deviation, per repetition
     force_jitter: float = 0.0
     offset_jitter_m: float = 0.0
-    force_control: str = "dynamic"
+    force_control: str = "quasi-static"
 
     def __post_init__(self) -> None:
         v.in_range("speed_m_s", self.speed_m_s, 0.0, 1.0, unit="m/s")
