@@ -41,7 +41,7 @@ def _code_version() -> str:
     from .. import records, sensors
     from ..scene import elastic, finger, layouts, model
     from ..sensors import micro, transducers
-    from ..sim import _readout, contact, fidelity, simulate
+    from ..sim import _readout, collide, contact, fidelity, simulate
 
     return source_version(
         records,
@@ -53,6 +53,7 @@ def _code_version() -> str:
         micro,
         transducers,
         _readout,
+        collide,
         contact,
         fidelity,
         simulate,
