@@ -158,29 +158,28 @@ class ActiveSet:
         (no contact within the collider's margin) cannot join."""
         if not total_pa > 0:
             raise PhysicsError(f"solve_force needs a positive total pressure, got {total_pa!r}")
-        if self.S.size:  # the common case: the set holds at the shift it implies
-            p = np.empty_like(pen_m)
-            dz = _force_same_set(self.M, self.S, pen_m, self.C, self._in, _TOL_REL, total_pa, p)
-            if dz == dz:  # not NaN
-                return p, dz
-        dz = 0.0
-        finite = np.isfinite(pen_m)
-        if not finite.any():
+        K = self.K if self.K is not None else _NO_K
+        p = np.empty_like(pen_m)
+        status, dz, M, S, updates, rebuilds = _force_loop(
+            self.M,
+            self.S,
+            self._in,
+            self.C,
+            K,
+            np.ascontiguousarray(pen_m, dtype=np.float64),
+            _TOL_REL,
+            float(total_pa),
+            self.updates,
+            self.refresh,
+            max_iter,
+            p,
+        )
+        self.M, self.S, self.updates = M, S, updates
+        self.rebuilds += rebuilds
+        if status == 1:
+            return p, dz
+        if status == 2:
             raise PhysicsError("no skin node lies within the collider's margin of the plate")
-        for _ in range(max_iter):
-            pS = pen_m[self.S]
-            if pS.size and np.isfinite(pS).all():  # else the solve below updates the set first
-                k = float(self.M.sum())
-                if k > 0:
-                    dz = (total_pa - float((self.M @ pS).sum())) / k
-            p, _ = self.solve(pen_m + dz)
-            got = float(p.sum())
-            if abs(got - total_pa) <= 1e-9 * total_pa:
-                return p, dz
-            if self.S.size == 0:  # nothing touches at this shift: sink to the first touch
-                dz = float(-pen_m[finite].max())
-                dz += 1e-9 * max(abs(dz), 1e-6)
-                p, _ = self.solve(pen_m + dz)
         raise PhysicsError(
             f"the force-holding contact solve did not converge in {max_iter} iterations "
             f"(target {total_pa:.4g} Pa summed over the nodes)"
@@ -352,6 +351,55 @@ def _solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p)
             p[S[k]] = pS[k]
         return True, M, S, updates, rebuilds
     return False, M, S, updates, rebuilds
+
+
+@numba.njit(cache=True)
+def _force_loop(M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p):
+    """:meth:`ActiveSet.solve_force` in one call. Returns ``(status, dz, M, S, updates,
+    rebuilds)``: status 1 converged (pressures in ``p``), 0 not converged, 2 no node within
+    the margin."""
+    n = pen.shape[0]
+    rebuilds = 0
+    if S.size:  # the common case: the set holds at the shift it implies
+        d = _force_same_set(M, S, pen, C, in_set, tol_rel, total, p)
+        if d == d:
+            return 1, d, M, S, updates, rebuilds
+    top = -np.inf
+    for j in range(n):
+        if pen[j] > top:
+            top = pen[j]
+    if top == -np.inf:
+        return 2, 0.0, M, S, updates, rebuilds
+    dz = 0.0
+    shifted = np.empty(n)
+    for _ in range(max_iter):
+        finite = S.size > 0
+        for k in range(S.size):
+            if not np.isfinite(pen[S[k]]):
+                finite = False
+        if finite:  # else the solve below updates the set first
+            kk = M.sum()
+            if kk > 0:
+                dz = (total - (M @ np.ascontiguousarray(pen[S])).sum()) / kk
+        for sink in range(2):
+            for j in range(n):
+                shifted[j] = pen[j] + dz
+            if not (S.size and _kkt_same_set(M, S, shifted, C, in_set, tol_rel, p)):
+                ok, M, S, updates, rb = _solve_loop(
+                    M, S, in_set, C, K, shifted, tol_rel, updates, refresh, max_iter, p
+                )
+                rebuilds += rb
+                if not ok:
+                    return 0, dz, M, S, updates, rebuilds
+            got = p.sum()
+            if abs(got - total) <= 1e-9 * total:
+                return 1, dz, M, S, updates, rebuilds
+            if S.size or sink:
+                break
+            # nothing touches at this shift: sink to the first touch and solve there
+            dz = -top
+            dz += 1e-9 * max(abs(dz), 1e-6)
+    return 0, dz, M, S, updates, rebuilds
 
 
 @numba.njit(cache=True)
