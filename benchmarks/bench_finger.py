@@ -87,9 +87,11 @@ def loop_overhead(repeats: int = 5) -> dict:
     """Median seconds per step of three loops over the same 200 sliding steps:
 
     - full: the project's step (readout, skin solve, checks, drag, taxel accumulation);
-    - bare MuJoCo: the MuJoCo calls alone (kinematics and collision of the skin, mj_step);
-    - minimal: the least a user's own script must do for the same physics: the MuJoCo calls,
-      the penetration map, the skin's contact solve, and the press force fed back.
+    - bare MuJoCo: MuJoCo stepping the same model: kinematics and collision of the skin nodes
+      against the plate, and mj_step (no skin solve);
+    - minimal: the least a user's own script must do for the same physics: the depth map (the
+      primitive collider where the plate allows it, else MuJoCo's collider), the skin's
+      force-holding contact solve, and mj_step.
 
     The loop overhead is full / minimal - 1: what the project's loop adds to the physics.
     """
@@ -130,7 +132,7 @@ def loop_overhead(repeats: int = 5) -> dict:
             t = time.perf_counter()
             acc = np.zeros(s.layout.n)
             for _ in range(n):
-                run.step(force_cmd=1.0, slide_v=V, taxel_acc=acc)
+                run.step(force_cmd=1.0, slide_v=V, taxel_out=acc)
             full.append((time.perf_counter() - t) / n)
             reset()
             t = time.perf_counter()
@@ -143,14 +145,25 @@ def loop_overhead(repeats: int = 5) -> dict:
             bare.append((time.perf_counter() - t) / n)
             reset()
             pen = np.empty(s.n_nodes)
+            bone = run._bone0.copy()
             t = time.perf_counter()
             for _ in range(n):
-                dc.qpos[:] = dd.qpos
-                mujoco.mj_kinematics(s.m_col, dc)
-                mujoco.mj_collision(s.m_col, dc)
-                penetration_map(dc.contact.geom, dc.contact.dist, s.node_of_geom, pen)
-                p, _ = s.solver.solve(pen)
-                dd.qfrc_applied[s.jz] = p.sum() * A - 1.0
+                if run.collider is not None:  # the plate's primitives: the fast collider
+                    bone[0] = run._bone0[0] + dd.qpos[s.jx]
+                    bone[2] = run._bone0[2] + dd.qpos[s.jz]
+                    run.collider.depths(bone, pen)
+                else:
+                    dc.qpos[:] = dd.qpos
+                    mujoco.mj_kinematics(s.m_col, dc)
+                    mujoco.mj_collision(s.m_col, dc)
+                    penetration_map(dc.contact.geom, dc.contact.dist, s.node_of_geom, pen)
+                if run.quasi_static:  # hold the force: move the pad to where the skin carries it
+                    p, dz = s.solver.solve_force(pen, 1.0 / A)
+                    dd.qpos[s.jz] -= dz
+                    dd.qvel[s.jz] = 0.0
+                else:
+                    p, _ = s.solver.solve(pen)
+                    dd.qfrc_applied[s.jz] = p.sum() * A - 1.0
                 dd.ctrl[0] = V
                 mujoco.mj_step(s.m_dyn, dd)
             minimal.append((time.perf_counter() - t) / n)

@@ -99,10 +99,11 @@ class PrimitiveCollider:
             size=m.geom_size[idx].copy(),
         )
 
-    def depths(self, bone_pos: np.ndarray, pen: np.ndarray) -> None:
+    def depths(self, bone_pos: np.ndarray, pen: np.ndarray) -> bool:
         """Fill ``pen`` (N,) with each node's deepest penetration [m] for the bone at world
-        position ``bone_pos`` (3,); ``-inf`` where no plate geom is within the node's margin."""
-        _depths(
+        position ``bone_pos`` (3,); ``-inf`` where no plate geom is within the node's margin.
+        Returns whether any node is within it."""
+        return _depths(
             bone_pos,
             self.local,
             self.radius,
@@ -136,6 +137,7 @@ def _depths(
     bone, local, radius, margin, kind, pos, mat, size, origin, cell, shape, start, items, pen
 ):
     n = local.shape[0]
+    near = False
     for i in range(n):
         cx = bone[0] + local[i, 0]
         cy = bone[1] + local[i, 1]
@@ -173,4 +175,9 @@ def _depths(
                     dist = inside - r
             if -dist > best:
                 best = -dist
-        pen[i] = best if best >= -margin[i] else -np.inf
+        if best >= -margin[i]:
+            pen[i] = best
+            near = True
+        else:
+            pen[i] = -np.inf
+    return near

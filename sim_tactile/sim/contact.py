@@ -160,13 +160,15 @@ class ActiveSet:
             raise PhysicsError(f"solve_force needs a positive total pressure, got {total_pa!r}")
         K = self.K if self.K is not None else _NO_K
         p = np.empty_like(pen_m)
+        if not (pen_m.flags.c_contiguous and pen_m.dtype == np.float64):
+            pen_m = np.ascontiguousarray(pen_m, dtype=np.float64)
         status, dz, M, S, updates, rebuilds = _force_loop(
             self.M,
             self.S,
             self._in,
             self.C,
             K,
-            np.ascontiguousarray(pen_m, dtype=np.float64),
+            pen_m,
             _TOL_REL,
             float(total_pa),
             self.updates,

@@ -562,8 +562,7 @@ class _Runner:
             b = self._bone_pos
             b[0] = self._bone0[0] + dd.qpos[s.jx]
             b[2] = self._bone0[2] + dd.qpos[s.jz]
-            self.collider.depths(b, pen)
-            return bool(np.isfinite(pen).any())
+            return self.collider.depths(b, pen)
         dc = self.d_col
         dc.qpos[:] = dd.qpos
         mujoco.mj_kinematics(s.m_col, dc)
