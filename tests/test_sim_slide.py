@@ -144,3 +144,22 @@ def test_bad_input_is_refused():
         )
     with pytest.raises(ConfigError, match="fidelity"):
         simulate("finger7/flat", "grid3x3", fidelity="L9")
+
+
+@pytest.mark.parametrize("force_control", ["quasi-static", "dynamic"])
+def test_a_window_longer_than_the_plate_stops_the_pad_at_its_end(force_control, cache):
+    """2 s at 60 mm/s would carry the pad 120 mm, off the 108 mm plate: the stroke stops with
+    the pad wholly on the plate and says so (it once slid off the end and sank)."""
+    res = simulate(
+        "finger7/ridges-4",
+        "grid3x3",
+        protocol=Protocol(duration_s=2.0, force_control=force_control),
+        ideal=True,
+        cache=cache,
+    )
+    rec = res.recording
+    x = np.asarray(rec.meta["x_pad_m"])
+    assert x.max() <= 54e-3 - 8e-3 + 1e-4  # the 16 mm patch stays on the plate
+    assert any("stopped at the plate's end" in w for w in res.warnings)
+    tail = rec.data[-20:].astype(float)  # at rest on flat ground: a steady load
+    assert tail.min() > 0 and np.ptp(tail, axis=0).max() < 1e-3 * tail.max()

@@ -204,6 +204,9 @@ def _simulate(
             f"plate {plate.name or plate.hash} ({plate.length_m:g} m long) is too short for a "
             f"{px:g} m pad to enter and leave the textured area on flat ground"
         )
+    # a stroke that would carry the pad off the plate (a long window, a fast draw of the
+    # speed) stops there: the pad rests on flat ground for the rest of the window
+    x_limit = max(x_end, plate.length_m / 2 - px / 2)
     z0 = APPROACH_CLEARANCE_M + max(
         0.0, float(np.nanmax(_plate_heights(plate, grid, x_start, proto.offset_y_m)))
     )
@@ -301,14 +304,21 @@ def _simulate(
     prev_first = np.zeros(layout.n)
     f_first = f_prev_first = f_prev_sum = 0.0
 
+    stopped_at = None  # time the stroke stopped at the plate's end
+
     def slide_step() -> float:
-        nonlocal stroke_i, xa, xb, sgn, t_stroke, vcmd
+        nonlocal stroke_i, xa, xb, sgn, t_stroke, vcmd, stopped_at
         x = x_start + d_dyn.qpos[scene.jx]
         if sgn * (x - xb) >= 0 and stroke_i + 1 < len(strokes):
             stroke_i += 1
             xa, xb, sgn = strokes[stroke_i]
             t_stroke = 0.0
         vcmd = sgn * v_slide * min(1.0, t_stroke / t_ramp)
+        if sgn * x >= x_limit:
+            vcmd = 0.0
+            if stopped_at is None:
+                stopped_at = t_slide_sim[0]
+        t_slide_sim[0] += dt
         f = runner.step(force_cmd=F, slide_v=vcmd, taxel_out=now)
         t_stroke += dt
         return f
@@ -318,6 +328,7 @@ def _simulate(
         forces[s] = (f_prev_sum + 0.5 * (f_end - f_prev_first)) / n_sub
 
     vcmd = 0.0
+    t_slide_sim = [0.0]
     for s in range(n_samples):
         acc[:] = 0.0
         fsum = 0.0
@@ -336,6 +347,12 @@ def _simulate(
         runner.check_warnings()
     close(n_samples - 1, slide_step())  # the last period's end point
     slide_wall = time.perf_counter() - t_slide
+    sim_window = n_samples / proto.rate_hz
+    if stopped_at is not None:
+        warnings.append(
+            f"the stroke stopped at the plate's end after {stopped_at:.3g} s of the {sim_window:.3g} s "
+            f"window ({proto.speed_m_s * 1e3:.3g} mm/s): the pad rested on flat ground for the rest"
+        )
     warnings += _force_warnings(forces, F, proto.speed_m_s)
     # micro-roughness acts through the contact patch on top of the finger's simulation
     micro = micro_loads(plate, layout, x_pad, out > 1e-9, finger.e_star_pa, proto.rate_hz)
