@@ -208,14 +208,13 @@ def _kkt_same_set(M, S, pen, C, in_set, tol_rel, p) -> bool:
         if pen[S[k]] <= 0.0:
             return False
     tol = tol_rel * big
-    pS = np.empty(m)
+    pen_S = np.empty(m)
+    for k in range(m):
+        pen_S[k] = pen[S[k]]
+    pS = M @ pen_S  # BLAS
     for i in range(m):
-        acc = 0.0
-        for k in range(m):
-            acc += M[i, k] * pen[S[k]]
-        if acc < 0.0:
+        if pS[i] < 0.0:
             return False
-        pS[i] = acc
     for j in range(n):
         if pen[j] > 0.0 and not in_set[j]:
             u = 0.0
@@ -411,23 +410,18 @@ def _force_same_set(M, S, pen, C, in_set, tol_rel, total, p) -> float:
     problem at ``pen + dz`` (the checks of :func:`_kkt_same_set`); NaN if it does not."""
     n = pen.shape[0]
     m = S.shape[0]
-    a = np.empty(m)  # M pen_S
-    b = np.empty(m)  # M 1
-    ra = 0.0
-    rb = 0.0
+    pen_S = np.empty(m)
     for i in range(m):
         if not np.isfinite(pen[S[i]]):
             return np.nan
+        pen_S[i] = pen[S[i]]
+    a = M @ pen_S  # M pen_S (BLAS)
+    b = M @ np.ones(m)  # M 1
+    ra = 0.0
+    rb = 0.0
     for i in range(m):
-        sa = 0.0
-        sb = 0.0
-        for k in range(m):
-            sa += M[i, k] * pen[S[k]]
-            sb += M[i, k]
-        a[i] = sa
-        b[i] = sb
-        ra += sa
-        rb += sb
+        ra += a[i]
+        rb += b[i]
     if not rb > 0.0:
         return np.nan
     dz = (total - ra) / rb
