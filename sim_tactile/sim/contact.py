@@ -75,6 +75,7 @@ class ActiveSet:
         self.updates = 0
         self.rebuilds = 0
         self._in = np.zeros(C.shape[0], bool)
+        self._rowsum, self._rowsum_of = np.zeros(0), None
 
     # -- the inverse on the set
     def _rebuild(self, S: np.ndarray) -> None:
@@ -158,10 +159,18 @@ class ActiveSet:
         (no contact within the collider's margin) cannot join."""
         if not total_pa > 0:
             raise PhysicsError(f"solve_force needs a positive total pressure, got {total_pa!r}")
-        K = self.K if self.K is not None else _NO_K
         p = np.empty_like(pen_m)
         if not (pen_m.flags.c_contiguous and pen_m.dtype == np.float64):
             pen_m = np.ascontiguousarray(pen_m, dtype=np.float64)
+        if self.S.size:  # the common case, without the loop's call and return costs
+            if self._rowsum_of is not self.M:  # M 1, kept while M stands
+                self._rowsum, self._rowsum_of = self.M.sum(axis=1), self.M
+            dz = _force_same_set(
+                self.M, self.S, pen_m, self.C, self._in, _TOL_REL, total_pa, p, self._rowsum
+            )
+            if dz == dz:
+                return p, dz
+        K = self.K if self.K is not None else _NO_K
         status, dz, M, S, updates, rebuilds = _force_loop(
             self.M,
             self.S,
@@ -362,7 +371,7 @@ def _force_loop(M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_i
     n = pen.shape[0]
     rebuilds = 0
     if S.size:  # the common case: the set holds at the shift it implies
-        d = _force_same_set(M, S, pen, C, in_set, tol_rel, total, p)
+        d = _force_same_set(M, S, pen, C, in_set, tol_rel, total, p, M @ np.ones(S.size))
         if d == d:
             return 1, d, M, S, updates, rebuilds
     top = -np.inf
@@ -404,10 +413,11 @@ def _force_loop(M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_i
 
 
 @numba.njit(cache=True)
-def _force_same_set(M, S, pen, C, in_set, tol_rel, total, p) -> float:
+def _force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b) -> float:
     """:meth:`ActiveSet.solve_force` on the set S alone: the shift ``dz`` at which the set's
     pressures sum to ``total``, and the pressures (into ``p``) if S still solves the contact
-    problem at ``pen + dz`` (the checks of :func:`_kkt_same_set`); NaN if it does not."""
+    problem at ``pen + dz`` (the checks of :func:`_kkt_same_set`); NaN if it does not. ``b``:
+    the row sums of M."""
     n = pen.shape[0]
     m = S.shape[0]
     pen_S = np.empty(m)
@@ -415,8 +425,7 @@ def _force_same_set(M, S, pen, C, in_set, tol_rel, total, p) -> float:
         if not np.isfinite(pen[S[i]]):
             return np.nan
         pen_S[i] = pen[S[i]]
-    a = M @ pen_S  # M pen_S (BLAS)
-    b = M @ np.ones(m)  # M 1
+    a = M @ pen_S  # M pen_S (BLAS); b = M 1
     ra = 0.0
     rb = 0.0
     for i in range(m):
