@@ -184,6 +184,7 @@ class ActiveSet:
             self.refresh,
             max_iter,
             p,
+            False,  # the same-set case was tried above
         )
         self.M, self.S, self.updates = M, S, updates
         self.rebuilds += rebuilds
@@ -364,13 +365,15 @@ def _solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p)
 
 
 @numba.njit(cache=True)
-def _force_loop(M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p):
+def _force_loop(
+    M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p, try_same=True
+):
     """:meth:`ActiveSet.solve_force` in one call. Returns ``(status, dz, M, S, updates,
     rebuilds)``: status 1 converged (pressures in ``p``), 0 not converged, 2 no node within
     the margin."""
     n = pen.shape[0]
     rebuilds = 0
-    if S.size:  # the common case: the set holds at the shift it implies
+    if try_same and S.size:  # the common case: the set holds at the shift it implies
         d = _force_same_set(M, S, pen, C, in_set, tol_rel, total, p, M @ np.ones(S.size))
         if d == d:
             return 1, d, M, S, updates, rebuilds
@@ -388,7 +391,7 @@ def _force_loop(M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_i
             if not np.isfinite(pen[S[k]]):
                 finite = False
         if finite:  # else the solve below updates the set first
-            kk = M.sum()
+            kk = (M @ np.ones(S.size)).sum()  # BLAS: a plain sum over M is sequential
             if kk > 0:
                 dz = (total - (M @ np.ascontiguousarray(pen[S])).sum()) / kk
         for sink in range(2):
