@@ -457,6 +457,14 @@ class _Runner:
         )
         self._bone0 = scene.m_col.body_pos[bone].copy()
         self._bone_pos = self._bone0.copy()
+        # the held-force step's lookups, done once (MuJoCo's arrays are views of d_dyn)
+        self._held_fast = quasi_static and self.collider is not None and scene.solver is not None
+        self._qpos, self._qvel = d_dyn.qpos, d_dyn.qvel
+        self._qfrc, self._ctrl = d_dyn.qfrc_applied, d_dyn.ctrl
+        self._jx, self._jz = scene.jx, scene.jz
+        self._area = scene.grid.area_m2
+        self._W, self._m_dyn = scene.W, scene.m_dyn
+        self._friction = finger.friction
         self.pen = np.zeros(scene.n_nodes)
         self.loads = np.zeros(scene.n_nodes)
         self.drag_sum = 0.0
@@ -487,6 +495,8 @@ class _Runner:
         taxel_acc: np.ndarray | None = None,
         taxel_out: np.ndarray | None = None,
     ) -> float:
+        if self._held_fast and z_vel is None and force_cmd > 0:
+            return self._step_held(force_cmd, slide_v, taxel_acc, taxel_out)
         s, dd = self.s, self.d_dyn
         if z_vel is not None:  # kinematic approach
             dd.qpos[s.jz] += z_vel * self.dt
@@ -551,6 +561,71 @@ class _Runner:
         dd.qfrc_applied[s.jx] = drag
         dd.ctrl[0] = slide_v
         mujoco.mj_step(s.m_dyn, dd)
+        self._check_depth(force_cmd)
+        if taxel_acc is not None:
+            taxel_acc += s.W @ loads
+        if taxel_out is not None:
+            np.matmul(s.W, loads, out=taxel_out)
+        return Fs
+
+    def _step_held(self, force_cmd, slide_v, taxel_acc, taxel_out) -> float:
+        """:meth:`step` under quasi-static force control with the primitive collider: the same
+        operations in the same order, with the MuJoCo arrays and constants looked up once."""
+        qpos, qvel, jx, jz = self._qpos, self._qvel, self._jx, self._jz
+        pen, b, b0 = self.pen, self._bone_pos, self._bone0
+        area = self._area
+        total = force_cmd / area
+        for _ in range(_QS_COLLISIONS):
+            b[0] = b0[0] + qpos[jx]
+            b[2] = b0[2] + qpos[jz]
+            if not self.collider.depths(b, pen):  # nothing within the margin: sink, look again
+                qpos[jz] -= 0.9 * QS_MARGIN_M
+                continue
+            p, dz = self.s.solver.solve_force(pen, total)
+            qpos[jz] -= dz
+            pen += dz  # the depths at the new height (for the checks below)
+            if abs(dz) <= QS_MARGIN_M:
+                break
+        else:
+            raise PhysicsError(
+                f"quasi-static force control: the pad found no height carrying {force_cmd:g} N "
+                f"within {_QS_COLLISIONS} collision queries (it fell more than "
+                f"{_QS_COLLISIONS * QS_MARGIN_M * 1e3:g} mm in one step)"
+            )
+        loads = self.loads
+        np.multiply(p, area, out=loads)
+        Fs = float(loads.sum())
+        if not math.isfinite(Fs):
+            raise PhysicsError("the skin load is not finite (NaN or infinity)")
+        top = pen.max()
+        if top > self.max_pen_allowed:
+            raise PhysicsError(
+                f"skin pressed to the bottom: a node is {top * 1e3:.3g} mm deep, beyond the "
+                f"skin thickness {self.max_pen_allowed * 1e3:.3g} mm (lower the force or use a thicker skin)"
+            )
+        drag = 0.0
+        if slide_v != 0.0:
+            drag = -self._friction * Fs * math.tanh(qvel[jx] / V_STICK)
+            self.drag_sum += abs(drag)
+            self.n_slide_steps += 1
+        qvel[jz] = 0.0
+        frc = self._qfrc
+        frc[jz] = 0.0
+        frc[jx] = drag
+        self._ctrl[0] = slide_v
+        mujoco.mj_step(self._m_dyn, self.d_dyn)
+        z = qpos[jz]
+        if self.z0 + z < -self.max_depth or not (math.isfinite(z) and abs(z) < 0.05):
+            self._check_depth(force_cmd)
+        if taxel_acc is not None:
+            taxel_acc += self._W @ loads
+        if taxel_out is not None:
+            np.matmul(self._W, loads, out=taxel_out)
+        return Fs
+
+    def _check_depth(self, force_cmd: float) -> None:
+        """Raise if the pad is below what the skin carries, or ran away."""
+        s, dd = self.s, self.d_dyn
         low = self.z0 + dd.qpos[s.jz]
         if low < -self.max_depth:
             raise PhysicsError(
@@ -564,11 +639,6 @@ class _Runner:
             raise PhysicsError(
                 f"the finger ran away (z = {dd.qpos[s.jz]:.3g} m): the simulation diverged"
             )
-        if taxel_acc is not None:
-            taxel_acc += s.W @ loads
-        if taxel_out is not None:
-            np.matmul(s.W, loads, out=taxel_out)
-        return Fs
 
     def _depths(self, pen: np.ndarray) -> bool:
         """The skin's penetration-depth map at the bone's current position into ``pen``;
@@ -592,7 +662,7 @@ class _Runner:
         return False
 
     def check_warnings(self) -> None:
-        for d in (self.d_dyn, self.d_col):
+        for d in (self.d_dyn,) if self.collider is not None else (self.d_dyn, self.d_col):
             if d.warning.number.any():
                 bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
                 raise PhysicsError(
