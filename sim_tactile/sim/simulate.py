@@ -55,8 +55,12 @@ FORCE_CONTROLS = ("dynamic", "quasi-static")
 #: above the plate are reported, so they can join the contact when the pad sinks; a step
 #: that would move the pad further than this is re-collided at the new height.
 QS_MARGIN_M = 0.5e-3
+#: The margin where MuJoCo's collider serves (meshes, cylinders, height fields): each node
+#: within it is a contact MuJoCo must generate, which on a height field filled the contact
+#: buffer at 0.5 mm; a step that sinks further is re-collided.
+QS_MARGIN_MUJOCO_M = 0.1e-3
 #: Collision queries one quasi-static step may take before it gives up.
-_QS_COLLISIONS = 20
+_QS_COLLISIONS = 50
 
 
 @dataclass(frozen=True)
@@ -224,7 +228,7 @@ def _simulate(
         z0_m=z0,
         z_damping=z_damp,
         coupled=fid.coupled,
-        node_margin_m=QS_MARGIN_M if proto.force_control == "quasi-static" else 0.0,
+        node_margin_m=_qs_margin(plate) if proto.force_control == "quasi-static" else 0.0,
         cache=cache,
     )
     scene.solver = contact.ActiveSet(scene.C, scene.K) if fid.coupled else None
@@ -424,6 +428,19 @@ def _force_warnings(forces: np.ndarray, target_n: float, speed_m_s: float) -> li
     return out
 
 
+def _qs_margin(plate: Plate) -> float:
+    """The skin nodes' collider margin under quasi-static force control: wide where the
+    primitive collider serves (it costs nothing there), narrow where MuJoCo collides."""
+    from ..plates import features
+    from ..plates.spec import Roughness
+
+    if isinstance(plate.texture, Roughness):
+        return QS_MARGIN_MUJOCO_M
+    if all(f.kind in ("box", "cap") for f in features(plate)):
+        return QS_MARGIN_M
+    return QS_MARGIN_MUJOCO_M
+
+
 def _plate_heights(plate: Plate, grid, x: float, y: float) -> np.ndarray:
     from ..plates import height_at
 
@@ -455,6 +472,10 @@ class _Runner:
             if use_primitive_collider
             else None
         )
+        nodes = np.flatnonzero(scene.node_of_geom >= 0)
+        self._margin = float(scene.m_col.geom_margin[nodes[0]]) if nodes.size else 0.0
+        if quasi_static and not self._margin > 0:
+            raise ConfigError("quasi-static force control needs skin nodes with a collider margin")
         self._bone0 = scene.m_col.body_pos[bone].copy()
         self._bone_pos = self._bone0.copy()
         # the held-force step's lookups, done once (MuJoCo's arrays are views of d_dyn)
@@ -509,7 +530,7 @@ class _Runner:
                 p = _skin_pressure(s, self.fid, pen)
                 break
             if not n:  # nothing within the margin: sink by most of it and look again
-                dd.qpos[s.jz] -= 0.9 * QS_MARGIN_M
+                dd.qpos[s.jz] -= 0.9 * self._margin
                 continue
             if s.solver is None:  # L0: the Winkler bed
                 p, dz = contact.winkler_force(
@@ -519,13 +540,13 @@ class _Runner:
                 p, dz = s.solver.solve_force(pen, force_cmd / s.grid.area_m2)
             dd.qpos[s.jz] -= dz
             pen += dz  # the depths at the new height (for the checks below)
-            if abs(dz) <= QS_MARGIN_M:
+            if abs(dz) <= self._margin:
                 break
         else:
             raise PhysicsError(
                 f"quasi-static force control: the pad found no height carrying {force_cmd:g} N "
                 f"within {_QS_COLLISIONS} collision queries (it fell more than "
-                f"{_QS_COLLISIONS * QS_MARGIN_M * 1e3:g} mm in one step)"
+                f"{_QS_COLLISIONS * self._margin * 1e3:g} mm in one step)"
             )
         loads = self.loads
         np.multiply(p, s.grid.area_m2, out=loads)
@@ -579,18 +600,18 @@ class _Runner:
             b[0] = b0[0] + qpos[jx]
             b[2] = b0[2] + qpos[jz]
             if not self.collider.depths(b, pen):  # nothing within the margin: sink, look again
-                qpos[jz] -= 0.9 * QS_MARGIN_M
+                qpos[jz] -= 0.9 * self._margin
                 continue
             p, dz = self.s.solver.solve_force(pen, total)
             qpos[jz] -= dz
             pen += dz  # the depths at the new height (for the checks below)
-            if abs(dz) <= QS_MARGIN_M:
+            if abs(dz) <= self._margin:
                 break
         else:
             raise PhysicsError(
                 f"quasi-static force control: the pad found no height carrying {force_cmd:g} N "
                 f"within {_QS_COLLISIONS} collision queries (it fell more than "
-                f"{_QS_COLLISIONS * QS_MARGIN_M * 1e3:g} mm in one step)"
+                f"{_QS_COLLISIONS * self._margin * 1e3:g} mm in one step)"
             )
         loads = self.loads
         np.multiply(p, area, out=loads)
