@@ -64,8 +64,9 @@ class ActiveSet:
     node leaves through the Schur complement of ``M``, a node joins through the Schur
     complement of ``C``. A step that keeps its set costs one matrix-vector product, and the
     pad's contact stiffness is ``sum(M)`` times the node area. ``M`` is recomputed from ``C``
-    after ``refresh`` updates (a block of nodes joining or leaving is one), which bounds round-off drift; the schedule is deterministic, so
-    equal inputs give bit-identical outputs. Same answer as :func:`halfspace` (tested).
+    after ``refresh`` updates (a block of nodes joining or leaving is one), which bounds
+    round-off drift; the schedule is deterministic, so equal inputs give bit-identical
+    outputs. Same answer as :func:`halfspace` (tested).
     """
 
     def __init__(self, C: np.ndarray, K: np.ndarray | None = None, refresh: int = 100):
@@ -76,41 +77,6 @@ class ActiveSet:
         self.rebuilds = 0
         self._in = np.zeros(C.shape[0], bool)
         self._rowsum, self._rowsum_of = np.zeros(0), None
-
-    # -- the inverse on the set
-    def _rebuild(self, S: np.ndarray) -> None:
-        S = np.sort(S)
-        if S.size:
-            self.M = _inverse_subset(self.C, self.K, S)
-        else:
-            self.M = np.zeros((0, 0))
-        self.S, self.updates = S, 0
-        self.rebuilds += 1
-        self._in[:] = False
-        self._in[S] = True
-
-    def _remove(self, drop: np.ndarray) -> None:
-        """Remove the rows at positions ``drop`` (boolean over S) from the set."""
-        keep = ~drop
-        if not keep.any():
-            self._rebuild(self.S[:0])
-            return
-        if self.updates >= self.refresh:
-            self._rebuild(self.S[keep])
-            return
-        self.M = _inverse_without(self.M, np.flatnonzero(keep), np.flatnonzero(drop))
-        self._in[self.S[drop]] = False
-        self.S = self.S[keep]
-        self.updates += 1
-
-    def _add(self, A: np.ndarray) -> None:
-        if self.S.size == 0 or self.updates >= self.refresh:
-            self._rebuild(np.concatenate([self.S, A]))
-            return
-        self.M = _inverse_with(self.M, self.C, self.S, A)
-        self.S = np.concatenate([self.S, A])
-        self._in[A] = True
-        self.updates += 1
 
     # -- the contact problem
     def solve(self, pen_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -244,7 +210,8 @@ _NO_K = np.zeros((0, 0))
 
 @numba.njit(cache=True)
 def _inverse_subset_nb(C, K, S):
-    """:func:`_inverse_subset` in numba; ``K`` of shape (0, 0) stands for no inverse."""
+    """inv(C[S, S]); a large S goes through its small complement T with K = inv(C):
+    inv(C_SS) = K_SS - K_ST inv(K_TT) K_TS. ``K`` of shape (0, 0) stands for no inverse."""
     n = C.shape[0]
     m = S.size
     if K.shape[0] == 0 or 2 * m <= n:
@@ -504,22 +471,6 @@ def _inverse_with(M, C, S, A):
     out[n:, :n] = -G.T
     out[n:, n:] = Zi
     return out
-
-
-def _inverse_subset(C: np.ndarray, K: np.ndarray | None, S: np.ndarray) -> np.ndarray:
-    """inv(C[S, S]); a large S goes through its small complement T with K = inv(C):
-    inv(C_SS) = K_SS - K_ST inv(K_TT) K_TS."""
-    n = C.shape[0]
-    if K is None or 2 * S.size <= n:
-        return np.linalg.inv(C[np.ix_(S, S)])
-    mask = np.ones(n, bool)
-    mask[S] = False
-    T = np.flatnonzero(mask)
-    KSS = K[np.ix_(S, S)]
-    if T.size == 0:
-        return KSS.copy()
-    KST = K[np.ix_(S, T)]
-    return KSS - KST @ np.linalg.solve(K[np.ix_(T, T)], KST.T)
 
 
 def _solve_subset(

@@ -524,30 +524,11 @@ class _Runner:
             dd.qvel[s.jz] = 0.0
         quasi = self.quasi_static and z_vel is None and force_cmd > 0
         pen = self.pen
-        for _ in range(_QS_COLLISIONS):
-            n = self._depths(pen)
-            if not quasi:
-                p = _skin_pressure(s, self.fid, pen)
-                break
-            if not n:  # nothing within the margin: sink by most of it and look again
-                dd.qpos[s.jz] -= 0.9 * self._margin
-                continue
-            if s.solver is None:  # L0: the Winkler bed
-                p, dz = contact.winkler_force(
-                    pen, self.fid.winkler_k_pa_per_m, force_cmd / s.grid.area_m2
-                )
-            else:
-                p, dz = s.solver.solve_force(pen, force_cmd / s.grid.area_m2)
-            dd.qpos[s.jz] -= dz
-            pen += dz  # the depths at the new height (for the checks below)
-            if abs(dz) <= self._margin:
-                break
+        if quasi:
+            p, n = self._hold(force_cmd), True
         else:
-            raise PhysicsError(
-                f"quasi-static force control: the pad found no height carrying {force_cmd:g} N "
-                f"within {_QS_COLLISIONS} collision queries (it fell more than "
-                f"{_QS_COLLISIONS * self._margin * 1e3:g} mm in one step)"
-            )
+            n = self._depths(pen)
+            p = _skin_pressure(s, self.fid, pen)
         loads = self.loads
         np.multiply(p, s.grid.area_m2, out=loads)
         Fs = float(loads.sum())
@@ -593,26 +574,8 @@ class _Runner:
         """:meth:`step` under quasi-static force control with the primitive collider: the same
         operations in the same order, with the MuJoCo arrays and constants looked up once."""
         qpos, qvel, jx, jz = self._qpos, self._qvel, self._jx, self._jz
-        pen, b, b0 = self.pen, self._bone_pos, self._bone0
-        area = self._area
-        total = force_cmd / area
-        for _ in range(_QS_COLLISIONS):
-            b[0] = b0[0] + qpos[jx]
-            b[2] = b0[2] + qpos[jz]
-            if not self.collider.depths(b, pen):  # nothing within the margin: sink, look again
-                qpos[jz] -= 0.9 * self._margin
-                continue
-            p, dz = self.s.solver.solve_force(pen, total)
-            qpos[jz] -= dz
-            pen += dz  # the depths at the new height (for the checks below)
-            if abs(dz) <= self._margin:
-                break
-        else:
-            raise PhysicsError(
-                f"quasi-static force control: the pad found no height carrying {force_cmd:g} N "
-                f"within {_QS_COLLISIONS} collision queries (it fell more than "
-                f"{_QS_COLLISIONS * self._margin * 1e3:g} mm in one step)"
-            )
+        pen, area = self.pen, self._area
+        p = self._hold(force_cmd)
         loads = self.loads
         np.multiply(p, area, out=loads)
         Fs = float(loads.sum())
@@ -643,6 +606,30 @@ class _Runner:
         if taxel_out is not None:
             np.matmul(self._W, loads, out=taxel_out)
         return Fs
+
+    def _hold(self, force_cmd: float) -> np.ndarray:
+        """Move the pad to the height where the skin carries ``force_cmd``; returns the
+        pressures there and leaves the depths there in ``self.pen``. Re-collides when the
+        pad moves further than the collider's margin (nodes beyond it could not join)."""
+        qpos, jz, pen, solver = self._qpos, self._jz, self.pen, self.s.solver
+        total = force_cmd / self._area
+        for _ in range(_QS_COLLISIONS):
+            if not self._depths(pen):  # nothing within the margin: sink by most of it, look again
+                qpos[jz] -= 0.9 * self._margin
+                continue
+            if solver is None:  # L0: the Winkler bed
+                p, dz = contact.winkler_force(pen, self.fid.winkler_k_pa_per_m, total)
+            else:
+                p, dz = solver.solve_force(pen, total)
+            qpos[jz] -= dz
+            pen += dz  # the depths at the new height (for the checks)
+            if abs(dz) <= self._margin:
+                return p
+        raise PhysicsError(
+            f"quasi-static force control: the pad found no height carrying {force_cmd:g} N "
+            f"within {_QS_COLLISIONS} collision queries (it fell more than "
+            f"{_QS_COLLISIONS * self._margin * 1e3:g} mm in one step)"
+        )
 
     def _check_depth(self, force_cmd: float) -> None:
         """Raise if the pad is below what the skin carries, or ran away."""
