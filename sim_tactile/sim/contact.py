@@ -209,36 +209,33 @@ _NO_K = np.zeros((0, 0))
 
 
 @numba.njit(cache=True)
+def _take(X, rows, cols):
+    """X[rows][:, cols] as a new C-contiguous array."""
+    out = np.empty((rows.size, cols.size))
+    for i in range(rows.size):
+        for j in range(cols.size):
+            out[i, j] = X[rows[i], cols[j]]
+    return out
+
+
+@numba.njit(cache=True)
 def _inverse_subset_nb(C, K, S):
     """inv(C[S, S]); a large S goes through its small complement T with K = inv(C):
     inv(C_SS) = K_SS - K_ST inv(K_TT) K_TS. ``K`` of shape (0, 0) stands for no inverse."""
     n = C.shape[0]
     m = S.size
     if K.shape[0] == 0 or 2 * m <= n:
-        A = np.empty((m, m))
-        for i in range(m):
-            for j in range(m):
-                A[i, j] = C[S[i], S[j]]
-        return np.ascontiguousarray(np.linalg.inv(A))
+        return np.ascontiguousarray(np.linalg.inv(_take(C, S, S)))
     mask = np.ones(n, np.bool_)
     for i in range(m):
         mask[S[i]] = False
     T = np.flatnonzero(mask)
     t = T.size
-    KSS = np.empty((m, m))
-    for i in range(m):
-        for j in range(m):
-            KSS[i, j] = K[S[i], S[j]]
+    KSS = _take(K, S, S)
     if t == 0:
         return KSS
-    KST = np.empty((m, t))
-    for i in range(m):
-        for j in range(t):
-            KST[i, j] = K[S[i], T[j]]
-    KTT = np.empty((t, t))
-    for i in range(t):
-        for j in range(t):
-            KTT[i, j] = K[T[i], T[j]]
+    KST = _take(K, S, T)
+    KTT = _take(K, T, T)
     return np.ascontiguousarray(KSS - KST @ np.linalg.solve(KTT, np.ascontiguousarray(KST.T)))
 
 
@@ -434,17 +431,9 @@ def _force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b) -> float:
 @numba.njit(cache=True)
 def _inverse_without(M, keep, drop):
     """inv(C_KK) from M = inv(C_SS), S = K + R: the Schur complement M_KK - M_KR inv(M_RR) M_RK."""
-    Mkr = np.empty((keep.size, drop.size))
-    Mrr = np.empty((drop.size, drop.size))
-    Mkk = np.empty((keep.size, keep.size))
-    for i in range(keep.size):
-        for j in range(drop.size):
-            Mkr[i, j] = M[keep[i], drop[j]]
-        for j in range(keep.size):
-            Mkk[i, j] = M[keep[i], keep[j]]
-    for i in range(drop.size):
-        for j in range(drop.size):
-            Mrr[i, j] = M[drop[i], drop[j]]
+    Mkr = _take(M, keep, drop)
+    Mrr = _take(M, drop, drop)
+    Mkk = _take(M, keep, keep)
     X = np.linalg.solve(Mrr, np.ascontiguousarray(Mkr.T))
     return Mkk - Mkr @ X
 
@@ -454,14 +443,8 @@ def _inverse_with(M, C, S, A):
     """inv(C_TT) for T = S + A from M = inv(C_SS), through the Schur complement of C_SS:
     Z = C_AA - C_AS M C_SA, inv = [[M + M B Z^-1 B' M, -M B Z^-1], [-Z^-1 B' M, Z^-1]]."""
     n, a = S.size, A.size
-    B = np.empty((n, a))
-    for i in range(n):
-        for j in range(a):
-            B[i, j] = C[S[i], A[j]]
-    D = np.empty((a, a))
-    for i in range(a):
-        for j in range(a):
-            D[i, j] = C[A[i], A[j]]
+    B = _take(C, S, A)
+    D = _take(C, A, A)
     MB = M @ B
     Zi = np.linalg.inv(D - np.ascontiguousarray(B.T) @ MB)
     G = MB @ Zi
