@@ -104,6 +104,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         force_n=args.force,
         duration_s=args.duration,
         rate_hz=args.rate or layout.rate_hz,
+        force_control=args.force_control,
     )
     res = simulate(
         args.plate,
@@ -479,6 +480,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--rate", type=float, default=None, help="sample rate [Hz] (default: the layout's)"
     )
     sm.add_argument("--fidelity", default="auto", choices=["auto", "L0", "L1", "L2"])
+    sm.add_argument(
+        "--force-control",
+        default="quasi-static",
+        choices=["quasi-static", "dynamic"],
+        help="hold the force exactly each step (default) or a damped bone mass",
+    )
     sm.add_argument("--seed", type=int, default=0)
     sm.add_argument("--ideal", action="store_true", help="record the noise-free normal load [N]")
     sm.add_argument("--out", required=True, help="output .npz")

@@ -90,3 +90,18 @@ def test_simulate_bad_sensor_is_one_line(cli_env, tmp_path):
     )
     assert res.returncode != 0 and res.stdout == ""
     assert len(res.stderr.strip().splitlines()) == 1 and "nope" in res.stderr
+
+
+def test_simulate_force_control_flag(cli_env, tmp_path):
+    args = ["simulate", "--plate", "finger7/ridges-4", "--sensor", "grid3x3", "--speed", "0.06"]
+    args += ["--force", "1", "--duration", "0.4", "--ideal", "--json"]
+    forces = {}
+    for fc in ("quasi-static", "dynamic"):
+        out = tmp_path / f"{fc}.npz"
+        run([*args, "--force-control", fc, "--out", str(out)], cli_env)
+        with np.load(out, allow_pickle=False) as z:
+            meta = json.loads(str(z["meta_json"]))
+        assert meta["protocol"]["force_control"] == fc
+        forces[fc] = np.asarray(meta["normal_force_n"])
+    np.testing.assert_allclose(forces["quasi-static"], 1.0, rtol=1e-9)
+    assert np.ptp(forces["dynamic"]) > 1e-3  # the damped bone's force moves
