@@ -91,7 +91,9 @@ def loop_overhead(repeats: int = 5) -> dict:
       against the plate, and mj_step (no skin solve);
     - minimal: the least a user's own script must do for the same physics: the depth map (the
       primitive collider where the plate allows it, else MuJoCo's collider), the skin's
-      force-holding contact solve, and mj_step.
+      force-holding contact solve, and mj_step. Where the step solves a reduced problem
+      (:class:`sim_tactile.sim.held.HeldSkin`: collider probes per column, the mirror half),
+      the minimal loop calls the same reduced collider and solver, so both do the same work.
 
     The loop overhead is full / minimal - 1: what the project's loop adds to the physics.
     """
@@ -117,7 +119,9 @@ def loop_overhead(repeats: int = 5) -> dict:
     n = 200
     full, bare, minimal = [], [], []
     q0, v0 = run.d_dyn.qpos.copy(), run.d_dyn.qvel.copy()
+    held = run.held
     solver0 = copy.deepcopy(s.solver)
+    held0 = copy.deepcopy(held.solver) if held is not None else None
     A = s.grid.area_m2
     dc, dd = run.d_col, run.d_dyn
 
@@ -125,6 +129,8 @@ def loop_overhead(repeats: int = 5) -> dict:
         dd.qpos[:], dd.qvel[:] = q0, v0
         dd.qfrc_applied[:] = 0.0
         s.solver = copy.deepcopy(solver0)
+        if held is not None:
+            held.solver = copy.deepcopy(held0)
 
     with threadpool_limits(limits=1, user_api="blas"):
         for _ in range(repeats):
@@ -148,6 +154,16 @@ def loop_overhead(repeats: int = 5) -> dict:
             bone = run._bone0.copy()
             t = time.perf_counter()
             for _ in range(n):
+                if held is not None:  # the reduced problem the step solves
+                    bone[0] = run._bone0[0] + dd.qpos[s.jx]
+                    bone[2] = run._bone0[2] + dd.qpos[s.jz]
+                    held.depths(bone)
+                    p, dz = held.solver.solve_force(held.pen, 1.0 / A)
+                    dd.qpos[s.jz] -= dz
+                    dd.qvel[s.jz] = 0.0
+                    dd.ctrl[0] = V
+                    mujoco.mj_step(s.m_dyn, dd)
+                    continue
                 if run.collider is not None:  # the plate's primitives: the fast collider
                     bone[0] = run._bone0[0] + dd.qpos[s.jx]
                     bone[2] = run._bone0[2] + dd.qpos[s.jz]

@@ -53,6 +53,21 @@ class PrimitiveCollider:
         self.start = np.zeros(len(buckets) + 1, dtype=np.int64)
         self.start[1:] = np.cumsum([len(b) for b in buckets])
         self.items = np.array([g for b in buckets for g in b], dtype=np.int64)
+        #: the arguments of the depth kernel after the bone's position, in its order
+        self.arrays = (
+            self.local,
+            self.radius,
+            self.margin,
+            self.kind,
+            self.pos,
+            self.mat,
+            self.size,
+            self.origin,
+            self.cell,
+            self.shape,
+            self.start,
+            self.items,
+        )
 
     @classmethod
     def from_model(
@@ -99,26 +114,40 @@ class PrimitiveCollider:
             size=m.geom_size[idx].copy(),
         )
 
-    def depths(self, bone_pos: np.ndarray, pen: np.ndarray) -> bool:
-        """Fill ``pen`` (N,) with each node's deepest penetration [m] for the bone at world
-        position ``bone_pos`` (3,); ``-inf`` where no plate geom is within the node's margin.
-        Returns whether any node is within it."""
-        return _depths(
-            bone_pos,
-            self.local,
-            self.radius,
-            self.margin,
+    def y_invariant(self, bone_y: float) -> bool:
+        """Whether every node's depth is independent of its y for the bone at ``bone_y``: all
+        plate geoms are unrotated boxes that reach past every node in y by more than their
+        smaller half-extent in x or z. Then a node's signed distance to each box does not
+        involve its y at all (the y-term is neither the largest inside nor nonzero outside),
+        so nodes with equal x, z, radius and margin get bit-identical depths."""
+        if not len(self.kind) or not (self.kind == _BOX).all():
+            return False
+        if not (self.mat == np.eye(3)).all():
+            return False
+        y = bone_y + self.local[:, 1]
+        for g in range(len(self.kind)):
+            hx, hy, hz = self.size[g]
+            if np.abs(y - self.pos[g, 1]).max() >= hy - min(hx, hz):
+                return False
+        return True
+
+    def subset(self, nodes: np.ndarray) -> PrimitiveCollider:
+        """The same collider for the nodes ``nodes`` only (their order)."""
+        return PrimitiveCollider(
+            self.local[nodes],
+            self.radius[nodes],
+            self.margin[nodes],
             self.kind,
             self.pos,
             self.mat,
             self.size,
-            self.origin,
-            self.cell,
-            self.shape,
-            self.start,
-            self.items,
-            pen,
         )
+
+    def depths(self, bone_pos: np.ndarray, pen: np.ndarray) -> bool:
+        """Fill ``pen`` (N,) with each node's deepest penetration [m] for the bone at world
+        position ``bone_pos`` (3,); ``-inf`` where no plate geom is within the node's margin.
+        Returns whether any node is within it."""
+        return _depths(bone_pos, *self.arrays, pen)
 
 
 def _half_extents(kind: np.ndarray, mat: np.ndarray, size: np.ndarray) -> np.ndarray:

@@ -129,11 +129,8 @@ class ActiveSet:
         if not (pen_m.flags.c_contiguous and pen_m.dtype == np.float64):
             pen_m = np.ascontiguousarray(pen_m, dtype=np.float64)
         if self.S.size:  # the common case, without the loop's call and return costs
-            if self._rowsum_of is not self.M:  # M 1, kept while M stands
-                self._rowsum, self._rowsum_of = self.M.sum(axis=1), self.M
-            dz = _force_same_set(
-                self.M, self.S, pen_m, self.C, self._in, _TOL_REL, total_pa, p, self._rowsum
-            )
+            M, S, in_set, C, rowsum = self.same_set_state()
+            dz = _force_same_set(M, S, pen_m, C, in_set, _TOL_REL, total_pa, p, rowsum)
             if dz == dz:
                 return p, dz
         K = self.K if self.K is not None else _NO_K
@@ -162,6 +159,13 @@ class ActiveSet:
             f"the force-holding contact solve did not converge in {max_iter} iterations "
             f"(target {total_pa:.4g} Pa summed over the nodes)"
         )
+
+    def same_set_state(self):
+        """``(M, S, in_set, C, rowsum)``: what :func:`_force_same_set` needs to try the current
+        set; ``rowsum = M 1`` is kept while ``M`` stands."""
+        if self._rowsum_of is not self.M:
+            self._rowsum, self._rowsum_of = self.M.sum(axis=1), self.M
+        return self.M, self.S, self._in, self.C, self._rowsum
 
     def stiffness_per_area(self) -> float:
         """d(total pressure integral)/d(uniform indentation) on the current set [Pa/m]:

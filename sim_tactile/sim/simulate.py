@@ -28,6 +28,7 @@ from . import contact
 from ._readout import penetration_map
 from .collide import PrimitiveCollider
 from .fidelity import Fidelity, choose_fidelity, flat_stiffness
+from .held import _QS_COLLISIONS, HeldSkin
 
 #: Largest omega * dt of the explicit skin-to-bone coupling before the run is refused; the
 #: semi-implicit scheme is stable below 2, this keeps a margin of 2.
@@ -59,8 +60,6 @@ QS_MARGIN_M = 0.5e-3
 #: within it is a contact MuJoCo must generate, which on a height field filled the contact
 #: buffer at 0.5 mm; a step that sinks further is re-collided.
 QS_MARGIN_MUJOCO_M = 0.1e-3
-#: Collision queries one quasi-static step may take before it gives up.
-_QS_COLLISIONS = 50
 
 
 @dataclass(frozen=True)
@@ -462,6 +461,7 @@ class _Runner:
         plate: Plate | None = None,
         quasi_static: bool = False,
         use_primitive_collider: bool = True,
+        reduce_skin: bool = True,
     ):
         self.s, self.fid, self.finger = scene, fid, finger
         self.quasi_static = quasi_static
@@ -480,6 +480,12 @@ class _Runner:
         self._bone_pos = self._bone0.copy()
         # the held-force step's lookups, done once (MuJoCo's arrays are views of d_dyn)
         self._held_fast = quasi_static and self.collider is not None and scene.solver is not None
+        self.held = (
+            HeldSkin(scene, self.collider, float(self._bone0[1]), self._margin, reduce_skin)
+            if self._held_fast
+            else None
+        )
+        self._taxel_tmp = np.zeros(scene.layout.n)
         self._qpos, self._qvel = d_dyn.qpos, d_dyn.qvel
         self._qfrc, self._ctrl = d_dyn.qfrc_applied, d_dyn.ctrl
         self._jx, self._jz = scene.jx, scene.jz
@@ -571,17 +577,15 @@ class _Runner:
         return Fs
 
     def _step_held(self, force_cmd, slide_v, taxel_acc, taxel_out) -> float:
-        """:meth:`step` under quasi-static force control with the primitive collider: the same
-        operations in the same order, with the MuJoCo arrays and constants looked up once."""
+        """:meth:`step` under quasi-static force control with the primitive collider: the
+        skin's part in one compiled call on the reduced problem (:class:`HeldSkin`)."""
         qpos, qvel, jx, jz = self._qpos, self._qvel, self._jx, self._jz
-        pen, area = self.pen, self._area
-        p = self._hold(force_cmd)
-        loads = self.loads
-        np.multiply(p, area, out=loads)
-        Fs = float(loads.sum())
+        h = self.held
+        out = taxel_out if taxel_out is not None else self._taxel_tmp
+        total = force_cmd / self._area
+        Fs, top = h.step(self._bone0, qpos, jx, jz, total, out)
         if not math.isfinite(Fs):
             raise PhysicsError("the skin load is not finite (NaN or infinity)")
-        top = pen.max()
         if top > self.max_pen_allowed:
             raise PhysicsError(
                 f"skin pressed to the bottom: a node is {top * 1e3:.3g} mm deep, beyond the "
@@ -602,9 +606,7 @@ class _Runner:
         if self.z0 + z < -self.max_depth or not (math.isfinite(z) and abs(z) < 0.05):
             self._check_depth(force_cmd)
         if taxel_acc is not None:
-            taxel_acc += self._W @ loads
-        if taxel_out is not None:
-            np.matmul(self._W, loads, out=taxel_out)
+            taxel_acc += out
         return Fs
 
     def _hold(self, force_cmd: float) -> np.ndarray:

@@ -41,7 +41,7 @@ def _code_version() -> str:
     from .. import records, sensors
     from ..scene import elastic, finger, layouts, model
     from ..sensors import micro, transducers
-    from ..sim import _readout, collide, contact, fidelity, simulate
+    from ..sim import _readout, collide, contact, fidelity, held, simulate
 
     return source_version(
         records,
@@ -56,6 +56,7 @@ def _code_version() -> str:
         collide,
         contact,
         fidelity,
+        held,
         simulate,
     )
 

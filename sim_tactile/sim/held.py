@@ -1,0 +1,287 @@
+"""The skin's part of one held-force step, in one numba call, on the smallest exact problem.
+
+Under quasi-static force control with the primitive collider, a step is: the depth map at the
+bone's position, the height at which the skin carries the commanded force (the force-holding
+contact solve), and the taxel loads there. :class:`HeldSkin` does these in one compiled call
+(:func:`_held_kernel`) whenever the contact set holds and the pad moves less than the
+collider's margin; otherwise (a node joins or leaves, nothing is near, a long move) it falls
+back to the general loop, which re-collides and updates the set.
+
+It also solves the smallest problem that gives the same answer:
+
+- **columns** (:meth:`PrimitiveCollider.y_invariant`): when every plate geom is a box that
+  runs past the whole pad in y (ridges across the slide), a node's depth does not depend on
+  its y; the collider computes one node per distinct (x, z, radius, margin), the rest are
+  copies (bit-identical);
+- **mirror** halving: when, in addition, the node grid is symmetric about the pad's centre
+  line (nodes at y and -y alike), the depth map, and so the unique contact solution, are
+  symmetric. The solve then runs on the nodes with y >= 0 only. Its unknowns are the summed
+  pressure of each mirror pair, ``f = p_a + p_a'`` (``p_a`` on the centre line), and its
+  compliance ``C_f[a, b] = (C[a, b] + C[a, b']) / 2`` is symmetric positive definite
+  (``V' C V`` for the pair-averaging ``V``). The total force is the plain sum of ``f``, so
+  the force-holding solve is unchanged; the taxels read ``f`` through ``W_f[:, b] =
+  (W[:, b] + W[:, b']) / 2``. Equal to the full solve to round-off (tested); the set
+  updates, which dominate a sliding step, cost about a third.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..errors import PhysicsError
+from . import contact
+from .collide import PrimitiveCollider, _depths
+
+#: Collision queries one step may take before it gives up (the pad falling through).
+_QS_COLLISIONS = 50
+#: Relative tolerance of the mirror-symmetry check of the compliance.
+_SYM_RTOL = 1e-10
+
+
+class HeldSkin:
+    """Depths, force-holding solve and taxel readout of one scene under quasi-static force
+    control with the primitive collider.
+
+    ``pen`` and ``f`` live on the reduced nodes ``nodes`` (all nodes when no reduction
+    applies, or ``reduce`` is False); ``f`` sums each mirror pair's pressures, so ``area * f.sum()`` is the normal
+    force and ``W @ (area * f)`` the taxel loads."""
+
+    def __init__(
+        self,
+        scene,
+        collider: PrimitiveCollider,
+        bone_y: float,
+        margin: float,
+        reduce: bool = True,
+    ):
+        n = scene.n_nodes
+        self.area = scene.grid.area_m2
+        self.margin = margin
+        nodes = np.arange(n)
+        C, K, W = scene.C, scene.K, scene.W
+        self.columns = reduce and collider.y_invariant(bone_y)
+        self.mirrored = False
+        if self.columns:
+            mirror = _mirror_of(collider)
+            if mirror is not None and _mirror_symmetric(C, mirror):
+                self.mirrored = True
+                nodes = np.flatnonzero(collider.local[:, 1] >= 0.0)
+                pair = mirror[nodes]
+                Cf = 0.5 * (C[np.ix_(nodes, nodes)] + C[np.ix_(nodes, pair)])
+                C = np.ascontiguousarray(0.5 * (Cf + Cf.T))
+                K = np.ascontiguousarray(np.linalg.inv(C))
+                W = 0.5 * (W[:, nodes] + W[:, pair])
+        self.nodes = nodes
+        self.n = nodes.size
+        self.solver = contact.ActiveSet(C, K)
+        self.W = np.ascontiguousarray(W, dtype=np.float64)
+        sub = collider.subset(nodes)
+        if self.columns:  # one probe per distinct (x, z, radius, margin)
+            key = np.column_stack([sub.local[:, 0], sub.local[:, 2], sub.radius, sub.margin])
+            _, first, group = np.unique(key, axis=0, return_index=True, return_inverse=True)
+            sub = sub.subset(first)
+            self.group = group.ravel().astype(np.int64)
+        else:
+            self.group = np.arange(self.n, dtype=np.int64)
+        self.probe = sub
+        self.n_probes = len(sub.radius)
+        self.pen = np.empty(self.n)
+        self.f = np.zeros(self.n)
+        self._small = np.empty(self.n_probes)
+
+    def describe(self) -> str:
+        how = []
+        if self.columns:
+            how.append(f"{self.n_probes} collider probes (depths constant along y)")
+        if self.mirrored:
+            how.append(f"mirror-halved solve on {self.n} nodes")
+        return ", ".join(how) or "full problem"
+
+    def depths(self, bone: np.ndarray) -> bool:
+        """The reduced depth map at the bone's world position into ``pen``."""
+        near = _depths(bone, *self.probe.arrays, self._small)
+        np.take(self._small, self.group, out=self.pen)
+        return near
+
+    def step(self, bone0, qpos, jx, jz, total, taxel_out) -> tuple[float, float]:
+        """One held-force step in one call: the depths at the bone (from ``qpos``), the height
+        that carries ``total`` (the pressure sum), the pad moved there (``qpos[jz]``), the
+        taxel loads into ``taxel_out``. Re-collides when the pad moves beyond the margin and
+        updates the contact set when it changes. Returns ``(force [N], deepest node [m])``."""
+        s = self.solver
+        M, S, in_set, C, rowsum = s.same_set_state()
+        st, force, top, M2, S2, updates, rebuilds, rowsum2 = _held_kernel(
+            bone0,
+            qpos,
+            jx,
+            jz,
+            *self.probe.arrays,
+            self._small,
+            self.group,
+            M,
+            S,
+            in_set,
+            C,
+            s.K if s.K is not None else contact._NO_K,
+            rowsum,
+            contact._TOL_REL,
+            total,
+            self.margin,
+            s.updates,
+            s.refresh,
+            contact._MAX_ITER,
+            _QS_COLLISIONS,
+            self.pen,
+            self.f,
+            self.W,
+            self.area,
+            taxel_out,
+        )
+        if M2 is not M:  # the set changed
+            s.M, s.S, s.updates = M2, S2, updates
+            s.rebuilds += rebuilds
+            s._rowsum, s._rowsum_of = rowsum2, M2
+        if st == 0:
+            return force, top
+        if st == 1:
+            raise PhysicsError(
+                f"quasi-static force control: the pad found no height carrying {total * self.area:g} N "
+                f"within {_QS_COLLISIONS} collision queries (it fell more than "
+                f"{_QS_COLLISIONS * self.margin * 1e3:g} mm in one step)"
+            )
+        if st == 3:
+            raise PhysicsError("no skin node lies within the collider's margin of the plate")
+        raise PhysicsError(
+            f"the force-holding contact solve did not converge in {contact._MAX_ITER} iterations "
+            f"(target {total:.4g} Pa summed over the nodes)"
+        )
+
+
+def _mirror_of(c: PrimitiveCollider) -> np.ndarray | None:
+    """Each node's mirror image across y = 0 (same x, z, radius, margin; y negated,
+    bit-exact), or None if some node has none."""
+    key = {
+        (x, y, z, r, m): i
+        for i, ((x, y, z), r, m) in enumerate(
+            zip(c.local.tolist(), c.radius, c.margin, strict=True)
+        )
+    }
+    out = np.empty(len(key), dtype=np.int64)
+    if len(key) != len(c.radius):
+        return None
+    for (x, y, z, r, m), i in key.items():
+        j = key.get((x, -y if y else y, z, r, m))
+        if j is None:
+            return None
+        out[i] = j
+    return out
+
+
+def _mirror_symmetric(C: np.ndarray, mirror: np.ndarray) -> bool:
+    return bool(np.allclose(C[np.ix_(mirror, mirror)], C, rtol=_SYM_RTOL, atol=0.0))
+
+
+@numba.njit(cache=True)
+def _held_kernel(
+    bone0,
+    qpos,
+    jx,
+    jz,
+    local,
+    radius,
+    margin,
+    kind,
+    pos,
+    mat,
+    size,
+    origin,
+    cell,
+    shape,
+    start,
+    items,
+    small,
+    group,
+    M,
+    S,
+    in_set,
+    C,
+    K,
+    rowsum,
+    tol_rel,
+    total,
+    qs_margin,
+    updates,
+    refresh,
+    max_iter,
+    n_collisions,
+    pen,
+    f,
+    W,
+    area,
+    taxel_out,
+):
+    """:meth:`HeldSkin.step`. Returns ``(status, force, top, M, S, updates, rebuilds,
+    rowsum)``; status 0 done, 1 no height within the collision queries, 2 the contact solve
+    did not converge, 3 no node within the margin (from the contact solve)."""
+    n = pen.shape[0]
+    bone = np.empty(3)
+    rebuilds = 0
+    done = False
+    for _ in range(n_collisions):
+        bone[0] = bone0[0] + qpos[jx]
+        bone[1] = bone0[1]
+        bone[2] = bone0[2] + qpos[jz]
+        near = _depths(
+            bone,
+            local,
+            radius,
+            margin,
+            kind,
+            pos,
+            mat,
+            size,
+            origin,
+            cell,
+            shape,
+            start,
+            items,
+            small,
+        )
+        for i in range(n):
+            pen[i] = small[group[i]]
+        if not near:  # nothing within the margin: sink by most of it and look again
+            qpos[jz] -= 0.9 * qs_margin
+            continue
+        dz = np.nan
+        if S.size:  # the common case: the set holds at the shift it implies
+            dz = contact._force_same_set(M, S, pen, C, in_set, tol_rel, total, f, rowsum)
+        if dz != dz:
+            st, dz, M, S, updates, rb = contact._force_loop(
+                M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, f, False
+            )
+            rebuilds += rb
+            rowsum = M @ np.ones(S.size)  # BLAS, as ActiveSet keeps it
+            if st != 1:
+                return 3 if st == 2 else 2, 0.0, 0.0, M, S, updates, rebuilds, rowsum
+        qpos[jz] -= dz
+        for i in range(n):
+            pen[i] += dz
+        if abs(dz) <= qs_margin:
+            done = True
+            break
+    if not done:
+        return 1, 0.0, 0.0, M, S, updates, rebuilds, rowsum
+    force = 0.0
+    for i in range(n):
+        force += f[i] * area
+    for t in range(W.shape[0]):
+        acc = 0.0
+        for i in range(n):
+            acc += W[t, i] * (f[i] * area)
+        taxel_out[t] = acc
+    top = -np.inf
+    for i in range(n):
+        if pen[i] > top:
+            top = pen[i]
+    return 0, force, top, M, S, updates, rebuilds, rowsum
