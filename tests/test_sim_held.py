@@ -10,6 +10,7 @@ from sim_tactile.scene.finger import Finger, skin_grid
 from sim_tactile.scene.layouts import get_layout
 from sim_tactile.scene.model import build_scene
 from sim_tactile.sim import contact
+from sim_tactile.sim import held as H
 from sim_tactile.sim import simulate as S
 from sim_tactile.sim.collide import PrimitiveCollider
 from sim_tactile.sim.held import HeldSkin, _mirror_of, _mirror_symmetric
@@ -147,6 +148,58 @@ def test_a_slide_with_the_reduced_skin_equals_the_full_one(plate, cache, monkeyp
     assert seen == [plate.startswith("finger7/ridges"), False]
     assert fast.data.max() > 0.01
     np.testing.assert_allclose(fast.data, full.data, rtol=1e-5, atol=1e-7)
-    np.testing.assert_allclose(
-        fast.meta["normal_force_n"], full.meta["normal_force_n"], rtol=1e-6
-    )
+    np.testing.assert_allclose(fast.meta["normal_force_n"], full.meta["normal_force_n"], rtol=1e-6)
+
+
+def test_weighted_winkler_bed_equals_the_expanded_one():
+    rng = np.random.default_rng(1)
+    for _ in range(100):
+        n = int(rng.integers(1, 40))
+        pen = rng.normal(0.0, 1e-4, n)
+        pen[rng.random(n) < 0.3] = -np.inf
+        if not np.isfinite(pen).any():
+            continue
+        mult = rng.choice([1.0, 2.0], n)
+        total = float(rng.uniform(1e2, 1e6))
+        f = np.empty(n)
+        dz = H._winkler_force(pen, mult, 3e6, total, f)
+        # the same nodes written out once per node they stand for
+        full = np.repeat(pen, mult.astype(int))
+        p, dz_full = contact.winkler_force(full, 3e6, total)
+        assert dz == pytest.approx(dz_full, rel=1e-12, abs=1e-18)
+        assert f.sum() == pytest.approx(total, rel=1e-12)
+        np.testing.assert_allclose(f / mult, 3e6 * np.maximum(pen + dz, 0.0), rtol=1e-12)
+        # unit weights: bit for bit the plain closed form
+        p1, dz1 = contact.winkler_force(pen, 3e6, total)
+        assert H._winkler_force(pen, np.ones(n), 3e6, total, f) == dz1
+        assert f.tobytes() == p1.tobytes()
+    assert np.isnan(H._winkler_force(np.full(3, -np.inf), np.ones(3), 3e6, 1.0, np.empty(3)))
+
+
+@pytest.mark.parametrize("fidelity", ["L0", "L1"])
+def test_the_held_step_equals_the_general_loop_with_mujocos_collider(fidelity, cache, monkeypatch):
+    """The compiled held step on the reduced problem against the Python loop over MuJoCo's
+    collider and the full problem (the path of plates MuJoCo must collide)."""
+    orig = S._Runner.__init__
+    paths = []
+
+    def run(primitive: bool):
+        def spy(self, *a, **k):
+            orig(self, *a, **{**k, "use_primitive_collider": primitive})
+            paths.append(self.held is not None and self.held.mirrored)
+
+        monkeypatch.setattr(S._Runner, "__init__", spy)
+        return simulate(
+            "finger7/ridges-4",
+            "grid3x3",
+            protocol=Protocol(duration_s=0.5),
+            fidelity=fidelity,
+            ideal=True,
+            seed=2,
+            cache=cache,
+        ).recording
+
+    fast, slow = run(True), run(False)
+    assert paths == [True, False]
+    assert fast.data.max() > 0.05
+    np.testing.assert_allclose(fast.data, slow.data, rtol=1e-5, atol=1e-7)

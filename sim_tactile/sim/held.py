@@ -54,27 +54,36 @@ class HeldSkin:
         bone_y: float,
         margin: float,
         reduce: bool = True,
+        winkler_k_pa_per_m: float | None = None,
     ):
         n = scene.n_nodes
         self.area = scene.grid.area_m2
         self.margin = margin
         nodes = np.arange(n)
         C, K, W = scene.C, scene.K, scene.W
+        winkler = C is None
+        if winkler and not (winkler_k_pa_per_m and winkler_k_pa_per_m > 0):
+            raise ValueError("a skin without coupling (L0) needs its Winkler stiffness")
+        self.winkler_k = float(winkler_k_pa_per_m) if winkler else 0.0
         self.columns = reduce and collider.y_invariant(bone_y)
         self.mirrored = False
+        mult = np.ones(n)
         if self.columns:
             mirror = _mirror_of(collider)
-            if mirror is not None and _mirror_symmetric(C, mirror):
+            if mirror is not None and (winkler or _mirror_symmetric(C, mirror)):
                 self.mirrored = True
                 nodes = np.flatnonzero(collider.local[:, 1] >= 0.0)
                 pair = mirror[nodes]
-                Cf = 0.5 * (C[np.ix_(nodes, nodes)] + C[np.ix_(nodes, pair)])
-                C = np.ascontiguousarray(0.5 * (Cf + Cf.T))
-                K = np.ascontiguousarray(np.linalg.inv(C))
+                mult = np.where(pair != nodes, 2.0, 1.0)
+                if not winkler:
+                    Cf = 0.5 * (C[np.ix_(nodes, nodes)] + C[np.ix_(nodes, pair)])
+                    C = np.ascontiguousarray(0.5 * (Cf + Cf.T))
+                    K = np.ascontiguousarray(np.linalg.inv(C))
                 W = 0.5 * (W[:, nodes] + W[:, pair])
         self.nodes = nodes
         self.n = nodes.size
-        self.solver = contact.ActiveSet(C, K)
+        self.mult = mult
+        self.solver = None if winkler else contact.ActiveSet(C, K)
         self.W = np.ascontiguousarray(W, dtype=np.float64)
         sub = collider.subset(nodes)
         if self.columns:  # one probe per distinct (x, z, radius, margin)
@@ -89,6 +98,7 @@ class HeldSkin:
         self.pen = np.empty(self.n)
         self.f = np.zeros(self.n)
         self._small = np.empty(self.n_probes)
+        self._none = contact.ActiveSet(np.zeros((0, 0)))  # the Winkler bed keeps no set
 
     def describe(self) -> str:
         how = []
@@ -109,7 +119,7 @@ class HeldSkin:
         that carries ``total`` (the pressure sum), the pad moved there (``qpos[jz]``), the
         taxel loads into ``taxel_out``. Re-collides when the pad moves beyond the margin and
         updates the contact set when it changes. Returns ``(force [N], deepest node [m])``."""
-        s = self.solver
+        s = self.solver or self._none
         M, S, in_set, C, rowsum = s.same_set_state()
         st, force, top, M2, S2, updates, rebuilds, rowsum2 = _held_kernel(
             bone0,
@@ -119,6 +129,8 @@ class HeldSkin:
             *self.probe.arrays,
             self._small,
             self.group,
+            self.winkler_k,
+            self.mult,
             M,
             S,
             in_set,
@@ -202,6 +214,8 @@ def _held_kernel(
     items,
     small,
     group,
+    winkler_k,
+    mult,
     M,
     S,
     in_set,
@@ -254,7 +268,11 @@ def _held_kernel(
             qpos[jz] -= 0.9 * qs_margin
             continue
         dz = np.nan
-        if S.size:  # the common case: the set holds at the shift it implies
+        if winkler_k > 0.0:  # L0: the Winkler bed, in closed form
+            dz = _winkler_force(pen, mult, winkler_k, total, f)
+            if dz != dz:
+                return 3, 0.0, 0.0, M, S, updates, rebuilds, rowsum
+        elif S.size:  # the common case: the set holds at the shift it implies
             dz = contact._force_same_set(M, S, pen, C, in_set, tol_rel, total, f, rowsum)
         if dz != dz:
             st, dz, M, S, updates, rb = contact._force_loop(
@@ -285,3 +303,41 @@ def _held_kernel(
         if pen[i] > top:
             top = pen[i]
     return 0, force, top, M, S, updates, rebuilds, rowsum
+
+
+@numba.njit(cache=True)
+def _winkler_force(pen, mult, k, total, f):
+    """:func:`contact.winkler_force` with node weights ``mult`` (the nodes each reduced node
+    stands for): the shift ``dz`` at which ``sum(mult * k * max(pen + dz, 0)) = total``, and
+    those pair sums into ``f``; NaN if no node is finite. Equal to it bit for bit at unit
+    weights (the same sequential sums, deepest first)."""
+    n = pen.shape[0]
+    cnt = 0
+    for i in range(n):
+        if np.isfinite(pen[i]):
+            cnt += 1
+    if cnt == 0:
+        return np.nan
+    idx = np.empty(cnt, np.int64)
+    c = 0
+    for i in range(n):
+        if np.isfinite(pen[i]):
+            idx[c] = i
+            c += 1
+    order = np.argsort(-pen[idx], kind="mergesort")  # deepest first; ties keep their order
+    need = total / k
+    csum = 0.0
+    wsum = 0.0
+    dz = 0.0
+    for m in range(cnt):
+        i = idx[order[m]]
+        csum += mult[i] * pen[i]
+        wsum += mult[i]
+        dz = (need - csum) / wsum
+        nxt = pen[idx[order[m + 1]]] if m + 1 < cnt else -np.inf
+        if dz + nxt <= 0:
+            break
+    for i in range(n):
+        d = pen[i] + dz
+        f[i] = mult[i] * (k * d) if d > 0.0 else 0.0
+    return dz

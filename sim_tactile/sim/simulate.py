@@ -479,9 +479,16 @@ class _Runner:
         self._bone0 = scene.m_col.body_pos[bone].copy()
         self._bone_pos = self._bone0.copy()
         # the held-force step's lookups, done once (MuJoCo's arrays are views of d_dyn)
-        self._held_fast = quasi_static and self.collider is not None and scene.solver is not None
+        self._held_fast = quasi_static and self.collider is not None
         self.held = (
-            HeldSkin(scene, self.collider, float(self._bone0[1]), self._margin, reduce_skin)
+            HeldSkin(
+                scene,
+                self.collider,
+                float(self._bone0[1]),
+                self._margin,
+                reduce_skin,
+                winkler_k_pa_per_m=None if scene.C is not None else fid.winkler_k_pa_per_m,
+            )
             if self._held_fast
             else None
         )
