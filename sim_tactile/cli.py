@@ -118,6 +118,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         _log(f"warning: {w}")
     _log(f"fidelity: {res.fidelity.reason}")
     rec = res.recording
+    _log(f"skin problem solved: {rec.meta['skin_problem']}")
     rec.save(out)
     figs = [
         str(plot_traces(rec, out.with_suffix(".traces.png"))),
@@ -134,6 +135,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         "dt_s": res.fidelity.dt_s,
         "warnings": res.warnings,
         "node_pitch_m": res.fidelity.pitch_m,
+        "skin_problem": rec.meta["skin_problem"],
         "transducer": rec.meta["transducer"],
         "figures": figs,
     }

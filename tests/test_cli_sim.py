@@ -43,6 +43,8 @@ def test_simulate_json_and_npz(cli_env, tmp_path):
         "warnings",
     } <= set(doc)
     assert doc["n_taxels"] == 9 and doc["n_samples"] == 30 and doc["rate_hz"] == 100.0
+    # it says which problem it solved: ridges across the slide reduce to columns and a half
+    assert "mirror-halved solve" in doc["skin_problem"], doc["skin_problem"]
     with np.load(out, allow_pickle=False) as z:
         assert z["data"].shape == (30, 9) and z["data"].dtype == np.float32
         assert z["times"].shape == (30,) and z["taxels"].shape == (9, 3)

@@ -81,6 +81,7 @@ class HeldSkin:
                     K = np.ascontiguousarray(np.linalg.inv(C))
                 W = 0.5 * (W[:, nodes] + W[:, pair])
         self.nodes = nodes
+        self.n_full = n
         self.n = nodes.size
         self.mult = mult
         self.solver = None if winkler else contact.ActiveSet(C, K)
@@ -101,12 +102,14 @@ class HeldSkin:
         self._none = contact.ActiveSet(np.zeros((0, 0)))  # the Winkler bed keeps no set
 
     def describe(self) -> str:
-        how = []
+        how = [f"{self.n_full} nodes"]
         if self.columns:
             how.append(f"{self.n_probes} collider probes (depths constant along y)")
         if self.mirrored:
             how.append(f"mirror-halved solve on {self.n} nodes")
-        return ", ".join(how) or "full problem"
+        if len(how) == 1:
+            how.append("full problem")
+        return ": ".join([how[0], ", ".join(how[1:])])
 
     def depths(self, bone: np.ndarray) -> bool:
         """The reduced depth map at the bone's world position into ``pen``."""

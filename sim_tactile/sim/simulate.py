@@ -378,6 +378,7 @@ def _simulate(
         "protocol_nominal": asdict(protocol),
         "seed": seed,
         "fidelity": fid.to_json(),
+        "skin_problem": runner.held.describe() if runner.held is not None else "full problem",
         "rate_hz": proto.rate_hz,
         "dt_s": dt,
         "transducer": transducer,
