@@ -129,7 +129,7 @@ class HeldSkin:
             qpos,
             jx,
             jz,
-            *self.probe.arrays,
+            self.probe.arrays,
             self._small,
             self.group,
             self.winkler_k,
@@ -203,18 +203,7 @@ def _held_kernel(
     qpos,
     jx,
     jz,
-    local,
-    radius,
-    margin,
-    kind,
-    pos,
-    mat,
-    size,
-    origin,
-    cell,
-    shape,
-    start,
-    items,
+    probe,
     small,
     group,
     winkler_k,
@@ -238,7 +227,8 @@ def _held_kernel(
     area,
     taxel_out,
 ):
-    """:meth:`HeldSkin.step`. Returns ``(status, force, top, M, S, updates, rebuilds,
+    """:meth:`HeldSkin.step`; ``probe``: the collider's arrays (:attr:`PrimitiveCollider.arrays`).
+    Returns ``(status, force, top, M, S, updates, rebuilds,
     rowsum)``; status 0 done, 1 no height within the collision queries, 2 the contact solve
     did not converge, 3 no node within the margin (from the contact solve)."""
     n = pen.shape[0]
@@ -249,22 +239,7 @@ def _held_kernel(
         bone[0] = bone0[0] + qpos[jx]
         bone[1] = bone0[1]
         bone[2] = bone0[2] + qpos[jz]
-        near = _depths(
-            bone,
-            local,
-            radius,
-            margin,
-            kind,
-            pos,
-            mat,
-            size,
-            origin,
-            cell,
-            shape,
-            start,
-            items,
-            small,
-        )
+        near = _depths(bone, *probe, small)
         for i in range(n):
             pen[i] = small[group[i]]
         if not near:  # nothing within the margin: sink by most of it and look again
