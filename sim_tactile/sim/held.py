@@ -2,10 +2,11 @@
 
 Under quasi-static force control with the primitive collider, a step is: the depth map at the
 bone's position, the height at which the skin carries the commanded force (the force-holding
-contact solve), and the taxel loads there. :class:`HeldSkin` does these in one compiled call
-(:func:`_held_kernel`) whenever the contact set holds and the pad moves less than the
-collider's margin; otherwise (a node joins or leaves, nothing is near, a long move) it falls
-back to the general loop, which re-collides and updates the set.
+contact solve), and the taxel loads there. :class:`HeldSkin` does all of it in one compiled
+call (:func:`_held_kernel`): the common case (the contact set holds, the pad moves less than
+the collider's margin) and the rest (nodes join or leave: the active-set updates of
+:mod:`.contact`; nothing near or a long move: re-collide at the new height), so no step pays
+Python's per-call costs more than once. L0's Winkler bed takes the same path in closed form.
 
 It also solves the smallest problem that gives the same answer:
 
@@ -44,8 +45,8 @@ class HeldSkin:
     control with the primitive collider.
 
     ``pen`` and ``f`` live on the reduced nodes ``nodes`` (all nodes when no reduction
-    applies, or ``reduce`` is False); ``f`` sums each mirror pair's pressures, so ``area * f.sum()`` is the normal
-    force and ``W @ (area * f)`` the taxel loads."""
+    applies, or ``reduce`` is False); ``f`` sums each mirror pair's pressures, so
+    ``area * f.sum()`` is the normal force and ``W @ (area * f)`` the taxel loads."""
 
     def __init__(
         self,
