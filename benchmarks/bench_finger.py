@@ -154,9 +154,9 @@ def loop_overhead(repeats: int = 5) -> dict:
             bone = run._bone0.copy()
             t = time.perf_counter()
             for _ in range(n):
+                bone[0] = run._bone0[0] + dd.qpos[s.jx]
+                bone[2] = run._bone0[2] + dd.qpos[s.jz]
                 if held is not None:  # the reduced problem the step solves
-                    bone[0] = run._bone0[0] + dd.qpos[s.jx]
-                    bone[2] = run._bone0[2] + dd.qpos[s.jz]
                     held.depths(bone)
                     p, dz = held.solver.solve_force(held.pen, 1.0 / A)
                     dd.qpos[s.jz] -= dz
@@ -165,8 +165,6 @@ def loop_overhead(repeats: int = 5) -> dict:
                     mujoco.mj_step(s.m_dyn, dd)
                     continue
                 if run.collider is not None:  # the plate's primitives: the fast collider
-                    bone[0] = run._bone0[0] + dd.qpos[s.jx]
-                    bone[2] = run._bone0[2] + dd.qpos[s.jz]
                     run.collider.depths(bone, pen)
                 else:
                     dc.qpos[:] = dd.qpos

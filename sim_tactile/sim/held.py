@@ -103,14 +103,12 @@ class HeldSkin:
         self._none = contact.ActiveSet(np.zeros((0, 0)))  # the Winkler bed keeps no set
 
     def describe(self) -> str:
-        how = [f"{self.n_full} nodes"]
+        how = []
         if self.columns:
             how.append(f"{self.n_probes} collider probes (depths constant along y)")
         if self.mirrored:
             how.append(f"mirror-halved solve on {self.n} nodes")
-        if len(how) == 1:
-            how.append("full problem")
-        return ": ".join([how[0], ", ".join(how[1:])])
+        return f"{self.n_full} nodes: {', '.join(how) or 'full problem'}"
 
     def depths(self, bone: np.ndarray) -> bool:
         """The reduced depth map at the bone's world position into ``pen``."""
@@ -183,11 +181,11 @@ def _mirror_of(c: PrimitiveCollider) -> np.ndarray | None:
             zip(c.local.tolist(), c.radius, c.margin, strict=True)
         )
     }
-    out = np.empty(len(key), dtype=np.int64)
     if len(key) != len(c.radius):
         return None
+    out = np.empty(len(key), dtype=np.int64)
     for (x, y, z, r, m), i in key.items():
-        j = key.get((x, -y if y else y, z, r, m))
+        j = key.get((x, -y, z, r, m))  # -0.0 == 0.0: the centre line maps to itself
         if j is None:
             return None
         out[i] = j
@@ -258,7 +256,7 @@ def _held_kernel(
                 M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, f, False
             )
             rebuilds += rb
-            rowsum = M @ np.ones(S.size)  # BLAS, as ActiveSet keeps it
+            rowsum = M @ np.ones(S.size)  # M 1 for the new M (BLAS, as _force_loop forms it)
             if st != 1:
                 return 3 if st == 2 else 2, 0.0, 0.0, M, S, updates, rebuilds, rowsum
         qpos[jz] -= dz

@@ -480,7 +480,6 @@ class _Runner:
         self._bone0 = scene.m_col.body_pos[bone].copy()
         self._bone_pos = self._bone0.copy()
         # the held-force step's lookups, done once (MuJoCo's arrays are views of d_dyn)
-        self._held_fast = quasi_static and self.collider is not None
         self.held = (
             HeldSkin(
                 scene,
@@ -490,7 +489,7 @@ class _Runner:
                 reduce_skin,
                 winkler_k_pa_per_m=None if scene.C is not None else fid.winkler_k_pa_per_m,
             )
-            if self._held_fast
+            if quasi_static and self.collider is not None
             else None
         )
         self._taxel_tmp = np.zeros(scene.layout.n)
@@ -498,7 +497,7 @@ class _Runner:
         self._qfrc, self._ctrl = d_dyn.qfrc_applied, d_dyn.ctrl
         self._jx, self._jz = scene.jx, scene.jz
         self._area = scene.grid.area_m2
-        self._W, self._m_dyn = scene.W, scene.m_dyn
+        self._m_dyn = scene.m_dyn
         self._friction = finger.friction
         self.pen = np.zeros(scene.n_nodes)
         self.loads = np.zeros(scene.n_nodes)
@@ -530,7 +529,7 @@ class _Runner:
         taxel_acc: np.ndarray | None = None,
         taxel_out: np.ndarray | None = None,
     ) -> float:
-        if self._held_fast and z_vel is None and force_cmd > 0:
+        if self.held is not None and z_vel is None and force_cmd > 0:
             return self._step_held(force_cmd, slide_v, taxel_acc, taxel_out)
         s, dd = self.s, self.d_dyn
         if z_vel is not None:  # kinematic approach
