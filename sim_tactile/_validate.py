@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 
+import numpy as np
+
 from .errors import ConfigError
 
 
@@ -76,3 +78,16 @@ def one_of(name: str, value: object, allowed: Iterable[str]) -> str:
     if value not in allowed:
         raise ConfigError(f"{name} = {_fmt(value)} is not valid; valid: {', '.join(allowed)}")
     return str(value)
+
+
+def finite_array(name: str, arr: np.ndarray, hint: str = "") -> np.ndarray:
+    """Return ``arr`` if every value is finite, else raise a ConfigError naming the first
+    non-finite value, its index and how many there are (``hint``: what to do about it)."""
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ConfigError(
+            f"{name} must be finite; found {arr[idx]} at index {idx} ({int(bad.sum())} "
+            f"non-finite value(s) in all)" + (f": {hint}" if hint else "")
+        )
+    return arr

@@ -1,38 +1,27 @@
 """A content-addressed artefact cache with atomic writes.
 
-An artefact's key is the SHA-256 of its canonical description: what it is made from (e.g. a
-plate's canonical parameters), its kind and settings, and the version of the code that makes
-it. Files are written to a temporary name in the same directory, flushed and renamed, so a
-reader sees a whole file or none, and an interrupted build leaves nothing behind.
+An artefact's key is the content hash (:func:`sim_tactile.hashing.content_hash`) of its whole
+description: what it is made from (e.g. a plate's canonical parameters), its kind and
+settings, and the version of the code that makes it (:func:`sim_tactile.hashing.code_version`).
+Files are written to a temporary name in the same directory, flushed and renamed, so a reader
+sees a whole file or none, and an interrupted build leaves nothing behind.
 
 Location: ``$SIM_TACTILE_CACHE`` if set, else ``~/.cache/sim_tactile``.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import CacheError
+from .hashing import content_hash
 
 
 def default_root() -> Path:
     env = os.environ.get("SIM_TACTILE_CACHE")
     return Path(env) if env else Path.home() / ".cache" / "sim_tactile"
-
-
-def source_version(*modules: object) -> str:
-    """A short hash of the source files of the given modules (the 'code version')."""
-    h = hashlib.sha256()
-    for mod in modules:
-        path = Path(getattr(mod, "__file__", "") or "")
-        h.update(path.name.encode())
-        h.update(path.read_bytes() if path.is_file() else b"")
-    return h.hexdigest()[:16]
 
 
 def atomic_write(path: Path, data: bytes) -> None:
@@ -63,11 +52,8 @@ class ArtefactCache:
 
     @staticmethod
     def key(description: dict) -> str:
-        try:
-            blob = json.dumps(description, sort_keys=True, separators=(",", ":"))
-        except TypeError as exc:
-            raise CacheError(f"cache key description is not JSON data: {exc}") from None
-        return hashlib.sha256(blob.encode()).hexdigest()
+        """The key of an artefact: the content hash of its whole description."""
+        return content_hash(description)
 
     def path(self, key: str, ext: str) -> Path:
         return Path(self.root) / key[:2] / f"{key}.{ext}"

@@ -36,8 +36,13 @@ class MissingDependencyError(SimTactileError, ImportError):
     """An optional dependency is missing; the message gives the exact install command."""
 
 
-class CacheError(SimTactileError):
-    """The artefact cache is unreadable or corrupted."""
+class StoreError(SimTactileError):
+    """A data set's store is missing, of another configuration, incomplete or corrupted."""
+
+
+class NeuronStepWarning(RuntimeWarning):
+    """The integration step cannot follow the input: the neuron would fire more than once per
+    step (rate above ``1 / dt_s``), or a strongly negative input makes the step unstable."""
 
 
 def require(name: str, extra: str):

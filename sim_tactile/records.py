@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._validate import finite_array
 from .errors import ConfigError
 
 #: Keys every Recording .npz holds.
@@ -149,10 +150,7 @@ class TactileDataset:
             raise ConfigError(
                 f"dataset has {data.shape[2]} channels but {len(self.channel_names)} channel names"
             )
-        bad = ~np.isfinite(data)
-        if bad.any():
-            idx = tuple(int(i) for i in np.argwhere(bad)[0])
-            raise ConfigError(f"dataset data must be finite; found {data[idx]} at {idx}")
+        finite_array("dataset data", data)
         if not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ConfigError(f"dataset rate_hz = {self.rate_hz} must be a positive number [Hz]")
         pos = self.taxel_positions

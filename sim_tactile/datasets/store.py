@@ -44,7 +44,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from ..errors import MissingDependencyError, SimTactileError
+from ..errors import MissingDependencyError, StoreError
+from ..hashing import content_hash
 from ..records import Recording, TactileDataset
 
 FORMAT = "sim_tactile.slides"
@@ -53,10 +54,6 @@ FORMAT_VERSION = 1
 PARAM_NAMES = ("speed_m_s", "force_n", "offset_y_m")
 #: per-slide arrays written when the store is created (chunks of this many slides)
 _INDEX_CHUNK = 65536
-
-
-class StoreError(SimTactileError):
-    """A store is missing, of another configuration, incomplete or corrupted."""
 
 
 def _zarr():
@@ -68,9 +65,8 @@ def _zarr():
 
 
 def config_hash(config: dict) -> str:
-    """SHA-256 (first 16 hex digits) of the canonical JSON of a configuration."""
-    blob = json.dumps(config, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+    """The content hash (16 hex digits) of a configuration."""
+    return content_hash(config, 16)
 
 
 def slide_digest(x: np.ndarray) -> int:

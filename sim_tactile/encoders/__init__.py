@@ -10,13 +10,13 @@
 
 from __future__ import annotations
 
+from ..errors import NeuronStepWarning
 from .izhikevich import izhikevich_spike_times, simulate_izhikevich
 from .lif import simulate_lif
 from .neurons import (
     IZHIKEVICH_PRESETS,
     IzhikevichParams,
     LIFParams,
-    NeuronStepWarning,
     alif_params,
     izhikevich_preset,
 )

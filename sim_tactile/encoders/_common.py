@@ -7,22 +7,14 @@ import warnings
 
 import numpy as np
 
-from .._validate import positive
-from ..errors import ConfigError, PhysicsError
-from .neurons import NeuronStepWarning
+from .._validate import finite_array, positive
+from ..errors import ConfigError, NeuronStepWarning, PhysicsError
 
 
 def check_current(current: object, name: str = "current") -> np.ndarray:
     """Return a C-contiguous float64 array; NaN or infinite values raise a ConfigError."""
     arr = np.ascontiguousarray(np.asarray(current, dtype=np.float64))
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        idx = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise ConfigError(
-            f"{name} must be finite; found {arr[idx]} at index {idx} (replace or interpolate "
-            f"missing samples before encoding)"
-        )
-    return arr
+    return finite_array(name, arr, "replace or interpolate missing samples before encoding")
 
 
 def sample_of_step(n_samples: int, rate_hz: float, dt_s: float) -> np.ndarray:

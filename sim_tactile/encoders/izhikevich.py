@@ -21,7 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .._validate import one_of, positive
-from ..errors import ConfigError
+from ..errors import ConfigError, NeuronStepWarning
 from . import _kernels as K
 from ._common import check_current, report, sample_of_step, split
 from .neurons import (
@@ -30,7 +30,6 @@ from .neurons import (
     MAX_SPIKES_PER_STEP,
     SCHEMES,
     IzhikevichParams,
-    NeuronStepWarning,
     izhikevich_map,
     izhikevich_preset,
     stable_current_limit,

@@ -35,7 +35,7 @@ def simulate_lif(
 
     ``current`` is ``(n_neurons, n_samples)`` (or 1-D), the input in the units of ``v``
     (``R * I``) sampled at ``rate_hz`` [Hz]; ``params`` one :class:`LIFParams` or one per neuron.
-    Warns :class:`~sim_tactile.encoders.neurons.NeuronStepWarning` when a neuron fires more than
+    Warns :class:`~sim_tactile.errors.NeuronStepWarning` when a neuron fires more than
     once per step.
     """
     dt_s = positive("dt_s", dt_s, unit="s")

@@ -29,11 +29,6 @@ from .._validate import finite, non_negative, one_of, positive
 from ..errors import ConfigError, UnknownNameError
 
 
-class NeuronStepWarning(RuntimeWarning):
-    """The integration step cannot follow the input: the neuron would fire more than once per
-    step (rate above ``1 / dt_s``), or a strongly negative input makes the step unstable."""
-
-
 @dataclass(frozen=True)
 class IzhikevichParams:
     """Izhikevich neuron parameters (model units: ms, mV).

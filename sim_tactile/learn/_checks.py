@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import finite_array
 from ..errors import ConfigError
 
 
@@ -24,14 +25,7 @@ def check_array(X: object, name: str = "X", *, ndim: tuple[int, ...] = (3,)) -> 
         raise ConfigError(f"{name} must have shape {shapes}, got {arr.shape}")
     if arr.shape[0] == 0 or 0 in arr.shape[1:]:
         raise ConfigError(f"{name} is empty (shape {arr.shape}); at least one sample is needed")
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        idx = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise ConfigError(
-            f"{name} must be finite; found {arr[idx]} at index {idx} "
-            f"({int(bad.sum())} non-finite values in all): remove or impute them first"
-        )
-    return arr
+    return finite_array(name, arr, "remove or impute them first")
 
 
 def check_labels(y: object, n_samples: int, name: str = "y") -> np.ndarray:

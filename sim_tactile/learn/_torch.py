@@ -22,6 +22,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 
 from .._validate import integer, one_of, positive
 from ..errors import ConfigError, require
+from ..hashing import derive_seed
 from ._checks import check_array, check_classes, check_labels
 
 DEVICES = ("auto", "cpu", "cuda")
@@ -45,9 +46,9 @@ def resolve_device(torch: Any, device: str):
 
 def seed_from(random_state: int | None) -> int:
     """A 63-bit seed from ``random_state`` (fresh OS entropy when it is None)."""
-    if random_state is not None:
-        integer("random_state", random_state, 0, None)
-    return int(np.random.SeedSequence(random_state).generate_state(2, np.uint64)[0] >> 1)
+    if random_state is None:
+        return int(np.random.SeedSequence().generate_state(1, np.uint64)[0] >> 1)
+    return derive_seed(integer("random_state", random_state, 0, None), bits=63)
 
 
 @contextmanager

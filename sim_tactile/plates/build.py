@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cache import ArtefactCache, atomic_write, source_version
+from ..cache import ArtefactCache, atomic_write
 from ..errors import ConfigError
+from ..hashing import code_version
 from . import features as _features
-from . import spec as _spec
 from .presets import get_plate
 from .spec import Plate
 
@@ -27,13 +27,20 @@ _EXT = {"stl": "stl", "step": "step", "mjcf": "xml", "png": "png", "heightmap": 
 HEIGHTMAP_STEP_M = 5e-5
 
 
-def _code_version(kind: str) -> str:
-    from . import cad, mjcf, render
+#: The module that makes each kind of artefact, and the libraries whose versions it depends
+#: on: the artefact's code version is the source of everything that module imports.
+_MAKERS = {
+    "stl": ("cad", ("cadquery",)),
+    "step": ("cad", ("cadquery",)),
+    "mjcf": ("mjcf", ("mujoco", "numpy", "scipy")),
+    "png": ("render", ("matplotlib", "numpy")),
+    "heightmap": ("features", ("numpy",)),
+}
 
-    extra = {"stl": (cad,), "step": (cad,), "mjcf": (mjcf,), "png": (render,), "heightmap": ()}[
-        kind
-    ]
-    return source_version(_spec, _features, *extra)
+
+def _code_version(kind: str) -> str:
+    module, libraries = _MAKERS[kind]
+    return code_version(f"{__package__}.{module}", libraries=libraries)
 
 
 def _settings(kind: str) -> dict:

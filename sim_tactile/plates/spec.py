@@ -13,14 +13,13 @@ range, before anything is built or cached.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from dataclasses import asdict, dataclass, field, fields
 from typing import Literal
 
 from .. import _validate as v
 from ..errors import ConfigError
+from ..hashing import content_hash
 
 #: Tallest feature a plate may carry [m]: the finger pads of the scenes are at most 10 mm
 #: thick, so a taller feature would hit the finger's bone rather than its skin.
@@ -284,8 +283,7 @@ class Plate:
     @property
     def hash(self) -> str:
         """A 16-hex-digit content hash of :meth:`params`."""
-        blob = json.dumps(self.params(), sort_keys=True, separators=(",", ":"))
-        return hashlib.sha256(blob.encode()).hexdigest()[:16]
+        return content_hash(self.params(), 16)
 
     @property
     def slug(self) -> str:

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..errors import PhysicsError
+from ..errors import ConfigError, PhysicsError
 from . import contact
 from .collide import PrimitiveCollider, _depths
 
@@ -64,7 +64,10 @@ class HeldSkin:
         C, K, W = scene.C, scene.K, scene.W
         winkler = C is None
         if winkler and not (winkler_k_pa_per_m and winkler_k_pa_per_m > 0):
-            raise ValueError("a skin without coupling (L0) needs its Winkler stiffness")
+            raise ConfigError(
+                f"winkler_k_pa_per_m = {winkler_k_pa_per_m!r}: a skin without coupling (L0) "
+                "needs its Winkler stiffness; valid: > 0"
+            )
         self.winkler_k = float(winkler_k_pa_per_m) if winkler else 0.0
         self.columns = reduce and collider.y_invariant(bone_y)
         self.mirrored = False

@@ -21,10 +21,10 @@ from sklearn.pipeline import Pipeline
 from .. import __version__
 from .._validate import integer
 from ..errors import ConfigError, require
+from ..hashing import derive_seed
 from ..learn.classifiers import (
     FEATURE_MODELS,
     LearnContext,
-    classifier_names,
     feature_estimator,
     get_classifier,
     make_classifier,
@@ -46,10 +46,6 @@ def _path(p: str | Path | None) -> Path | None:
 
 def _stderr(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
-
-
-def _seed(seed: int, *keys: int) -> int:
-    return int(np.random.SeedSequence([seed, *keys]).generate_state(1)[0])
 
 
 def _classifier_list(spec: TaskSpec, classifiers: Sequence[str] | str | None) -> list[str]:
@@ -264,12 +260,11 @@ def evaluate_task(
     for run in runs:
         name = run.name
         cs = get_classifier(run.classifier)
-        k = list(classifier_names()).index(run.classifier)
         split = spec.split_for(run, quick)
         cols = _channels(spec, run, ds)
         if split not in split_cache:
             split_cache[split] = repeated_splits(
-                ds.labels, split, max(n_rep.values()), _seed(seed, 0)
+                ds.labels, split, max(n_rep.values()), derive_seed(seed, 0)
             )
         rctx = _run_context(ctx, run, cols, ds)
         log(f"{task_id}: {name} on {cs.features}, split {split}, {n_rep[name]} repeat(s)")
@@ -277,14 +272,16 @@ def evaluate_task(
         if pre is not None and pre.handles(run.classifier):
             x, times_s = sample_index(ds.n_samples), ()
 
-            def make(r, run=run, cols=cols, rctx=rctx, k=k):
+            def make(r, run=run, cols=cols, rctx=rctx):
                 return pre.estimator(run.classifier, rctx, cols)
         else:
             x = ds.data if cols is None else ds.data[:, :, cols]
             times_s = settings.time_points_s
 
-            def make(r, run=run, rctx=rctx, k=k):
-                return make_classifier(run.classifier, rctx, _seed(seed, 1 + k, r))
+            def make(r, run=run, rctx=rctx):
+                return make_classifier(
+                    run.classifier, rctx, derive_seed(seed, "model", run.classifier, r)
+                )
 
         results[name] = evaluate(
             make,

@@ -26,8 +26,9 @@ from multiprocessing import get_all_start_methods, get_context
 import numpy as np
 
 from .. import _validate as v
-from ..cache import ArtefactCache, source_version
+from ..cache import ArtefactCache
 from ..errors import ConfigError, SimTactileError
+from ..hashing import code_version, derive_seed
 from ..records import Recording, TactileDataset
 from .registry import DataRequest
 
@@ -38,27 +39,7 @@ _MARGIN_M = 2e-3
 
 
 def _code_version() -> str:
-    from .. import records, sensors
-    from ..scene import elastic, finger, layouts, model
-    from ..sensors import micro, transducers
-    from ..sim import _readout, collide, contact, fidelity, held, simulate
-
-    return source_version(
-        records,
-        sensors,
-        elastic,
-        finger,
-        layouts,
-        model,
-        micro,
-        transducers,
-        _readout,
-        collide,
-        contact,
-        fidelity,
-        held,
-        simulate,
-    )
+    return code_version("sim_tactile.sim.simulate", libraries=("mujoco", "numba", "numpy"))
 
 
 def crossing_s(plate_name: str, sensor: str, speed_m_s: float) -> float:
@@ -149,7 +130,7 @@ class SlideSet:
         for plate in self.plates_for(quick):
             i = self.plates.index(plate)  # a plate's slides keep their seeds in quick runs
             for k in range(n_slides):
-                s = int(np.random.SeedSequence([seed, i, k]).generate_state(1, np.uint64)[0] >> 1)
+                s = derive_seed(seed, i, k, bits=63)
                 out.append(
                     {
                         "kind": "slide",

@@ -1,0 +1,159 @@
+"""What cached and stored results are keyed by: content hashes, code versions, derived seeds.
+
+- :func:`content_hash`: the SHA-256 of an object's canonical JSON (sorted keys, no spaces),
+  the one way a description becomes a key (cache keys, plate hashes, store configurations).
+- :func:`code_version`: a hash of the source of every module of this package that a given
+  module imports, directly or through others (found from the import statements of the source
+  itself, those inside functions included), and of the versions of the libraries that
+  compute with it. A cached result keyed by it is never served after any of that code
+  changes, and no hand-written list of modules can fall behind.
+- :func:`derive_seed`: an independent seed for a part of a run (a slide, a split, a model)
+  from the run's seed and the part's keys (integers or names).
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import json
+from functools import lru_cache
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ConfigError
+
+#: The package whose modules :func:`code_version` follows, and its folder.
+PACKAGE = __name__.rpartition(".")[0]
+_ROOT = Path(__file__).resolve().parent
+
+
+def canonical_json(obj: object) -> str:
+    """``obj`` as JSON with sorted keys and no spaces: equal data, equal text."""
+    try:
+        return json.dumps(obj, sort_keys=True, separators=(",", ":"))
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"the description to hash is not JSON data: {exc}") from None
+
+
+def content_hash(obj: object, digits: int = 64) -> str:
+    """The SHA-256 of :func:`canonical_json` of ``obj``, as ``digits`` hex digits."""
+    return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:digits]
+
+
+def _key_int(key: int | str) -> int:
+    if isinstance(key, str):  # a name: its own stable integer (SeedSequence takes any size)
+        return int.from_bytes(hashlib.sha256(key.encode()).digest()[:8], "little")
+    if isinstance(key, bool) or not isinstance(key, int | np.integer) or key < 0:
+        raise ConfigError(f"a seed key must be an integer >= 0 or a name, got {key!r}")
+    return int(key)
+
+
+def derive_seed(seed: int, *keys: int | str, bits: int = 32) -> int:
+    """A seed for the part of a run named by ``keys``, independent of every other part's.
+
+    ``bits`` 32: an unsigned 32-bit seed (what scikit-learn and torch take); 63: a seed below
+    2**63 (the slides' seeds, stored as int64). Names key a part by what it is, not by its
+    position in a list, so adding a classifier never re-seeds the others."""
+    if bits not in (32, 63):
+        raise ConfigError(f"bits = {bits!r} is not valid; valid: 32, 63")
+    ss = np.random.SeedSequence([_key_int(seed), *(_key_int(k) for k in keys)])
+    if bits == 32:
+        return int(ss.generate_state(1)[0])
+    return int(ss.generate_state(1, np.uint64)[0] >> 1)
+
+
+# ------------------------------------------------------------------------------ code version
+def module_file(name: str) -> Path | None:
+    """The source file of the package's module ``name`` (``a.b``: ``a/b.py`` or
+    ``a/b/__init__.py``), or None if it is not one of the package's modules."""
+    parts = name.split(".")
+    if parts[0] != PACKAGE:
+        return None
+    base = _ROOT.joinpath(*parts[1:])
+    for p in (base.with_suffix(".py"), base / "__init__.py"):
+        if p.is_file():
+            return p
+    return None
+
+
+def _is_package(name: str) -> bool:
+    f = module_file(name)
+    return f is not None and f.name == "__init__.py"
+
+
+def _resolve(name: str, node: ast.ImportFrom) -> str:
+    if not node.level:
+        return node.module or ""
+    package = name if _is_package(name) else name.rpartition(".")[0]
+    base = package.split(".")
+    if node.level > 1:
+        base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def imports_of(name: str) -> set[str]:
+    """The package's modules that module ``name`` imports anywhere in its source (at the top,
+    inside functions, or under ``TYPE_CHECKING``), with the packages they sit in."""
+    f = module_file(name)
+    if f is None:
+        return set()
+    out: set[str] = set()
+    for node in ast.walk(ast.parse(f.read_bytes(), filename=str(f))):
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            mod = _resolve(name, node)
+            targets = [mod] + [f"{mod}.{a.name}" for a in node.names if a.name != "*"]
+        else:
+            continue
+        for t in targets:
+            if module_file(t) is not None:
+                out.add(t)
+    # importing a module runs the packages it sits in
+    for t in list(out):
+        parts = t.split(".")
+        out.update(".".join(parts[:k]) for k in range(1, len(parts)))
+    out.discard(name)
+    return out
+
+
+def import_closure(*roots: str) -> tuple[str, ...]:
+    """Every module of the package that importing ``roots`` can run, sorted: the roots, the
+    packages they sit in and, transitively, what each of those imports."""
+    todo = []
+    for r in roots:
+        if module_file(r) is None:
+            raise ConfigError(f"{r!r} is not a module of {PACKAGE}")
+        parts = r.split(".")
+        todo += [".".join(parts[:k]) for k in range(1, len(parts) + 1)]
+    seen: set[str] = set()
+    while todo:
+        m = todo.pop()
+        if m in seen:
+            continue
+        seen.add(m)
+        todo.extend(imports_of(m) - seen)
+    return tuple(sorted(seen))
+
+
+def _library_version(dist: str) -> str:
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return "absent"
+
+
+@lru_cache(maxsize=64)
+def code_version(*roots: str, libraries: tuple[str, ...] = ()) -> str:
+    """A 16-hex-digit hash of the source of :func:`import_closure` of ``roots`` and of the
+    installed versions of ``libraries`` (distribution names). Computed once per process."""
+    h = hashlib.sha256()
+    for m in import_closure(*roots):
+        h.update(m.encode() + b"\0")
+        h.update(module_file(m).read_bytes())
+        h.update(b"\0")
+    for lib in sorted(libraries):
+        h.update(f"{lib}=={_library_version(lib)}\0".encode())
+    return h.hexdigest()[:16]

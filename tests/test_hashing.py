@@ -1,0 +1,77 @@
+"""Content hashes, code versions from the import graph, and derived seeds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sim_tactile.errors import ConfigError
+from sim_tactile.hashing import (
+    PACKAGE,
+    code_version,
+    content_hash,
+    derive_seed,
+    import_closure,
+    imports_of,
+)
+
+
+def test_content_hash_is_the_canonical_json_of_the_data():
+    a = {"b": [1, 2.5, "x"], "a": {"z": None, "y": True}}
+    b = {"a": {"y": True, "z": None}, "b": [1, 2.5, "x"]}
+    assert content_hash(a) == content_hash(b)
+    assert len(content_hash(a)) == 64 and content_hash(a, 16) == content_hash(a)[:16]
+    assert content_hash(a) != content_hash({**a, "b": [1, 2.5, "y"]})
+    with pytest.raises(ConfigError, match="not JSON data"):
+        content_hash({"x": object()})
+
+
+def test_derived_seeds_keep_the_formulas_the_data_sets_were_made_with():
+    # slides: SeedSequence([seed, plate, slide]) as a 63-bit integer; splits: a 32-bit one
+    for seed, keys in ((0, (0, 0)), (7, (3, 11)), (2**40, (19, 49))):
+        ss = np.random.SeedSequence([seed, *keys])
+        assert derive_seed(seed, *keys, bits=63) == int(ss.generate_state(1, np.uint64)[0] >> 1)
+        assert derive_seed(seed, *keys) == int(ss.generate_state(1)[0])
+    assert 0 <= derive_seed(5, 1, bits=63) < 2**63 and 0 <= derive_seed(5, 1) < 2**32
+
+
+def test_names_key_a_seed_by_what_it_is():
+    s = {name: derive_seed(0, "model", name, 0) for name in ("lstm", "snn", "svm")}
+    assert len(set(s.values())) == 3
+    assert derive_seed(0, "model", "lstm", 0) == s["lstm"]  # independent of any list
+    assert derive_seed(0, "model", "lstm", 1) != s["lstm"]
+    for bad in (-1, 1.5, True):
+        with pytest.raises(ConfigError, match="seed key"):
+            derive_seed(0, bad)
+    with pytest.raises(ConfigError, match="bits"):
+        derive_seed(0, bits=16)
+
+
+def test_the_import_closure_is_the_import_graphs():
+    """Against grimp (the graph import-linter checks): every module that importing the root
+    runs, following the imports of each module and of the packages each sits in."""
+    grimp = pytest.importorskip("grimp", reason="grimp comes with the test extra import-linter")
+    graph = grimp.build_graph(PACKAGE)
+    for root in (f"{PACKAGE}.sim.simulate", f"{PACKAGE}.plates.mjcf", f"{PACKAGE}.spikes"):
+        want, todo = set(), [root]
+        while todo:
+            m = todo.pop()
+            if m in want:
+                continue
+            want.add(m)
+            parts = m.split(".")
+            todo += [".".join(parts[:k]) for k in range(1, len(parts))]
+            todo += list(graph.find_modules_directly_imported_by(m))
+        assert set(import_closure(root)) == want, root
+    for m in sorted(graph.modules):
+        direct = set(graph.find_modules_directly_imported_by(m))
+        assert direct <= imports_of(m), m
+
+
+def test_code_version_follows_the_source_and_the_libraries():
+    v = code_version(f"{PACKAGE}.plates.spec")
+    assert len(v) == 16 and v == code_version(f"{PACKAGE}.plates.spec")
+    assert v != code_version(f"{PACKAGE}.plates.spec", libraries=("numpy",))
+    assert v != code_version(f"{PACKAGE}.sim.simulate")
+    with pytest.raises(ConfigError, match="not a module"):
+        code_version(f"{PACKAGE}.no_such_module")
