@@ -6,7 +6,8 @@ Importing this package never imports cadquery; only a cache miss on an STL or ST
 from __future__ import annotations
 
 from .build import KINDS, BuildResult, build, load_heightmap
-from .features import Feature, features, height_at, roughness_profile
+from .features import features, height_at, roughness_profile
+from .geometry import Feature
 from .presets import get_plate, preset_names
 from .spec import Bumps, Flat, Grating, Plate, Ridges, Roughness
 

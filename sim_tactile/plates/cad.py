@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import GeometryError
-from .features import Feature, features, roughness_profile
+from .features import features, roughness_profile
+from .geometry import Feature
 from .spec import Plate, Roughness
 
 M_TO_MM = 1000.0

@@ -18,7 +18,8 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from ..errors import GeometryError
-from .features import Feature, features, roughness_profile
+from .features import features, roughness_profile
+from .geometry import Feature
 from .spec import Plate, Roughness
 
 #: Largest height error allowed when the height field is made coarser than the profile: a

@@ -20,6 +20,7 @@ from typing import Literal
 from .. import _validate as v
 from ..errors import ConfigError
 from ..hashing import content_hash
+from .geometry import Feature, bump_features, grating_features, ridge_features
 
 #: Tallest feature a plate may carry [m]: the finger pads of the scenes are at most 10 mm
 #: thick, so a taller feature would hit the finger's bone rather than its skin.
@@ -52,6 +53,9 @@ class Flat:
     """No texture: the textured area is flat."""
 
     kind: Literal["flat"] = field(default="flat", init=False)
+
+    def features(self, area_length_m: float, area_width_m: float) -> list[Feature]:
+        return []
 
 
 @dataclass(frozen=True)
@@ -94,6 +98,18 @@ class Ridges:
     @property
     def top_width_m(self) -> float:
         return self.width_m - 2.0 * self.height_m * math.tan(math.radians(self.draft_deg))
+
+    def features(self, area_length_m: float, area_width_m: float) -> list[Feature]:
+        return ridge_features(
+            area_length_m,
+            area_width_m,
+            self.count,
+            self.width_m,
+            self.height_m,
+            self.draft_deg,
+            self.length_m,
+            "ridges",
+        )
 
 
 @dataclass(frozen=True)
@@ -146,6 +162,16 @@ class Grating:
     def ridge_width_m(self) -> float:
         return self.duty * self.period_m if self.duty is not None else float(self.width_m)
 
+    def features(self, area_length_m: float, area_width_m: float) -> list[Feature]:
+        return grating_features(
+            area_length_m,
+            area_width_m,
+            self.period_m,
+            self.ridge_width_m,
+            self.height_m,
+            self.draft_deg,
+        )
+
 
 @dataclass(frozen=True)
 class Bumps:
@@ -190,6 +216,18 @@ class Bumps:
                     f"{self.size_m:g} m overlap; valid: spacing_m > {self.size_m:g} m"
                 )
 
+    def features(self, area_length_m: float, area_width_m: float) -> list[Feature]:
+        return bump_features(
+            area_length_m,
+            area_width_m,
+            self.rows,
+            self.cols,
+            self.shape,
+            self.size_m,
+            self.height_m,
+            self.spacing_m,
+        )
+
 
 @dataclass(frozen=True)
 class Roughness:
@@ -220,6 +258,10 @@ class Roughness:
         v.in_range(
             "roughness.resolution_m", self.resolution_m, 1e-7, self.corr_length_m / 2, unit="m"
         )
+
+    def features(self, area_length_m: float, area_width_m: float) -> list[Feature]:
+        """None: a rough surface is a height profile (:func:`.features.roughness_profile`)."""
+        return []
 
 
 Texture = Flat | Ridges | Grating | Bumps | Roughness
@@ -264,9 +306,7 @@ class Plate:
                     f"(resolution_m >= {self.area_length_m / (MAX_ROUGHNESS_SAMPLES - 1):g} m)"
                 )
         # expanding the features checks that they fit and do not overlap
-        from .features import features
-
-        features(self)
+        self.texture.features(self.area_length_m, self.area_width_m)
 
     @property
     def family(self) -> str:
