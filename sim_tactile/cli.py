@@ -96,9 +96,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.suffix != ".npz":
         raise ConfigError(f"--out {args.out!r} must end in .npz")
-    from .scene.layouts import get_layout
+    from .sensors import resolve_sensor
 
-    layout = get_layout(args.sensor)
+    layout = resolve_sensor(args.sensor).layout
     proto = Protocol(
         speed_m_s=args.speed,
         force_n=args.force,
@@ -144,7 +144,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_press(args: argparse.Namespace) -> int:
-    from .scene.finger import Finger
+    from .sensors import Finger
     from .sim.press import hertz, press
 
     r = args.radius

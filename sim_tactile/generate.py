@@ -98,7 +98,7 @@ class Plan:
 def _slide_plan(slides, *, quick, seed, task, name, finger=None, source=None) -> Plan:
     from .sensors import get_sensor
     from .sim.simulate import Protocol
-    from .tasks.synthetic import GRID_SHAPES, _class_name, _code_version
+    from .tasks.synthetic import _class_name, _code_version
 
     n = slides.quick_slides if quick else slides.slides
     plates = slides.plates_for(quick)
@@ -131,8 +131,8 @@ def _slide_plan(slides, *, quick, seed, task, name, finger=None, source=None) ->
         "window_s": n_time / proto.rate_hz,
         "setup": setup,
     }
-    if slides.sensor in GRID_SHAPES:
-        meta["grid_shape"] = list(GRID_SHAPES[slides.sensor])
+    if layout.grid_shape is not None:
+        meta["grid_shape"] = list(layout.grid_shape)
     spec = StoreSpec(
         name=name,
         config=config,

@@ -8,8 +8,7 @@ import pytest
 from conftest import DATASET_DIR
 
 from sim_tactile.errors import ConfigError, UnknownNameError
-from sim_tactile.scene.finger import Finger
-from sim_tactile.sensors import Imperfections, get_sensor, sensor_names
+from sim_tactile.sensors import Finger, Imperfections, get_sensor, sensor_names
 from sim_tactile.sim.simulate import Protocol, simulate
 
 FAMILIES = [

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from sim_tactile.plates import get_plate
-from sim_tactile.scene.finger import Finger, skin_grid
-from sim_tactile.scene.layouts import get_layout
 from sim_tactile.scene.model import build_scene
+from sim_tactile.scene.nodes import skin_grid
+from sim_tactile.sensors import Finger, get_layout
 from sim_tactile.sim import simulate as S
 from sim_tactile.sim._readout import penetration_map
 from sim_tactile.sim.collide import PrimitiveCollider

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from sim_tactile.plates import get_plate
-from sim_tactile.scene.finger import Finger, skin_grid
-from sim_tactile.sensors import get_sensor
+from sim_tactile.scene.nodes import skin_grid
+from sim_tactile.sensors import Finger, get_sensor
 from sim_tactile.sim.fidelity import MAX_NODES, choose_fidelity
 from sim_tactile.sim.simulate import Protocol
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from sim_tactile.scene.finger import Finger
+from sim_tactile.sensors import Finger
 from sim_tactile.sim.press import hertz, press
 
 R, E, F = 8e-3, 0.3e6, 1.0

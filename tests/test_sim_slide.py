@@ -9,7 +9,7 @@ from scipy import ndimage
 
 from sim_tactile.errors import ConfigError, UnknownNameError
 from sim_tactile.records import Recording
-from sim_tactile.scene.finger import Finger
+from sim_tactile.sensors import Finger
 from sim_tactile.sim.simulate import Protocol, simulate
 
 MM = 1e-3

@@ -8,7 +8,7 @@ import pytest
 
 from sim_tactile.errors import PhysicsError
 from sim_tactile.plates import Bumps, Plate
-from sim_tactile.scene.finger import Finger
+from sim_tactile.sensors import Finger
 from sim_tactile.sim.simulate import Protocol, simulate
 
 

@@ -48,8 +48,8 @@ from .. import _validate as v
 from ..errors import ConfigError, SimTactileError
 from ..plates import Plate, features, get_plate
 from ..records import Recording
-from ..scene.finger import Finger, skin_grid
-from ..scene.layouts import Layout
+from ..scene.nodes import skin_grid
+from ..sensors import Finger, Layout
 from ..sim.fidelity import LEVELS, choose_fidelity
 from ..sim.press import hertz, press
 from ..sim.simulate import FORCE_CONTROLS, Protocol, simulate

@@ -209,7 +209,7 @@ def high_force_20n() -> Measured:
 
 
 def sharp_edges() -> Measured:
-    from ..scene.finger import Finger
+    from ..sensors import Finger
 
     return _slide(finger=Finger(edge_radius_m=0.0))
 
@@ -234,13 +234,13 @@ def coarse_step_held_force() -> Measured:
 
 
 def skin_pressed_to_bottom() -> Measured:
-    from ..scene.finger import Finger
+    from ..sensors import Finger
 
     return _slide(finger=Finger(thickness_m=0.3e-3), force_n=5.0, duration_s=0.3)
 
 
 def static_press_beyond_skin() -> Measured:
-    from ..scene.finger import Finger
+    from ..sensors import Finger
     from ..sim.press import press
 
     finger = Finger(shape="sphere", radius_m=8e-3, size_m=(8e-3, 8e-3), thickness_m=0.5e-3)

@@ -23,9 +23,10 @@ import numpy as np
 
 from ..plates import Plate
 from ..plates import build as build_plate
+from ..sensors.layouts import Layout
+from ..sensors.pad import Finger
 from .elastic import compliance_matrix, subsurface_weights
-from .finger import Finger, SkinGrid
-from .layouts import Layout
+from .nodes import SkinGrid
 
 _T = mujoco.mjtGeom
 #: Collision bit of the skin nodes (plates keep bit 1 for other uses).

@@ -1,4 +1,5 @@
-"""The papers' sensors: taxel layout, the pad it sits on, its transducer and imperfections.
+"""The papers' sensors: taxel layout and rate, the pad it sits on, its transducer and
+imperfections. A :class:`Sensor` is the whole definition; everything else reads it from there.
 
 | sensor | layout | pad | transducer | rate |
 |---|---|---|---|---|
@@ -16,9 +17,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..errors import UnknownNameError
-from ..scene.finger import Finger
-from ..scene.layouts import Layout, get_layout
-from .micro import micro_loads
+from .layouts import Layout, dense_layout, get_layout, grid_layout
+from .pad import Finger
 from .transducers import (
     Capacitive,
     Impedance,
@@ -31,14 +31,28 @@ from .transducers import (
 
 @dataclass(frozen=True)
 class Sensor:
+    """A tactile sensor: its taxels (``layout``, with the hardware's rate), the pad that
+    carries them (``finger``), the transducer from load to output (one per layer, or None
+    for a bare layout that reports the ideal normal load [N]) and its imperfections."""
+
     name: str
+    layout: Layout
     finger: Finger
-    transducer: Transducer | tuple[Transducer, ...]
-    imperfections: Imperfections
+    transducer: Transducer | tuple[Transducer, ...] | None
+    imperfections: Imperfections | None = None
+
+    @classmethod
+    def bare(cls, layout: Layout, finger: Finger | None = None) -> Sensor:
+        """Taxels without hardware: the ideal normal loads [N] on a default pad."""
+        return cls(layout.name, layout, finger or Finger(), None, None)
 
     @property
-    def layout(self) -> Layout:
-        return get_layout(self.name)
+    def rate_hz(self) -> float:
+        return self.layout.rate_hz
+
+    @property
+    def grid_shape(self) -> tuple[int, int] | None:
+        return self.layout.grid_shape
 
     def transduce(
         self, loads_n: np.ndarray, rate_hz: float, rng: np.random.Generator
@@ -46,6 +60,8 @@ class Sensor:
         """(T, N) ideal loads [N] -> (T, N) hardware output, with seeded imperfections."""
         layout = self.layout
         tr = self.transducer
+        if tr is None:
+            return loads_n
         if isinstance(tr, tuple):  # one transducer per layer
             out = np.empty(loads_n.shape)
             for lay, t in enumerate(tr):
@@ -53,24 +69,42 @@ class Sensor:
                 out[:, cols] = t.apply(loads_n[:, cols], rate_hz)
         else:
             out = tr.apply(loads_n, rate_hz)
+        if self.imperfections is None:
+            return out
         return self.imperfections.apply(out, layout.positions, rate_hz, rng)
 
     @property
     def units(self) -> str:
         tr = self.transducer
+        if tr is None:
+            return "N"
         return (tr[0] if isinstance(tr, tuple) else tr).units
 
-    def to_json(self) -> dict:
+    def transducer_json(self) -> dict | str:
+        """The transducer and imperfections as JSON data ("ideal" for a bare layout)."""
         tr = self.transducer
+        if tr is None:
+            return "ideal"
         trs = [
             asdict(t) | {"kind": type(t).__name__} for t in (tr if isinstance(tr, tuple) else (tr,))
         ]
-        return {"name": self.name, "transducer": trs, "imperfections": self.imperfections.to_json()}
+        imp = self.imperfections.to_json() if self.imperfections is not None else None
+        return {"name": self.name, "transducer": trs, "imperfections": imp}
+
+    def to_json(self) -> dict:
+        """The whole definition as JSON data: everything a recording of it depends on."""
+        return {
+            "name": self.name,
+            "layout": self.layout.to_json(),
+            "pad": self.finger.to_json(),
+            "transducer": self.transducer_json(),
+        }
 
 
 _SENSORS = {
     "grid3x3": lambda: Sensor(
         "grid3x3",
+        get_layout("grid3x3"),
         Finger(),
         PiezoResistive(),
         Imperfections(
@@ -83,6 +117,7 @@ _SENSORS = {
     ),
     "multilayer3x3x2": lambda: Sensor(
         "multilayer3x3x2",
+        get_layout("multilayer3x3x2"),
         Finger(shape="flat", size_m=(0.016, 0.016), edge_radius_m=0.002),
         (
             PiezoResistive(r_fix_ohm=100.0, r0_ohm=2e3, f_c_n=0.05),
@@ -98,6 +133,7 @@ _SENSORS = {
     ),
     "biotac19": lambda: Sensor(
         "biotac19",
+        get_layout("biotac19"),
         Finger(
             shape="ellipsoid",
             radii_m=(0.014, 0.010, 0.008),
@@ -111,12 +147,14 @@ _SENSORS = {
     ),
     "icub60": lambda: Sensor(
         "icub60",
+        get_layout("icub60"),
         Finger(shape="flat", size_m=(0.032, 0.022), edge_radius_m=0.002),
         Capacitive(),
         Imperfections(noise_std=1.4, drift_std_per_sqrt_s=0.3, clip_min=0.0),
     ),
     "pvdf2": lambda: Sensor(
         "pvdf2",
+        get_layout("pvdf2"),
         Finger(shape="sphere", radius_m=0.010, size_m=(0.014, 0.014)),
         Piezoelectric(),
         Imperfections(noise_std=2e-3, quant_step=20.0 / 65536),
@@ -137,14 +175,37 @@ def get_sensor(name: str) -> Sensor:
         ) from None
 
 
+def resolve_sensor(sensor: Sensor | Layout | str) -> Sensor:
+    """A :class:`Sensor` from a sensor, a sensor name, a bare layout or a layout name
+    (``dense-<pitch>mm``): the last two report the ideal normal loads on a default pad."""
+    if isinstance(sensor, Sensor):
+        return sensor
+    if isinstance(sensor, Layout):
+        return Sensor.bare(sensor)
+    if sensor in _SENSORS:
+        return get_sensor(sensor)
+    try:
+        return Sensor.bare(get_layout(sensor))
+    except UnknownNameError:
+        raise UnknownNameError(
+            f"sensor {sensor!r} is not known; valid: {', '.join(_SENSORS)}, or a layout "
+            "dense-<pitch>mm (e.g. dense-0.25mm)"
+        ) from None
+
+
 __all__ = [
     "Capacitive",
+    "Finger",
     "Imperfections",
     "Impedance",
+    "Layout",
     "Piezoelectric",
     "PiezoResistive",
     "Sensor",
+    "dense_layout",
+    "get_layout",
     "get_sensor",
-    "micro_loads",
+    "grid_layout",
+    "resolve_sensor",
     "sensor_names",
 ]

@@ -17,9 +17,10 @@ import numpy as np
 from .. import _validate as v
 from ..errors import PhysicsError
 from ..plates import Plate, get_plate
-from ..scene.finger import Finger, skin_grid
-from ..scene.layouts import Layout, dense_layout
 from ..scene.model import build_scene
+from ..scene.nodes import skin_grid
+from ..sensors.layouts import Layout, dense_layout
+from ..sensors.pad import Finger
 from . import contact
 from ._readout import penetration_map
 

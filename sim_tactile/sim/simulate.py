@@ -21,14 +21,15 @@ from .. import _validate as v
 from ..errors import ConfigError, PhysicsError
 from ..plates import Plate, get_plate
 from ..records import Recording
-from ..scene.finger import Finger, skin_grid
-from ..scene.layouts import Layout, get_layout
 from ..scene.model import build_scene
+from ..scene.nodes import skin_grid
+from ..sensors import Finger, Layout, Sensor, resolve_sensor
 from . import contact
 from ._readout import penetration_map
 from .collide import PrimitiveCollider
 from .fidelity import Fidelity, choose_fidelity, flat_stiffness
 from .held import _QS_COLLISIONS, HeldSkin
+from .micro import micro_loads
 
 #: Largest omega * dt of the explicit skin-to-bone coupling before the run is refused; the
 #: semi-implicit scheme is stable below 2, this keeps a margin of 2.
@@ -137,7 +138,7 @@ def _contact_stiffness(scene, fid: Fidelity, p: np.ndarray) -> float:
 
 def simulate(
     plate: Plate | str,
-    layout: Layout | str = "grid3x3",
+    layout: Sensor | Layout | str = "grid3x3",
     *,
     protocol: Protocol | None = None,
     finger: Finger | None = None,
@@ -176,11 +177,9 @@ def _simulate(
 ) -> SimResult:
     t_wall = time.perf_counter()
     plate = get_plate(plate) if isinstance(plate, str) else plate
-    from ..sensors import get_sensor, micro_loads, sensor_names
-
-    sensor = get_sensor(layout) if isinstance(layout, str) and layout in sensor_names() else None
-    layout = get_layout(layout) if isinstance(layout, str) else layout
-    finger = finger or (sensor.finger if sensor else Finger())
+    sensor = resolve_sensor(layout)
+    layout = sensor.layout
+    finger = finger or sensor.finger
     protocol = protocol or Protocol(rate_hz=layout.rate_hz)
     v.integer("seed", seed, 0, 2**63 - 1)
     rng = np.random.default_rng(seed)
@@ -362,9 +361,9 @@ def _simulate(
     if micro.any():
         out = np.maximum(out + micro, 0.0)
     units, transducer = "N", "ideal"
-    if not ideal and sensor is not None:
+    if not ideal and sensor.transducer is not None:
         out = sensor.transduce(out, proto.rate_hz, np.random.default_rng([seed, 1]))
-        units, transducer = sensor.units, sensor.to_json()
+        units, transducer = sensor.units, sensor.transducer_json()
     times = (np.arange(n_samples) + 0.5) / proto.rate_hz
     wall = time.perf_counter() - t_wall
     sim_s = n_samples / proto.rate_hz

@@ -32,8 +32,6 @@ from ..hashing import code_version, derive_seed
 from ..records import Recording, TactileDataset
 from .registry import DataRequest
 
-#: (rows, cols) of sensors whose taxels form a grid in channel order (the LSTM's conv front)
-GRID_SHAPES = {"grid3x3": (3, 3), "icub60": (6, 10)}
 #: margin [m] between the pad and the textured area at the start and end of a crossing
 _MARGIN_M = 2e-3
 
@@ -160,11 +158,11 @@ class SlideSet:
             "setup": {**self.describe(), "plates": list(plates)},
             **stats,
         }
-        if self.sensor in GRID_SHAPES:
-            meta["grid_shape"] = list(GRID_SHAPES[self.sensor])
         from ..sensors import get_sensor
 
         layout = get_sensor(self.sensor).layout
+        if layout.grid_shape is not None:
+            meta["grid_shape"] = list(layout.grid_shape)
         return TactileDataset(
             np.stack([r.data for r in recs]),
             labels,
@@ -183,10 +181,10 @@ def _class_name(plate: str) -> str:
 
 def simulate_job(job: dict, cache: ArtefactCache):
     """Simulate the slide of one job (:meth:`SlideSet.jobs`; a ``finger`` key, the fields of
-    a :class:`~sim_tactile.scene.finger.Finger`, replaces the sensor's pad); a
+    a :class:`~sim_tactile.sensors.pad.Finger`, replaces the sensor's pad); a
     :class:`~sim_tactile.sim.simulate.SimResult`. An error names the plate and the seed."""
     from ..plates import get_plate
-    from ..scene.finger import Finger
+    from ..sensors import Finger
     from ..sim.simulate import Protocol, simulate
 
     finger = job.get("finger")

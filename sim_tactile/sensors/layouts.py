@@ -18,7 +18,8 @@ from ..errors import ConfigError, UnknownNameError
 @dataclass(frozen=True)
 class Layout:
     """name; positions (N, 3) [m]; sizes (N, 2) [m] (x, y); layer (N,) int; rate_hz the
-    hardware's sampling rate; channel names."""
+    hardware's sampling rate; channel names; grid_shape ``(rows, cols)`` when the taxels form
+    a grid in channel order (row-major; the LSTM's convolutional front reads it), else None."""
 
     name: str
     positions: np.ndarray
@@ -26,6 +27,7 @@ class Layout:
     layer: np.ndarray
     rate_hz: float = 100.0
     names: tuple[str, ...] = field(default=())
+    grid_shape: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
         pos = np.asarray(self.positions, float)
@@ -49,6 +51,18 @@ class Layout:
         object.__setattr__(self, "layer", layer)
         if not self.names:
             object.__setattr__(self, "names", tuple(f"t{i}" for i in range(n)))
+        if len(self.names) != n:
+            raise ConfigError(
+                f"layout {self.name!r}: {len(self.names)} channel names for {n} taxels"
+            )
+        if self.grid_shape is not None:
+            rows, cols = (int(x) for x in self.grid_shape)
+            if rows * cols != n:
+                raise ConfigError(
+                    f"layout {self.name!r}: grid_shape {self.grid_shape} holds {rows * cols} "
+                    f"taxels, the layout {n}; valid: rows * cols = {n}"
+                )
+            object.__setattr__(self, "grid_shape", (rows, cols))
 
     @property
     def n(self) -> int:
@@ -84,6 +98,8 @@ class Layout:
             "positions_m": self.positions.tolist(),
             "sizes_m": self.sizes.tolist(),
             "layer": self.layer.tolist(),
+            "names": list(self.names),
+            "grid_shape": None if self.grid_shape is None else list(self.grid_shape),
         }
 
 
@@ -108,7 +124,8 @@ def grid_layout(
     X, Y = np.meshgrid(xs, ys, indexing="xy")  # row-major: y rows, x columns
     pos = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, -depth_m)])
     names = tuple(f"r{j}c{i}" for j in range(ny) for i in range(nx))
-    return Layout(name, pos, np.full((X.size, 2), size_m), np.zeros(X.size, int), rate_hz, names)
+    sizes = np.full((X.size, 2), size_m)
+    return Layout(name, pos, sizes, np.zeros(X.size, int), rate_hz, names, (ny, nx))
 
 
 def dense_layout(
@@ -137,7 +154,7 @@ def multilayer_layout() -> Layout:
         np.r_[np.zeros(9, int), np.ones(9, int)],
         100.0,
         names,
-    )
+    )  # no grid_shape: two layers
 
 
 def biotac_layout() -> Layout:
@@ -175,7 +192,9 @@ def icub_layout() -> Layout:
         pos += [(cx + x, cy + flip * y, -0.5e-3) for x, y in tri]
     pos = np.array(pos)
     names = tuple(f"m{m}t{k}" for m in range(6) for k in range(10))
-    return Layout("icub60", pos, np.full((60, 2), 2e-3), np.repeat(np.arange(6), 10), 50.0, names)
+    return Layout(
+        "icub60", pos, np.full((60, 2), 2e-3), np.repeat(np.arange(6), 10), 50.0, names, (6, 10)
+    )
 
 
 def pvdf_layout() -> Layout:
@@ -194,10 +213,6 @@ _LAYOUTS = {
     "icub60": icub_layout,
     "pvdf2": pvdf_layout,
 }
-
-
-def layout_names() -> list[str]:
-    return list(_LAYOUTS)
 
 
 def get_layout(name: str) -> Layout:

@@ -1,4 +1,4 @@
-"""The finger: a rigid bone carrying a soft pad, in physical units.
+"""A sensor's pad: the finger's rigid bone carrying a soft skin, in physical units.
 
 The pad's undeformed surface is ``z = surface(x, y) >= 0`` above its lowest point, in the pad
 frame (x along the slide, y across, z out of the skin, i.e. up from the plate). Shapes:
@@ -15,7 +15,7 @@ deeper than that bottoms out and stops the run.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Literal
 
 import numpy as np
@@ -99,60 +99,4 @@ class Finger:
         return rz * (1 - np.sqrt(np.maximum(1 - (x / rx) ** 2 - (y / ry) ** 2, 0.0)))
 
     def to_json(self) -> dict:
-        from dataclasses import asdict
-
         return asdict(self)
-
-
-@dataclass(frozen=True)
-class SkinGrid:
-    """Skin nodes: rectangular patches of ``pitch_m`` (x, the slide) by ``pitch_y_m`` (y;
-    None: square) tiling the pad's patch.
-
-    xy: (N, 2) node centres [m] in the pad frame; z: (N,) undeformed surface height [m].
-    """
-
-    pitch_m: float
-    xy: np.ndarray
-    z: np.ndarray
-    pitch_y_m: float | None = None
-
-    @property
-    def n(self) -> int:
-        return len(self.z)
-
-    @property
-    def pitch_xy(self) -> tuple[float, float]:
-        return (self.pitch_m, self.pitch_y_m or self.pitch_m)
-
-    @property
-    def area_m2(self) -> float:
-        px, py = self.pitch_xy
-        return px * py
-
-
-def skin_grid(finger: Finger, pitch_m: float, pitch_y_m: float | None = None) -> SkinGrid:
-    """Nodes at ``pitch_m`` along x and ``pitch_y_m`` (default: the same) along y over the
-    finger's patch (an odd count per side, so a node sits at the pad's centre)."""
-    v.in_range("skin pitch_m", pitch_m, 20e-6, 5e-3, unit="m")
-    if pitch_y_m is not None:
-        v.in_range("skin pitch_y_m", pitch_y_m, 20e-6, 5e-3, unit="m")
-    qy = pitch_y_m or pitch_m
-    px, py = finger.patch_m
-    nx = 2 * int(np.floor(px / pitch_m / 2)) + 1
-    ny = 2 * int(np.floor(py / qy / 2)) + 1
-    if nx * ny > 20_000:
-        raise ConfigError(
-            f"skin pitch_m = {pitch_m:g} m (y {qy:g} m) gives {nx * ny} nodes; valid: at most "
-            f"20000 (pitch_m >= {max(px, py) / 141:g} m for this pad)"
-        )
-    xs = (np.arange(nx) - (nx - 1) / 2) * pitch_m
-    ys = (np.arange(ny) - (ny - 1) / 2) * qy
-    X, Y = np.meshgrid(xs, ys, indexing="xy")
-    xy = np.column_stack([X.ravel(), Y.ravel()])
-    return SkinGrid(
-        pitch_m,
-        xy,
-        finger.surface(xy[:, 0], xy[:, 1]),
-        None if pitch_y_m is None or pitch_y_m == pitch_m else pitch_y_m,
-    )
