@@ -29,7 +29,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from sim_tactile.bench.speed_error import Sweep, run_speed_error
-from sim_tactile.sim.simulate import Protocol, simulate
+from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.simulate import prepare
 
 V = 0.06
 PLATE = "finger7/ridges-4"
@@ -86,49 +87,41 @@ def hertz_rows(quick: bool = False) -> list[dict]:
 def loop_overhead(repeats: int = 5) -> dict:
     """Median seconds per step of three loops over the same 200 sliding steps:
 
-    - full: the project's step (readout, skin solve, checks, drag, taxel accumulation);
+    - full: the project's step (readout, skin solve, checks, drag, taxel loads);
     - bare MuJoCo: MuJoCo stepping the same model: kinematics and collision of the skin nodes
       against the plate, and mj_step (no skin solve);
     - minimal: the least a user's own script must do for the same physics: the depth map (the
-      primitive collider where the plate allows it, else MuJoCo's collider), the skin's
+      compiled collider where the plate allows it, else MuJoCo's collider), the skin's
       force-holding contact solve, and mj_step. Where the step solves a reduced problem
-      (:class:`sim_tactile.sim.held.HeldSkin`: collider probes per column, the mirror half),
-      the minimal loop calls the same reduced collider and solver, so both do the same work.
+      (:class:`sim_tactile.sim.held.CompiledHeldStep`: collider probes per column, the mirror
+      half), the minimal loop calls the same reduced collider and solver, so both do the same
+      work.
 
     The loop overhead is full / minimal - 1: what the project's loop adds to the physics.
     """
     import copy
 
-    from sim_tactile.sim import simulate as S
-    from sim_tactile.sim._readout import penetration_map
+    from sim_tactile.sim.held import CompiledHeldStep
 
-    captured = {}
-    orig = S._Runner.__init__
-
-    def spy(self, *a, **k):
-        orig(self, *a, **k)
-        captured["runner"] = self
-
-    S._Runner.__init__ = spy
-    try:
-        simulate(PLATE, "grid3x3", protocol=Protocol(speed_m_s=V, duration_s=0.3), ideal=True)
-    finally:
-        S._Runner.__init__ = orig
-    run = captured["runner"]
+    pressed = prepare(PLATE, "grid3x3", protocol=Protocol(speed_m_s=V, duration_s=0.3))
+    run = pressed.runner
     s = run.s
     n = 200
     full, bare, minimal = [], [], []
-    q0, v0 = run.d_dyn.qpos.copy(), run.d_dyn.qvel.copy()
-    held = run.held
-    solver0 = copy.deepcopy(s.solver)
+    dd = run.d_dyn
+    dc = mujoco.MjData(s.m_col)
+    q0, v0 = dd.qpos.copy(), dd.qvel.copy()
+    held = run.hold if isinstance(run.hold, CompiledHeldStep) else None
+    skin0 = copy.deepcopy(run.skin)
     held0 = copy.deepcopy(held.solver) if held is not None else None
     A = s.grid.area_m2
-    dc, dd = run.d_col, run.d_dyn
 
     def reset() -> None:  # every timed loop starts from the same settled, sliding state
         dd.qpos[:], dd.qvel[:] = q0, v0
         dd.qfrc_applied[:] = 0.0
-        s.solver = copy.deepcopy(solver0)
+        run.skin = copy.deepcopy(skin0)
+        if run.hold is not None and held is None:
+            run.hold.skin = run.skin
         if held is not None:
             held.solver = copy.deepcopy(held0)
 
@@ -151,35 +144,30 @@ def loop_overhead(repeats: int = 5) -> dict:
             bare.append((time.perf_counter() - t) / n)
             reset()
             pen = np.empty(s.n_nodes)
-            bone = run._bone0.copy()
             t = time.perf_counter()
-            for _ in range(n):
-                bone[0] = run._bone0[0] + dd.qpos[s.jx]
-                bone[2] = run._bone0[2] + dd.qpos[s.jz]
-                if held is not None:  # the reduced problem the step solves
+            if held is not None:  # the reduced problem the step solves
+                bone = held.bone0.copy()
+                for _ in range(n):
+                    bone[0] = held.bone0[0] + dd.qpos[s.jx]
+                    bone[2] = held.bone0[2] + dd.qpos[s.jz]
                     held.depths(bone)
                     p, dz = held.solver.solve_force(held.pen, 1.0 / A)
                     dd.qpos[s.jz] -= dz
                     dd.qvel[s.jz] = 0.0
                     dd.ctrl[0] = V
                     mujoco.mj_step(s.m_dyn, dd)
-                    continue
-                if run.collider is not None:  # the plate's primitives: the fast collider
-                    run.collider.depths(bone, pen)
-                else:
-                    dc.qpos[:] = dd.qpos
-                    mujoco.mj_kinematics(s.m_col, dc)
-                    mujoco.mj_collision(s.m_col, dc)
-                    penetration_map(dc.contact.geom, dc.contact.dist, s.node_of_geom, pen)
-                if run.quasi_static:  # hold the force: move the pad to where the skin carries it
-                    p, dz = s.solver.solve_force(pen, 1.0 / A)
-                    dd.qpos[s.jz] -= dz
-                    dd.qvel[s.jz] = 0.0
-                else:
-                    p, _ = s.solver.solve(pen)
-                    dd.qfrc_applied[s.jz] = p.sum() * A - 1.0
-                dd.ctrl[0] = V
-                mujoco.mj_step(s.m_dyn, dd)
+            else:
+                for _ in range(n):
+                    run.collider.depths_at(dd.qpos, pen)
+                    if run.quasi_static:  # hold the force: the pad to where the skin carries it
+                        p, dz = run.skin.solve_force(pen, 1.0 / A)
+                        dd.qpos[s.jz] -= dz
+                        dd.qvel[s.jz] = 0.0
+                    else:
+                        p = run.skin.solve(pen)
+                        dd.qfrc_applied[s.jz] = p.sum() * A - 1.0
+                    dd.ctrl[0] = V
+                    mujoco.mj_step(s.m_dyn, dd)
             minimal.append((time.perf_counter() - t) / n)
     f, b, m = statistics.median(full), statistics.median(bare), statistics.median(minimal)
     return {

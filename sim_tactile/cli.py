@@ -91,19 +91,17 @@ def cmd_plates_build(args: argparse.Namespace) -> int:
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .errors import ConfigError
     from .sim.plots import plot_heatmap, plot_traces
-    from .sim.simulate import Protocol, simulate
+    from .sim.protocol import Protocol
+    from .sim.simulate import simulate
 
     out = Path(args.out)
     if out.suffix != ".npz":
         raise ConfigError(f"--out {args.out!r} must end in .npz")
-    from .sensors import resolve_sensor
-
-    layout = resolve_sensor(args.sensor).layout
     proto = Protocol(
         speed_m_s=args.speed,
         force_n=args.force,
         duration_s=args.duration,
-        rate_hz=args.rate or layout.rate_hz,
+        rate_hz=args.rate,
         force_control=args.force_control,
     )
     res = simulate(
@@ -128,7 +126,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         "out": str(out),
         "n_taxels": rec.n_taxels,
         "n_samples": int(rec.data.shape[0]),
-        "rate_hz": proto.rate_hz,
+        "rate_hz": rec.rate_hz,
         "sim_s": res.sim_s,
         "wall_s": round(res.wall_s, 4),
         "fidelity": res.fidelity.level,
@@ -145,17 +143,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 def cmd_press(args: argparse.Namespace) -> int:
     from .sensors import Finger
-    from .sim.press import hertz, press
+    from .sim.press import hertz, press, sphere_pad_size_m
 
     r = args.radius
     if args.finger == "sphere":
-        size = min(
-            2 * r,
-            max(
-                12e-3,
-                3 * (3 * args.force * r / (4 * args.young / (1 - args.poisson**2))) ** (1 / 3),
-            ),
-        )
+        size = sphere_pad_size_m(r, args.force, args.young / (1 - args.poisson**2))
         finger = Finger(
             shape="sphere",
             radius_m=r,
@@ -173,7 +165,7 @@ def cmd_press(args: argparse.Namespace) -> int:
             thickness_m=args.thickness,
         )
     res = press(
-        finger, args.force, pitch_m=args.pitch, plate=args.plate, coupled=args.fidelity != "L0"
+        finger, args.force, readout_pitch_m=args.pitch, plate=args.plate, fidelity=args.fidelity
     )
     payload = res.to_json()
     if args.finger == "sphere":

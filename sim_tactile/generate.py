@@ -97,7 +97,7 @@ class Plan:
 
 def _slide_plan(slides, *, quick, seed, task, name, finger=None, source=None) -> Plan:
     from .sensors import get_sensor
-    from .sim.simulate import Protocol
+    from .sim.protocol import Protocol
     from .tasks.synthetic import _class_name, _code_version
 
     n = slides.quick_slides if quick else slides.slides
@@ -219,7 +219,7 @@ def config_slide_set(cfg: dict, where: str = "configuration"):
     from .plates import preset_names
     from .sensors import get_sensor, sensor_names
     from .sim.fidelity import LEVELS
-    from .sim.simulate import Protocol
+    from .sim.protocol import Protocol
     from .tasks.synthetic import SlideSet, crossing_s
 
     def err(msg: str) -> ConfigError:

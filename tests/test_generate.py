@@ -375,7 +375,7 @@ def test_recorded_data_takes_the_same_form(tiny, tmp_path):
 def tiny_task():
     """A registered task whose quick data is the tiny set (removed again afterwards)."""
     from sim_tactile.learn.classifiers import threshold_encoding
-    from sim_tactile.sim.simulate import Protocol
+    from sim_tactile.sim.protocol import Protocol
     from sim_tactile.tasks import Settings, TaskSpec, register
     from sim_tactile.tasks import registry as R
     from sim_tactile.tasks.synthetic import SlideSet
@@ -429,7 +429,7 @@ def test_tasks_read_their_data_from_a_store(tiny_task, tmp_path):
 def _fake_slide(job: dict):
     """Zeros of the slide's shape and the protocol's own draw (no physics): for layouts."""
     from sim_tactile.sensors import get_sensor
-    from sim_tactile.sim.simulate import Protocol
+    from sim_tactile.sim.protocol import Protocol
 
     proto = Protocol(**job["protocol"])
     p = proto.varied(np.random.default_rng(job["seed"]))

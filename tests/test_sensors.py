@@ -9,7 +9,8 @@ from conftest import DATASET_DIR
 
 from sim_tactile.errors import ConfigError, UnknownNameError
 from sim_tactile.sensors import Finger, Imperfections, get_sensor, sensor_names
-from sim_tactile.sim.simulate import Protocol, simulate
+from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.simulate import simulate
 
 FAMILIES = [
     "finger7/flat",

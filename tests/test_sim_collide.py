@@ -10,10 +10,15 @@ from sim_tactile.plates import get_plate
 from sim_tactile.scene.model import build_scene
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, get_layout
-from sim_tactile.sim import simulate as S
-from sim_tactile.sim._readout import penetration_map
-from sim_tactile.sim.collide import PrimitiveCollider
-from sim_tactile.sim.simulate import Protocol, simulate
+from sim_tactile.sim.collide import (
+    MujocoCollider,
+    PrimitiveCollider,
+    make_collider,
+    penetration_map,
+)
+from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.runner import StepOptions
+from sim_tactile.sim.simulate import simulate
 
 
 def _scene(plate: str, margin: float, cache):
@@ -28,7 +33,6 @@ def _scene(plate: str, margin: float, cache):
         x0_m=-0.02,
         z0_m=1e-3,
         z_damping=1.0,
-        coupled=False,
         node_margin_m=margin,
         cache=cache,
     )
@@ -67,32 +71,39 @@ def test_depth_map_equals_mujocos(plate, margin, cache):
     assert touched > 1000  # the poses did press nodes into the plate
 
 
+def test_the_colliders_answer_alike_from_the_joints(cache):
+    """depths_at(qpos) of both colliders, bound to the scene's joints, against each other."""
+    sc = _scene("finger7/ridges-4", 0.5e-3, cache)
+    prim, ref = make_collider(sc), make_collider(sc, primitive=False)
+    assert isinstance(prim, PrimitiveCollider) and isinstance(ref, MujocoCollider)
+    qpos = np.zeros(sc.m_col.nq)
+    a, b = np.empty(sc.n_nodes), np.empty(sc.n_nodes)
+    for x in np.linspace(0.0, 0.04, 30):
+        qpos[sc.jx], qpos[sc.jz] = x, -2.5e-3
+        assert prim.depths_at(qpos, a) == ref.depths_at(qpos, b)
+        np.testing.assert_array_equal(a, b)
+    assert ref.warnings() == [] and prim.warnings() == []
+
+
 def test_meshes_and_height_fields_keep_mujocos_collider(cache):
     for plate in ("multilayer3/grating-9", "roughness8/ra-50"):
         sc = _scene(plate, 0.0, cache)
         bone = sc.m_col.body("bone").id
         assert PrimitiveCollider.from_model(sc.m_col, sc.node_of_geom, bone) is None
+        assert isinstance(make_collider(sc), MujocoCollider)
 
 
 @pytest.mark.parametrize("force_control", ["dynamic", "quasi-static"])
-def test_a_slide_is_bit_identical_with_either_collider(force_control, cache, monkeypatch):
+def test_a_slide_is_bit_identical_with_either_collider(force_control, cache):
     proto = Protocol(duration_s=0.4, force_control=force_control)
-    orig = S._Runner.__init__
-    used = []
 
-    def spy(self, *a, **k):
-        orig(self, *a, **k)
-        used.append(self.collider is not None)
+    def run(options):
+        return simulate(
+            "finger7/ridges-4", "grid3x3", protocol=proto, ideal=True, options=options, cache=cache
+        ).recording
 
-    monkeypatch.setattr(S._Runner, "__init__", spy)
-    fast = simulate("finger7/ridges-4", "grid3x3", protocol=proto, ideal=True, cache=cache)
-    assert used == [True]  # the default takes the primitive collider on a plate of boxes
-
-    def mujoco_only(self, *a, **k):
-        orig(self, *a, **{**k, "use_primitive_collider": False})
-        assert self.collider is None
-
-    monkeypatch.setattr(S._Runner, "__init__", mujoco_only)
-    slow = simulate("finger7/ridges-4", "grid3x3", protocol=proto, ideal=True, cache=cache)
-    assert fast.recording.data.tobytes() == slow.recording.data.tobytes()
-    assert fast.recording.data.max() > 0
+    # the plain held loop over both colliders: only the collider differs
+    fast = run(StepOptions(compiled_hold=False))
+    slow = run(StepOptions(primitive_collider=False))
+    assert fast.data.tobytes() == slow.data.tobytes()
+    assert fast.data.max() > 0

@@ -66,7 +66,7 @@ def test_no_penetration_no_load_and_winkler_is_local():
 
 
 def test_numba_readout_equals_numpy_reference():
-    from sim_tactile.sim._readout import penetration_map, penetration_map_reference
+    from sim_tactile.sim.collide import penetration_map, penetration_map_reference
 
     rng = np.random.default_rng(3)
     node_of_geom = np.array([-1, -1, 0, 1, 2, 3, 4, -1])

@@ -8,7 +8,7 @@ from sim_tactile.plates import get_plate
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, get_sensor
 from sim_tactile.sim.fidelity import MAX_NODES, choose_fidelity
-from sim_tactile.sim.simulate import Protocol
+from sim_tactile.sim.protocol import Protocol
 
 
 def _auto(plate: str, sensor: str = "grid3x3", finger: Finger | None = None, level="auto"):

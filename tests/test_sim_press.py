@@ -26,7 +26,7 @@ def hertz_ref():
 
 
 def test_coupled_skin_reproduces_hertz(hertz_ref, cache):
-    r = press(SPHERE, F, pitch_m=0.25e-3, cache=cache)
+    r = press(SPHERE, F, readout_pitch_m=0.25e-3, cache=cache)
     assert r.total_force_n == pytest.approx(F, rel=FORCE_RTOL)
     assert r.contact_radius_m == pytest.approx(hertz_ref["contact_radius_m"], rel=RADIUS_RTOL)
     assert r.peak_pressure_pa == pytest.approx(hertz_ref["peak_pressure_pa"], rel=PEAK_RTOL)
@@ -39,6 +39,6 @@ def test_coupled_skin_reproduces_hertz(hertz_ref, cache):
 def test_uncoupled_winkler_misses_hertz_as_documented(hertz_ref, cache):
     """L0 has no elastic coupling: PHYSICS.md measured its peak 30% off; it must stay far off
     (if it ever matched, the coupling test above would prove nothing)."""
-    r = press(SPHERE, F, pitch_m=0.25e-3, coupled=False, cache=cache)
+    r = press(SPHERE, F, readout_pitch_m=0.25e-3, fidelity="L0", cache=cache)
     assert r.total_force_n == pytest.approx(F, rel=FORCE_RTOL)
     assert abs(r.peak_pressure_pa / hertz_ref["peak_pressure_pa"] - 1) > PEAK_RTOL

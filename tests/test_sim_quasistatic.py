@@ -9,7 +9,8 @@ import pytest
 from sim_tactile.errors import ConfigError, PhysicsError
 from sim_tactile.scene.elastic import compliance_matrix
 from sim_tactile.sim.contact import ActiveSet, halfspace, winkler_force
-from sim_tactile.sim.simulate import Protocol, simulate
+from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.simulate import simulate
 
 QS = "quasi-static"
 

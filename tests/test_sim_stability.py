@@ -9,7 +9,8 @@ import pytest
 from sim_tactile.errors import PhysicsError
 from sim_tactile.plates import Bumps, Plate
 from sim_tactile.sensors import Finger
-from sim_tactile.sim.simulate import Protocol, simulate
+from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.simulate import simulate
 
 
 def _ok(res):

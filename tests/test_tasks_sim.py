@@ -16,7 +16,7 @@ from sklearn.svm import SVC
 
 from sim_tactile.errors import ConfigError
 from sim_tactile.learn.precomputed import OnDistances, OnFeatures, sample_index
-from sim_tactile.sim.simulate import Protocol
+from sim_tactile.sim.protocol import Protocol
 from sim_tactile.tasks import PaperCell, Run, TaskSpec, get_task, register, task_ids
 from sim_tactile.tasks.synthetic import SlideSet, simulate_slides
 

@@ -52,12 +52,8 @@ from ..scene.nodes import skin_grid
 from ..sensors import Finger, Layout
 from ..sim.fidelity import LEVELS, choose_fidelity
 from ..sim.press import hertz, press
-from ..sim.simulate import FORCE_CONTROLS, Protocol, simulate
-
-#: Margin [m] between the pad and the textured area where a slide starts (as in simulate).
-_START_MARGIN_M = 2e-3
-#: Speed ramp at the start of a stroke [s] (as in simulate).
-_RAMP_S = 0.02
+from ..sim.protocol import FORCE_CONTROLS, SPEED_RAMP_S, START_MARGIN_M, Protocol
+from ..sim.simulate import simulate
 
 
 def _nolog(msg: str) -> None:
@@ -345,10 +341,10 @@ def _quick_duration(
         return None
     px = finger.patch_m[0]
     half = plate.area_length_m / 2
-    x_start = -(half + px / 2 + _START_MARGIN_M)
+    x_start = -(half + px / 2 + START_MARGIN_M)
     steady_lo, steady_hi = -(half - px / 2), half - px / 2
     target = min(steady_lo + (n_periods + 0.5) * spacing, steady_hi + spacing / 2)
-    t = (target - x_start) / speed + _RAMP_S
+    t = (target - x_start) / speed + SPEED_RAMP_S
     full = 2 * abs(x_start) / speed
     return None if t >= full else float(t)
 
@@ -592,9 +588,9 @@ def _press_rows(scene: PressScene, sweep: Sweep, cache, log) -> list[dict]:
             r = press(
                 finger,
                 scene.force_n,
-                pitch_m=scene.readout_pitch_m,
+                readout_pitch_m=scene.readout_pitch_m,
                 node_pitch_m=pitch,
-                coupled=coupled,
+                fidelity="L1" if coupled else "L0",
                 cache=cache,
             )
         except Exception as exc:

@@ -3,11 +3,12 @@
 Built with ``mujoco.MjSpec`` from the plate's standalone MJCF. The finger's bone slides on
 two joints (``slide_x`` along the slide, driven by a velocity actuator; ``press_z`` normal to
 the plate, force-controlled). Each skin node is a small sphere on the bone at the pad's
-undeformed surface; MuJoCo's collider reports each node's signed distance to the plate (its
-penetration-depth map). The skin's elastic response is computed from that map
-(:mod:`sim_tactile.sim.contact`) and applied back to the bone, so MuJoCo integrates the
+undeformed surface; a collider reports each node's signed distance to the plate (its
+penetration-depth map). The skin's elastic response is computed from that map by a skin
+model (:mod:`sim_tactile.sim.skin`) and applied back to the bone, so MuJoCo integrates the
 finger while the skin is quasi-static (its own resonance, above 1 kHz for a few grams of
-silicone, lies far above the texture frequencies).
+silicone, lies far above the texture frequencies). The scene also holds ``W``, how the
+nodes' loads reach the taxels (:func:`~sim_tactile.scene.elastic.subsurface_weights`).
 
 Two models are compiled from the one spec: ``m_col`` with contacts, used only for collision
 queries, and ``m_dyn`` with contacts disabled, which MuJoCo steps. (Inactive "gap" contacts
@@ -25,7 +26,7 @@ from ..plates import Plate
 from ..plates import build as build_plate
 from ..sensors.layouts import Layout
 from ..sensors.pad import Finger
-from .elastic import compliance_matrix, subsurface_weights
+from .elastic import subsurface_weights
 from .nodes import SkinGrid
 
 _T = mujoco.mjtGeom
@@ -51,11 +52,8 @@ class Scene:
     m_dyn: mujoco.MjModel
     node_of_geom: np.ndarray  # (ngeom,) node index of each geom in m_col, -1 if none
     W: np.ndarray  # (M, N) taxel weights of node loads
-    C: np.ndarray | None  # (N, N) compliance [m/Pa] or None for Winkler
-    K: np.ndarray | None  # inv(C) [Pa/m]
     jx: int  # dof index of slide_x
     jz: int  # dof index of press_z
-    solver: object = None  # a sim.contact.ActiveSet for C, set by the simulation
 
     @property
     def n_nodes(self) -> int:
@@ -72,12 +70,11 @@ def build_scene(
     x0_m: float,
     z0_m: float,
     z_damping: float,
-    coupled: bool,
-    inverse: bool = True,
+    y0_m: float = 0.0,
     node_margin_m: float = 0.0,
     cache=None,
 ) -> Scene:
-    """Compose the plate's MJCF with the finger; x0, z0 place the pad's lowest point.
+    """Compose the plate's MJCF with the finger; x0, y0, z0 place the pad's lowest point.
     ``node_margin_m``: the collider reports nodes this far above the plate too (with their
     positive distance); it must be compiled in, as MuJoCo's broad phase sizes its bounding
     boxes from it."""
@@ -144,12 +141,9 @@ def build_scene(
         layout.depth_m,
         pitch_y_m=grid.pitch_y_m,
     )
-    C = (
-        compliance_matrix(grid.xy, grid.pitch_m, finger.e_star_pa, pitch_y_m=grid.pitch_y_m)
-        if coupled
-        else None
-    )
-    K = np.linalg.inv(C) if coupled and inverse else None  # for large contact sets
     jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]
     jz = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "press_z")]
-    return Scene(plate, finger, grid, layout, m_col, m_dyn, node_of_geom, W, C, K, int(jx), int(jz))
+    # the offset across the slide, set in both compiled models (as the slide's own offset)
+    for m in (m_col, m_dyn):
+        m.body_pos[m.body("bone").id, 1] = y0_m
+    return Scene(plate, finger, grid, layout, m_col, m_dyn, node_of_geom, W, int(jx), int(jz))

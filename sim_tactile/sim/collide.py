@@ -1,15 +1,17 @@
-"""A narrow phase for the skin's probe spheres against plates made of boxes and spheres.
+"""Colliders: the penetration-depth map of the skin's probe spheres against the plate.
 
-MuJoCo's collider (``mj_kinematics`` + ``mj_collision``) costs about 60 us a step for a few
-hundred skin nodes, a third of a whole L1 step, although the plate never moves and every node
-is a sphere on the one bone. :class:`PrimitiveCollider` computes the same penetration-depth map
-in one numba loop: the signed distance of each probe sphere to each plate box (in the box's
-frame) and sphere, the deepest per node, ``-inf`` where no geom lies within the node's margin,
-exactly as :func:`sim_tactile.sim._readout.penetration_map` reads MuJoCo's contacts. It is
-tested equal to MuJoCo's map on every plate it accepts, at random pad poses.
+A collider answers one question, :meth:`depths_at`: with the finger's joints at ``qpos``, how
+deep is each skin node in the plate (``-inf`` where no plate geom lies within the node's
+margin), and is any node that close. :func:`make_collider` chooses one, in one place:
 
-Plates with other geoms (meshes of drafted ridges, cylinders, height fields) return ``None``
-from :meth:`PrimitiveCollider.from_model`; they keep MuJoCo's collider.
+- :class:`PrimitiveCollider`: a compiled narrow phase for plates made of boxes and spheres.
+  MuJoCo's collider (``mj_kinematics`` + ``mj_collision``) costs about 60 us a step for a
+  few hundred skin nodes, a third of a whole L1 step, although the plate never moves and
+  every node is a sphere on the one bone; this computes the same map in one numba loop (the
+  signed distance of each probe sphere to each plate box, in the box's frame, and sphere; the
+  deepest per node). Tested equal to MuJoCo's map on every plate it accepts, at random poses.
+- :class:`MujocoCollider`: MuJoCo's own collider on the scene's collision model, for any
+  geometry (meshes of drafted ridges, cylinders, height fields): the reference.
 """
 
 from __future__ import annotations
@@ -20,13 +22,102 @@ import mujoco
 import numba
 import numpy as np
 
+from ..plates import features
+
 _BOX = int(mujoco.mjtGeom.mjGEOM_BOX)
 _SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
+
+
+@numba.njit(cache=True)
+def penetration_map(
+    geom: np.ndarray, dist: np.ndarray, node_of_geom: np.ndarray, pen: np.ndarray
+) -> None:
+    """pen[node] = max over the node's contacts of -dist (else -inf). geom: (n, 2) int32."""
+    pen[:] = -np.inf
+    for k in range(dist.shape[0]):
+        i = node_of_geom[geom[k, 0]]
+        if i < 0:
+            i = node_of_geom[geom[k, 1]]
+        if i >= 0 and -dist[k] > pen[i]:
+            pen[i] = -dist[k]
+
+
+def penetration_map_reference(geom, dist, node_of_geom, n_nodes: int) -> np.ndarray:
+    """:func:`penetration_map` in plain numpy (``np.maximum.at``)."""
+    pen = np.full(n_nodes, -np.inf)
+    node = node_of_geom[geom[:, 0]]
+    node = np.where(node >= 0, node, node_of_geom[geom[:, 1]])
+    keep = node >= 0
+    np.maximum.at(pen, node[keep], -dist[keep])
+    return pen
+
+
+class MujocoCollider:
+    """MuJoCo's collider on the scene's collision model (contacts enabled, nothing stepped):
+    each node's deepest contact distance, read by :func:`penetration_map`."""
+
+    compiled = False
+
+    def __init__(self, scene) -> None:
+        self.m = scene.m_col
+        self.d = mujoco.MjData(self.m)
+        self.node_of_geom = scene.node_of_geom
+
+    def depths_at(self, qpos: np.ndarray, pen: np.ndarray) -> bool:
+        """Fill ``pen`` with each node's depth [m] for the joints at ``qpos``; whether any
+        node is within its margin of the plate."""
+        d = self.d
+        d.qpos[:] = qpos
+        mujoco.mj_kinematics(self.m, d)
+        mujoco.mj_collision(self.m, d)
+        if d.ncon:
+            con = d.contact
+            penetration_map(con.geom, con.dist, self.node_of_geom, pen)
+            return True
+        pen[:] = -np.inf
+        return False
+
+    def warnings(self) -> list[str]:
+        """Names of the warnings MuJoCo raised while colliding (e.g. a full contact buffer)."""
+        return [mujoco.mjtWarning(i).name for i, w in enumerate(self.d.warning) if w.number]
+
+
+#: Collider margin [m] of the skin nodes when the pad is held at a force: nodes this far above
+#: the plate are reported, so they can join the contact when the pad sinks; a step that would
+#: move the pad further than this is re-collided at the new height.
+QS_MARGIN_M = 0.5e-3
+#: The margin where MuJoCo's collider serves (meshes, cylinders, height fields): each node
+#: within it is a contact MuJoCo must generate, which on a height field filled the contact
+#: buffer at 0.5 mm; a step that sinks further is re-collided.
+QS_MARGIN_MUJOCO_M = 0.1e-3
+
+
+def node_margin_m(plate) -> float:
+    """The skin nodes' collider margin for a held force on ``plate``: wide where the compiled
+    collider serves (boxes and spherical caps; it costs nothing there), narrow where MuJoCo
+    collides."""
+    if plate.texture.kind == "roughness":
+        return QS_MARGIN_MUJOCO_M
+    if all(f.kind in ("box", "cap") for f in features(plate)):
+        return QS_MARGIN_M
+    return QS_MARGIN_MUJOCO_M
+
+
+def make_collider(scene, primitive: bool = True) -> PrimitiveCollider | MujocoCollider:
+    """The compiled collider where the plate allows it and ``primitive`` is set, else
+    MuJoCo's. The bone must be at its starting pose (its world position is read here)."""
+    if primitive:
+        c = PrimitiveCollider.from_scene(scene)
+        if c is not None:
+            return c
+    return MujocoCollider(scene)
 
 
 class PrimitiveCollider:
     """Penetration depths of the skin's probe spheres against a static plate of boxes and
     spheres. Built once per scene from the compiled collision model."""
+
+    compiled = True
 
     def __init__(self, local, radius, margin, kind, pos, mat, size):
         self.local = local  # (N, 3) node centres in the bone's frame
@@ -113,6 +204,33 @@ class PrimitiveCollider:
             mat=d.geom_xmat[idx].reshape(-1, 3, 3).copy(),
             size=m.geom_size[idx].copy(),
         )
+
+    @classmethod
+    def from_scene(cls, scene) -> PrimitiveCollider | None:
+        """:meth:`from_model` for a scene's plate and skin, bound to its finger's joints so
+        that :meth:`depths_at` reads the bone's pose from ``qpos``."""
+        m = scene.m_col
+        bone = m.body("bone").id
+        c = cls.from_model(m, scene.node_of_geom, bone)
+        if c is not None:
+            c.bind(m.body_pos[bone], scene.jx, scene.jz)
+        return c
+
+    def bind(self, bone0: np.ndarray, jx: int, jz: int) -> None:
+        """Read the bone's world position as ``bone0 + (qpos[jx], 0, qpos[jz])``."""
+        self.bone0 = np.array(bone0, dtype=np.float64)
+        self.jx, self.jz = int(jx), int(jz)
+        self._bone = self.bone0.copy()
+
+    def depths_at(self, qpos: np.ndarray, pen: np.ndarray) -> bool:
+        """:meth:`depths` with the bone at its pose for the joints ``qpos`` (see :meth:`bind`)."""
+        b = self._bone
+        b[0] = self.bone0[0] + qpos[self.jx]
+        b[2] = self.bone0[2] + qpos[self.jz]
+        return _depths(b, *self.arrays, pen)
+
+    def warnings(self) -> list[str]:
+        return []
 
     def y_invariant(self, bone_y: float) -> bool:
         """Whether every node's depth is independent of its y for the bone at ``bone_y``: all

@@ -19,11 +19,13 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field
 
-from ..errors import ConfigError
+from .. import _validate as v
 from ..plates import Plate, features
 from ..plates.spec import Roughness
 
 LEVELS = ("L0", "L1", "L2")
+#: What a ``fidelity`` argument may be (a :class:`Fidelity` too, in Python).
+FIDELITIES = ("auto", *LEVELS)
 #: Coarsest and finest node pitch auto may pick [m].
 PITCH_MAX_M = 1.0e-3
 PITCH_MIN_M = 0.25e-3
@@ -35,12 +37,20 @@ PITCH_MAX_Y_M = 2.0e-3
 STEPS_PER_FEATURE = 20
 #: Longest time step auto may pick [s].
 DT_MAX_S = 2e-3
+#: Largest omega * dt of the dynamic force loop's explicit skin-to-bone coupling before a run
+#: is refused (the semi-implicit scheme is stable below 2: a margin of 2), and the share of it
+#: that auto's time step keeps to.
+MAX_OMEGA_DT = 1.0
+AUTO_OMEGA_DT = 0.5 * MAX_OMEGA_DT
 
 
 @dataclass(frozen=True)
 class Fidelity:
+    """The resolved fidelity of one slide: the skin model's level, the node pitch along
+    (``pitch_m``) and across (``pitch_y_m``) the slide [m], the steps per sample and the step
+    [s], the Winkler stiffness [Pa/m] of L0, why these were chosen, and the warnings."""
+
     level: str
-    coupled: bool
     pitch_m: float
     steps_per_sample: int
     dt_s: float
@@ -50,8 +60,14 @@ class Fidelity:
     #: node pitch across the slide [m]; None: square nodes (``pitch_m``)
     pitch_y_m: float | None = None
 
+    @property
+    def coupled(self) -> bool:
+        """Whether a load on one node deflects its neighbours (every level but L0)."""
+        return self.level != "L0"
+
     def to_json(self) -> dict:
         d = asdict(self)
+        d["coupled"] = self.coupled
         d["warnings"] = list(self.warnings)
         return d
 
@@ -80,11 +96,12 @@ def choose_fidelity(
     pitch_m: float | None = None,
     dt_s: float | None = None,
 ) -> Fidelity:
-    """Resolve ``fidelity`` ('auto', 'L0', 'L1', 'L2' or a Fidelity) for this scene."""
+    """Resolve ``fidelity`` ('auto', 'L0', 'L1', 'L2' or a Fidelity) for this scene (the
+    protocol's rate defaults to the layout's)."""
     if isinstance(fidelity, Fidelity):
         return fidelity
-    if fidelity not in ("auto", *LEVELS):
-        raise ConfigError(f"fidelity = {fidelity!r} is not valid; valid: auto, {', '.join(LEVELS)}")
+    protocol = protocol.at_rate(layout.rate_hz)
+    v.one_of("fidelity", fidelity, FIDELITIES)
     warnings: list[str] = []
     scale = feature_scale_m(plate)
     taxel = float(layout.sizes.min())
@@ -112,15 +129,15 @@ def choose_fidelity(
             f"taxels ({taxel * 1e3:.3g} mm) are larger than the texture period "
             f"({period * 1e3:.3g} mm): each taxel averages over several features"
         )
-    v = max(protocol.speed_m_s, 1e-6)
-    dt_need = DT_MAX_S if scale is None else min(DT_MAX_S, scale / (v * STEPS_PER_FEATURE))
+    speed = max(protocol.speed_m_s, 1e-6)
+    dt_need = DT_MAX_S if scale is None else min(DT_MAX_S, scale / (speed * STEPS_PER_FEATURE))
     level = "L1" if fidelity == "auto" else fidelity
     k_w = finger.e_star_pa / finger.thickness_m
-    # the dynamic skin-bone coupling is explicit: keep omega * dt at half its limit (1.0);
+    # the dynamic skin-bone coupling is explicit: keep omega * dt at half its limit;
     # quasi-static force control has no such coupling
-    if getattr(protocol, "force_control", "dynamic") == "dynamic":
+    if protocol.force_control == "dynamic":
         omega = math.sqrt(flat_stiffness(finger, level != "L0", k_w) / finger.bone_mass_kg)
-        dt_need = min(dt_need, 0.5 / omega)
+        dt_need = min(dt_need, AUTO_OMEGA_DT / omega)
     px, py = finger.patch_m
     # Ridges along y under a flat pad: the load varies along the slide only, so the nodes
     # go where it varies: x at 1/5 of the smallest feature, y as coarse as the taxels allow.
@@ -141,10 +158,10 @@ def choose_fidelity(
     if level == "L2":
         pitch, dt_target = (pitch_m or auto_pitch / 2), (dt_s or dt_need / 4)
     pitch_y = pitch * aspect
-    if dt_s is not None and scale is not None and dt_s > scale / (v * 10):
+    if dt_s is not None and scale is not None and dt_s > scale / (speed * 10):
         warnings.append(
-            f"time step {dt_s:g} s is too coarse for {v:g} m/s: a {scale * 1e3:.3g} mm feature "
-            f"takes {scale / (v * dt_s):.1f} steps to cross (want >= 10)"
+            f"time step {dt_s:g} s is too coarse for {speed:g} m/s: a {scale * 1e3:.3g} mm feature "
+            f"takes {scale / (speed * dt_s):.1f} steps to cross (want >= 10)"
         )
     if pitch_m is not None and scale is not None and pitch_m > scale / 2:
         warnings.append(
@@ -152,6 +169,7 @@ def choose_fidelity(
         )
     sample = 1.0 / protocol.rate_hz
     n_sub = max(1, math.ceil(sample / dt_target - 1e-9))
+    dt = 1.0 / (protocol.rate_hz * n_sub)  # the step simulate() takes
     shape = (
         f"{pitch * 1e3:.3g} mm"
         if aspect == 1.0
@@ -160,14 +178,13 @@ def choose_fidelity(
     reason = (
         f"{level}: node pitch {shape} (smallest feature "
         f"{'-' if scale is None else f'{scale * 1e3:.3g} mm'}, taxel {taxel * 1e3:.3g} mm), "
-        f"dt {sample / n_sub * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample)"
+        f"dt {dt * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample)"
     )
     return Fidelity(
         level,
-        level != "L0",
         float(pitch),
         n_sub,
-        sample / n_sub,
+        dt,
         k_w,
         reason,
         tuple(warnings),

@@ -1,28 +1,33 @@
-"""The skin's part of one held-force step, in one numba call, on the smallest exact problem.
+"""The held step: the pad moved to the height at which the skin carries the commanded force.
 
-Under quasi-static force control with the primitive collider, a step is: the depth map at the
-bone's position, the height at which the skin carries the commanded force (the force-holding
-contact solve), and the taxel loads there. :class:`HeldSkin` does all of it in one compiled
-call (:func:`_held_kernel`): the common case (the contact set holds, the pad moves less than
-the collider's margin) and the rest (nodes join or leave: the active-set updates of
-:mod:`.contact`; nothing near or a long move: re-collide at the new height), so no step pays
-Python's per-call costs more than once. L0's Winkler bed takes the same path in closed form.
+Under quasi-static force control a step is: the depth map at the bone's pose, the height at
+which the skin carries the force (the skin's force-holding solve, see
+:meth:`~sim_tactile.sim.contact.ActiveSet.solve_force`), a new collision query wherever the
+pad moved beyond the collider's margin (nodes further away could not join the contact), and
+the taxel loads there. One step, two implementations with the same interface
+(``step(qpos, total, taxel_out) -> (force, deepest node)``), tested equal:
 
-It also solves the smallest problem that gives the same answer:
+- :class:`HeldStep`: the plain loop, over any collider and any skin model: the reference,
+  and the path of plates that MuJoCo must collide (meshes, cylinders, height fields);
+- :class:`CompiledHeldStep`: the whole step in one numba call (:func:`_held_kernel`) with the
+  compiled collider, so no step pays Python's per-call costs more than once, on the smallest
+  exact problem:
 
-- **columns** (:meth:`PrimitiveCollider.y_invariant`): when every plate geom is a box that
-  runs past the whole pad in y (ridges across the slide), a node's depth does not depend on
-  its y; the collider computes one node per distinct (x, z, radius, margin), the rest are
-  copies (bit-identical);
-- **mirror** halving: when, in addition, the node grid is symmetric about the pad's centre
-  line (nodes at y and -y alike), the depth map, and so the unique contact solution, are
-  symmetric. The solve then runs on the nodes with y >= 0 only. Its unknowns are the summed
-  pressure of each mirror pair, ``f = p_a + p_a'`` (``p_a`` on the centre line), and its
-  compliance ``C_f[a, b] = (C[a, b] + C[a, b']) / 2`` is symmetric positive definite
-  (``V' C V`` for the pair-averaging ``V``). The total force is the plain sum of ``f``, so
-  the force-holding solve is unchanged; the taxels read ``f`` through ``W_f[:, b] =
-  (W[:, b] + W[:, b']) / 2``. Equal to the full solve to round-off (tested); the set
-  updates, which dominate a sliding step, cost about a third.
+  - **columns** (:meth:`PrimitiveCollider.y_invariant`): when every plate geom is a box that
+    runs past the whole pad in y (ridges across the slide), a node's depth does not depend on
+    its y; the collider computes one node per distinct (x, z, radius, margin), the rest are
+    copies (bit-identical);
+  - **mirror** halving: when, in addition, the node grid is symmetric about the pad's centre
+    line (nodes at y and -y alike), the depth map, and so the unique contact solution, are
+    symmetric. The solve then runs on the nodes with y >= 0 only. Its unknowns are the summed
+    pressure of each mirror pair, ``f = p_a + p_a'`` (``p_a`` on the centre line), and its
+    compliance ``C_f[a, b] = (C[a, b] + C[a, b']) / 2`` is symmetric positive definite
+    (``V' C V`` for the pair-averaging ``V``). The total force is the plain sum of ``f``, so
+    the force-holding solve is unchanged; the taxels read ``f`` through ``W_f[:, b] =
+    (W[:, b] + W[:, b']) / 2``. Equal to the full solve to round-off (tested); the set
+    updates, which dominate a sliding step, cost about a third.
+
+  L0's Winkler bed takes the same call in closed form (:func:`_winkler_force`).
 """
 
 from __future__ import annotations
@@ -30,19 +35,62 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..errors import ConfigError, PhysicsError
+from ..errors import PhysicsError
 from . import contact
 from .collide import PrimitiveCollider, _depths
+from .contact.kernels import NO_K, force_loop, force_same_set
+from .skin import CoupledSkin, SkinModel
 
 #: Collision queries one step may take before it gives up (the pad falling through).
-_QS_COLLISIONS = 50
+QS_COLLISIONS = 50
 #: Relative tolerance of the mirror-symmetry check of the compliance.
 _SYM_RTOL = 1e-10
 
 
-class HeldSkin:
-    """Depths, force-holding solve and taxel readout of one scene under quasi-static force
-    control with the primitive collider.
+def _no_height(force_n: float, margin: float) -> PhysicsError:
+    return PhysicsError(
+        f"quasi-static force control: the pad found no height carrying {force_n:g} N "
+        f"within {QS_COLLISIONS} collision queries (it fell more than "
+        f"{QS_COLLISIONS * margin * 1e3:g} mm in one step)"
+    )
+
+
+class HeldStep:
+    """The held step as a plain loop over ``collider`` (any, with :meth:`depths_at`) and
+    ``skin`` (any skin model, with ``solve_force``); ``W`` maps node loads to taxel loads."""
+
+    def __init__(self, collider, skin: SkinModel, W: np.ndarray, area_m2: float, margin: float):
+        self.collider, self.skin, self.W = collider, skin, W
+        self.area, self.margin = area_m2, margin
+        self.pen = np.zeros(W.shape[1])
+        self.p = np.zeros(W.shape[1])  # the pressures [Pa] of the last step
+
+    def describe(self) -> str:
+        return "full problem"
+
+    def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
+        """Move the pad (``qpos[jz]``) to the height where the node pressures sum to ``total``
+        [Pa], write the taxel loads [N] into ``taxel_out``; ``(force [N], deepest node [m])``."""
+        pen = self.pen
+        for _ in range(QS_COLLISIONS):
+            if not self.collider.depths_at(qpos, pen):  # nothing near: sink by most of the
+                qpos[jz] -= 0.9 * self.margin  # margin, look again
+                continue
+            p, dz = self.skin.solve_force(pen, total)
+            qpos[jz] -= dz
+            pen += dz  # the depths at the new height
+            if abs(dz) <= self.margin:
+                break
+        else:
+            raise _no_height(total * self.area, self.margin)
+        self.p = p
+        loads = p * self.area
+        np.matmul(self.W, loads, out=taxel_out)
+        return float(loads.sum()), float(pen.max())
+
+
+class CompiledHeldStep:
+    """The held step in one compiled call on the reduced problem (see the module docstring).
 
     ``pen`` and ``f`` live on the reduced nodes ``nodes`` (all nodes when no reduction
     applies, or ``reduce`` is False); ``f`` sums each mirror pair's pressures, so
@@ -50,36 +98,32 @@ class HeldSkin:
 
     def __init__(
         self,
-        scene,
         collider: PrimitiveCollider,
-        bone_y: float,
+        skin: SkinModel,
+        W: np.ndarray,
+        area_m2: float,
         margin: float,
         reduce: bool = True,
-        winkler_k_pa_per_m: float | None = None,
     ):
-        n = scene.n_nodes
-        self.area = scene.grid.area_m2
+        n = W.shape[1]
+        self.area = area_m2
         self.margin = margin
+        self.bone0, self.jx = collider.bone0, collider.jx
         nodes = np.arange(n)
-        C, K, W = scene.C, scene.K, scene.W
-        winkler = C is None
-        if winkler and not (winkler_k_pa_per_m and winkler_k_pa_per_m > 0):
-            raise ConfigError(
-                f"winkler_k_pa_per_m = {winkler_k_pa_per_m!r}: a skin without coupling (L0) "
-                "needs its Winkler stiffness; valid: > 0"
-            )
-        self.winkler_k = float(winkler_k_pa_per_m) if winkler else 0.0
-        self.columns = reduce and collider.y_invariant(bone_y)
+        coupled = isinstance(skin, CoupledSkin)
+        C, K = (skin.C, skin.K) if coupled else (None, None)
+        self.winkler_k = 0.0 if coupled else skin.k
+        self.columns = reduce and collider.y_invariant(float(self.bone0[1]))
         self.mirrored = False
         mult = np.ones(n)
         if self.columns:
             mirror = _mirror_of(collider)
-            if mirror is not None and (winkler or _mirror_symmetric(C, mirror)):
+            if mirror is not None and (not coupled or _mirror_symmetric(C, mirror)):
                 self.mirrored = True
                 nodes = np.flatnonzero(collider.local[:, 1] >= 0.0)
                 pair = mirror[nodes]
                 mult = np.where(pair != nodes, 2.0, 1.0)
-                if not winkler:
+                if coupled:
                     Cf = 0.5 * (C[np.ix_(nodes, nodes)] + C[np.ix_(nodes, pair)])
                     C = np.ascontiguousarray(0.5 * (Cf + Cf.T))
                     K = np.ascontiguousarray(np.linalg.inv(C))
@@ -88,7 +132,8 @@ class HeldSkin:
         self.n_full = n
         self.n = nodes.size
         self.mult = mult
-        self.solver = None if winkler else contact.ActiveSet(C, K)
+        # the Winkler bed keeps no contact set: an empty solver stands in for it
+        self.solver = contact.ActiveSet(C, K) if coupled else contact.ActiveSet(np.zeros((0, 0)))
         self.W = np.ascontiguousarray(W, dtype=np.float64)
         sub = collider.subset(nodes)
         if self.columns:  # one probe per distinct (x, z, radius, margin)
@@ -103,7 +148,8 @@ class HeldSkin:
         self.pen = np.empty(self.n)
         self.f = np.zeros(self.n)
         self._small = np.empty(self.n_probes)
-        self._none = contact.ActiveSet(np.zeros((0, 0)))  # the Winkler bed keeps no set
+        self._reduced = (self._small, self.group, self.mult)
+        self._limits = (contact.TOL_REL, contact.MAX_ITER, QS_COLLISIONS, self.margin)
 
     def describe(self) -> str:
         how = []
@@ -119,58 +165,32 @@ class HeldSkin:
         np.take(self._small, self.group, out=self.pen)
         return near
 
-    def step(self, bone0, qpos, jx, jz, total, taxel_out) -> tuple[float, float]:
-        """One held-force step in one call: the depths at the bone (from ``qpos``), the height
-        that carries ``total`` (the pressure sum), the pad moved there (``qpos[jz]``), the
-        taxel loads into ``taxel_out``. Re-collides when the pad moves beyond the margin and
-        updates the contact set when it changes. Returns ``(force [N], deepest node [m])``."""
-        s = self.solver or self._none
+    def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
+        """:meth:`HeldStep.step` in one call on the reduced problem; the contact set is
+        updated when it changes."""
+        s = self.solver
         M, S, in_set, C, rowsum = s.same_set_state()
+        K = s.K if s.K is not None else NO_K
         st, force, top, M2, S2, updates, rebuilds, rowsum2 = _held_kernel(
-            bone0,
-            qpos,
-            jx,
-            jz,
+            (self.bone0, qpos, self.jx, jz),
             self.probe.arrays,
-            self._small,
-            self.group,
-            self.winkler_k,
-            self.mult,
-            M,
-            S,
-            in_set,
-            C,
-            s.K if s.K is not None else contact._NO_K,
-            rowsum,
-            contact._TOL_REL,
+            self._reduced,
+            (self.winkler_k, C, K),
+            (M, S, in_set, rowsum, s.updates, s.refresh),
+            self._limits,
             total,
-            self.margin,
-            s.updates,
-            s.refresh,
-            contact._MAX_ITER,
-            _QS_COLLISIONS,
-            self.pen,
-            self.f,
-            self.W,
-            self.area,
-            taxel_out,
+            (self.pen, self.f, self.W, self.area, taxel_out),
         )
         if M2 is not M:  # the set changed
-            s.M, s.S, s.updates = M2, S2, updates
-            s.rebuilds += rebuilds
-            s._rowsum, s._rowsum_of = rowsum2, M2
+            s.adopt(M2, S2, updates, rebuilds, rowsum2)
         if st == 0:
             return force, top
         if st == 1:
-            raise PhysicsError(
-                f"quasi-static force control: the pad found no height carrying {total * self.area:g} N "
-                f"within {_QS_COLLISIONS} collision queries (it fell more than "
-                f"{_QS_COLLISIONS * self.margin * 1e3:g} mm in one step)"
-            )
+            raise _no_height(total * self.area, self.margin)
         if st == 3:
             raise PhysicsError("no skin node lies within the collider's margin of the plate")
         raise PhysicsError(
-            f"the force-holding contact solve did not converge in {contact._MAX_ITER} iterations "
+            f"the force-holding contact solve did not converge in {contact.MAX_ITER} iterations "
             f"(target {total:.4g} Pa summed over the nodes)"
         )
 
@@ -200,39 +220,29 @@ def _mirror_symmetric(C: np.ndarray, mirror: np.ndarray) -> bool:
 
 
 @numba.njit(cache=True)
-def _held_kernel(
-    bone0,
-    qpos,
-    jx,
-    jz,
-    probe,
-    small,
-    group,
-    winkler_k,
-    mult,
-    M,
-    S,
-    in_set,
-    C,
-    K,
-    rowsum,
-    tol_rel,
-    total,
-    qs_margin,
-    updates,
-    refresh,
-    max_iter,
-    n_collisions,
-    pen,
-    f,
-    W,
-    area,
-    taxel_out,
-):
-    """:meth:`HeldSkin.step`; ``probe``: the collider's arrays (:attr:`PrimitiveCollider.arrays`).
-    Returns ``(status, force, top, M, S, updates, rebuilds,
-    rowsum)``; status 0 done, 1 no height within the collision queries, 2 the contact solve
-    did not converge, 3 no node within the margin (from the contact solve)."""
+def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
+    """:meth:`CompiledHeldStep.step`. The arguments, grouped:
+
+    - ``pose``: ``(bone0, qpos, jx, jz)``, the bone's rest position and the joints;
+    - ``probe``: the collider's arrays (:attr:`PrimitiveCollider.arrays`);
+    - ``reduced``: ``(small, group, mult)``: the probes' depths, each node's probe, the nodes
+      each reduced node stands for;
+    - ``skin``: ``(winkler_k, C, K)``: the Winkler stiffness (> 0 for L0), else the reduced
+      compliance and its inverse;
+    - ``state``: ``(M, S, in_set, rowsum, updates, refresh)``: the contact set's state;
+    - ``limits``: ``(tol_rel, max_iter, n_collisions, qs_margin)``;
+    - ``out``: ``(pen, f, W, area, taxel_out)``: the depths and pressures it writes, and the
+      taxel readout.
+
+    Returns ``(status, force, top, M, S, updates, rebuilds, rowsum)``; status 0 done, 1 no
+    height within the collision queries, 2 the contact solve did not converge, 3 no node
+    within the margin (from the contact solve)."""
+    bone0, qpos, jx, jz = pose
+    small, group, mult = reduced
+    winkler_k, C, K = skin
+    M, S, in_set, rowsum, updates, refresh = state
+    tol_rel, max_iter, n_collisions, qs_margin = limits
+    pen, f, W, area, taxel_out = out
     n = pen.shape[0]
     bone = np.empty(3)
     rebuilds = 0
@@ -253,9 +263,9 @@ def _held_kernel(
             if dz != dz:
                 return 3, 0.0, 0.0, M, S, updates, rebuilds, rowsum
         elif S.size:  # the common case: the set holds at the shift it implies
-            dz = contact._force_same_set(M, S, pen, C, in_set, tol_rel, total, f, rowsum)
+            dz = force_same_set(M, S, pen, C, in_set, tol_rel, total, f, rowsum)
         if dz != dz:
-            st, dz, M, S, updates, rb = contact._force_loop(
+            st, dz, M, S, updates, rb = force_loop(
                 M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, f, False
             )
             rebuilds += rb
@@ -287,7 +297,7 @@ def _held_kernel(
 
 @numba.njit(cache=True)
 def _winkler_force(pen, mult, k, total, f):
-    """:func:`contact.winkler_force` with node weights ``mult`` (the nodes each reduced node
+    """:func:`~sim_tactile.sim.contact.winkler_force` with node weights ``mult`` (the nodes each reduced node
     stands for): the shift ``dz`` at which ``sum(mult * k * max(pen + dz, 0)) = total``, and
     those pair sums into ``f``; NaN if no node is finite. Equal to it bit for bit at unit
     weights (the same sequential sums, deepest first)."""

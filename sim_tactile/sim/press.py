@@ -1,9 +1,10 @@
 """Static indentation: press a finger on a plate to a normal force and read the pressure.
 
-The bone's height is found by root finding so that the skin's total load equals the force;
-the penetration-depth map comes from MuJoCo's collider (the same scene as :func:`simulate`),
-and the skin's response from the chosen contact model (half-space by default). With a
-spherical pad on a flat plate this is Hertz's problem, which the tests check.
+The pad is held at the force by the same held step as a slide under quasi-static force
+control (:class:`~.held.HeldStep`: the collider's depth map, the skin's force-holding solve,
+a new query wherever the pad moved beyond the collider's margin), on the scene a slide would
+build, and a dense grid of surface taxels reads the pressure. With a spherical pad on a flat
+plate this is Hertz's problem, which the tests check.
 """
 
 from __future__ import annotations
@@ -11,18 +12,26 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
 from .. import _validate as v
 from ..errors import PhysicsError
-from ..plates import Plate, get_plate
+from ..plates import Plate, get_plate, height_at
 from ..scene.model import build_scene
 from ..scene.nodes import skin_grid
 from ..sensors.layouts import Layout, dense_layout
 from ..sensors.pad import Finger
-from . import contact
-from ._readout import penetration_map
+from .collide import make_collider, node_margin_m
+from .held import HeldStep
+from .protocol import APPROACH_CLEARANCE_M
+from .skin import make_skin
+
+#: Fidelity levels a static press takes: the Winkler bed or the coupled skin.
+PRESS_LEVELS = ("L0", "L1")
+#: Smallest side of a spherical pad's node patch [m], and how many Hertz contact radii it
+#: spans at least (the pad's edge must lie beyond the contact).
+SPHERE_PAD_MIN_M = 12e-3
+SPHERE_PAD_CONTACT_RADII = 3.0
 
 
 @dataclass
@@ -57,28 +66,41 @@ def hertz(radius_m: float, e_star_pa: float, force_n: float) -> dict:
     }
 
 
+def sphere_pad_size_m(radius_m: float, force_n: float, e_star_pa: float) -> float:
+    """The side [m] of a spherical pad's node patch for a press: at least
+    :data:`SPHERE_PAD_CONTACT_RADII` Hertz contact radii and :data:`SPHERE_PAD_MIN_M`, at
+    most the sphere's diameter."""
+    a = hertz(radius_m, e_star_pa, force_n)["contact_radius_m"]
+    return min(2 * radius_m, max(SPHERE_PAD_MIN_M, SPHERE_PAD_CONTACT_RADII * a))
+
+
 def press(
     finger: Finger,
     force_n: float,
     *,
-    pitch_m: float = 0.25e-3,
+    readout_pitch_m: float = 0.25e-3,
     node_pitch_m: float | None = None,
     plate: Plate | str = "finger7/flat",
-    coupled: bool = True,
+    fidelity: str = "L1",
     cache=None,
 ) -> PressResult:
-    """Press ``finger`` with ``force_n`` on ``plate`` (at its centre) and read a dense grid of
-    surface taxels of side ``pitch_m`` covering the pad."""
+    """Press ``finger`` with ``force_n`` [N] on ``plate`` (at its centre) and read a dense grid
+    of surface taxels of side ``readout_pitch_m`` covering the pad. The skin's nodes are
+    ``node_pitch_m`` apart (default: the readout pitch, at most 0.2 mm); ``fidelity`` L1 is
+    the coupled skin, L0 the Winkler bed."""
     from threadpoolctl import threadpool_limits
 
     v.in_range("force_n", force_n, 1e-4, 100.0, unit="N")
-    v.in_range("pitch_m", pitch_m, 20e-6, 5e-3, unit="m")
+    v.in_range("readout_pitch_m", readout_pitch_m, 20e-6, 5e-3, unit="m")
+    v.one_of("fidelity", fidelity, PRESS_LEVELS)
     plate = get_plate(plate) if isinstance(plate, str) else plate
-    node_pitch = node_pitch_m or min(pitch_m, 0.2e-3)
-    grid = skin_grid(finger, node_pitch)
+    grid = skin_grid(finger, node_pitch_m or min(readout_pitch_m, 0.2e-3))
     px, py = finger.patch_m
-    layout = dense_layout(pitch_m, (px / 2 - pitch_m / 2, py / 2 - pitch_m / 2))
-    top = 0.02
+    half = readout_pitch_m / 2
+    layout = dense_layout(readout_pitch_m, (px / 2 - half, py / 2 - half))
+    heights = height_at(plate, grid.xy[:, 0], grid.xy[:, 1]) - grid.z
+    z0 = APPROACH_CLEARANCE_M + max(0.0, float(np.nanmax(heights)))
+    margin = node_margin_m(plate)
     scene = build_scene(
         plate,
         finger,
@@ -86,60 +108,24 @@ def press(
         layout,
         dt_s=1e-3,
         x0_m=0.0,
-        z0_m=top,
+        z0_m=z0,
         z_damping=0.0,
-        coupled=coupled,
-        inverse=False,
+        node_margin_m=margin,
         cache=cache,
     )
-    d = mujoco.MjData(scene.m_col)
     k_w = finger.e_star_pa / finger.thickness_m
-
-    def pen_at(z: float) -> np.ndarray:
-        d.qpos[:] = 0.0
-        d.qpos[scene.jz] = z - top
-        mujoco.mj_kinematics(scene.m_col, d)
-        mujoco.mj_collision(scene.m_col, d)
-        pen = np.empty(grid.n)
-        if d.ncon:
-            penetration_map(d.contact.geom, d.contact.dist, scene.node_of_geom, pen)
-        else:
-            pen[:] = -np.inf
-        return pen
-
-    state = {"active": None}
-
-    def solve(z: float):
-        pen = pen_at(z)
-        if coupled:
-            p, state["active"] = contact.halfspace(pen, scene.C, state["active"], scene.K)
-        else:
-            p = contact.winkler(pen, k_w)
-        return p, pen
-
+    skin = make_skin(fidelity, grid, finger, winkler_k_pa_per_m=k_w, inverse=False)
+    hold = HeldStep(make_collider(scene), skin, scene.W, grid.area_m2, margin)
+    qpos = np.zeros(scene.m_col.nq)
+    taxel = np.zeros(layout.n)
     with threadpool_limits(limits=1, user_api="blas"):
-        # bisection on the height of the pad's lowest point: load falls as it rises
-        lo, hi = -finger.thickness_m, 0.005
-        f_lo = solve(lo)[0].sum() * grid.area_m2
-        if f_lo < force_n:
-            raise PhysicsError(
-                f"skin pressed to the bottom: {force_n:g} N needs more than the skin thickness "
-                f"{finger.thickness_m * 1e3:g} mm of indentation (lower the force or use a thicker skin)"
-            )
-        for _ in range(80):
-            mid = 0.5 * (lo + hi)
-            f = solve(mid)[0].sum() * grid.area_m2
-            if f > force_n:
-                lo = mid
-            else:
-                hi = mid
-            if hi - lo < 1e-10:
-                break
-        z = 0.5 * (lo + hi)
-        p, pen = solve(z)
-    loads = p * grid.area_m2
-    total = float(loads.sum())
-    taxel = scene.W @ loads
+        total, top = hold.step(qpos, scene.jz, force_n / grid.area_m2, taxel)
+    if top > finger.thickness_m:
+        raise PhysicsError(
+            f"skin pressed to the bottom: {force_n:g} N needs more than the skin thickness "
+            f"{finger.thickness_m * 1e3:g} mm of indentation (lower the force or use a thicker skin)"
+        )
+    p = hold.p
     area = layout.sizes.prod(axis=1)
     n_contact = int(np.count_nonzero(p > 0))
     return PressResult(
@@ -149,5 +135,5 @@ def press(
         total,
         math.sqrt(n_contact * grid.area_m2 / math.pi),
         float(p.max()),
-        float(-z),
+        float(-(z0 + qpos[scene.jz])),
     )

@@ -11,7 +11,7 @@ from __future__ import annotations
 from ..encoders import IzhikevichEncoder
 from ..learn.classifiers import LearnContext, Steps
 from ..plates import preset_names
-from ..sim.simulate import Protocol
+from ..sim.protocol import Protocol
 from .registry import PaperCell, Run, Settings, TaskSpec, register
 from .synthetic import SlideSet
 

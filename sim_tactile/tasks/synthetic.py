@@ -98,8 +98,10 @@ class SlideSet:
         return tuple(_class_name(p) for p in self.plates)
 
     def window_protocol(self):
-        """The protocol with its window length fixed."""
-        proto = self.protocol
+        """The protocol with its rate (the sensor's unless it has its own) and window fixed."""
+        from ..sensors import get_sensor
+
+        proto = self.protocol.at_rate(get_sensor(self.sensor).rate_hz)
         if proto.duration_s is None:
             t = max(crossing_s(p, self.sensor, proto.speed_m_s) for p in self.plates)
             proto = replace(proto, duration_s=math.ceil(t * proto.rate_hz) / proto.rate_hz)
@@ -185,7 +187,8 @@ def simulate_job(job: dict, cache: ArtefactCache):
     :class:`~sim_tactile.sim.simulate.SimResult`. An error names the plate and the seed."""
     from ..plates import get_plate
     from ..sensors import Finger
-    from ..sim.simulate import Protocol, simulate
+    from ..sim.protocol import Protocol
+    from ..sim.simulate import simulate
 
     finger = job.get("finger")
     if finger is not None:

@@ -1,0 +1,295 @@
+"""Compiled kernels of :class:`~.active_set.ActiveSet` (numba): the same-set checks, the
+active-set loop with block updates of the inverse, and the force-holding loop. The held step
+(:mod:`sim_tactile.sim.held`) calls them from its own compiled step."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def kkt_same_set(M, S, pen, C, in_set, tol_rel, p) -> bool:
+    """Whether the contact set S still solves the problem for ``pen``; if so, write the
+    pressures to ``p``. Checks the three conditions :meth:`ActiveSet.solve` would: every node
+    of S touches and carries compression, and no other touching node is left inside the plate."""
+    n = pen.shape[0]
+    m = S.shape[0]
+    big = 0.0
+    for j in range(n):
+        if pen[j] > big:
+            big = pen[j]
+    for k in range(m):
+        if pen[S[k]] <= 0.0:
+            return False
+    tol = tol_rel * big
+    pen_S = np.empty(m)
+    for k in range(m):
+        pen_S[k] = pen[S[k]]
+    pS = M @ pen_S  # BLAS
+    for i in range(m):
+        if pS[i] < 0.0:
+            return False
+    for j in range(n):
+        if pen[j] > 0.0 and not in_set[j]:
+            u = 0.0
+            for k in range(m):
+                u += C[j, S[k]] * pS[k]
+            if pen[j] - u > tol:
+                return False
+    for j in range(n):
+        p[j] = 0.0
+    for k in range(m):
+        p[S[k]] = pS[k]
+    return True
+
+
+NO_K = np.zeros((0, 0))
+
+
+@numba.njit(cache=True)
+def take(X, rows, cols):
+    """X[rows][:, cols] as a new C-contiguous array."""
+    out = np.empty((rows.size, cols.size))
+    for i in range(rows.size):
+        for j in range(cols.size):
+            out[i, j] = X[rows[i], cols[j]]
+    return out
+
+
+@numba.njit(cache=True)
+def inverse_subset(C, K, S):
+    """inv(C[S, S]); a large S goes through its small complement T with K = inv(C):
+    inv(C_SS) = K_SS - K_ST inv(K_TT) K_TS. ``K`` of shape (0, 0) stands for no inverse."""
+    n = C.shape[0]
+    m = S.size
+    if K.shape[0] == 0 or 2 * m <= n:
+        return np.ascontiguousarray(np.linalg.inv(take(C, S, S)))
+    mask = np.ones(n, np.bool_)
+    for i in range(m):
+        mask[S[i]] = False
+    T = np.flatnonzero(mask)
+    t = T.size
+    KSS = take(K, S, S)
+    if t == 0:
+        return KSS
+    KST = take(K, S, T)
+    KTT = take(K, T, T)
+    return np.ascontiguousarray(KSS - KST @ np.linalg.solve(KTT, np.ascontiguousarray(KST.T)))
+
+
+@numba.njit(cache=True)
+def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p):
+    """The active-set iteration of :meth:`ActiveSet.solve` from the current set: nodes that
+    stop touching or carry tension leave, touching nodes left inside the plate join; the
+    inverse ``M`` follows by block updates, rebuilt every ``refresh`` updates. Returns
+    ``(converged, M, S, updates, rebuilds)`` and writes the pressures to ``p``."""
+    n = pen.shape[0]
+    rebuilds = 0
+    for j in range(n):
+        p[j] = 0.0
+    touching = pen > 0.0
+    if not touching.any():
+        if S.size:
+            M = np.zeros((0, 0))
+            S = S[:0]
+            updates = 0
+            rebuilds += 1
+            in_set[:] = False
+        return True, M, S, updates, rebuilds
+    big = 0.0
+    for j in range(n):
+        if touching[j] and pen[j] > big:
+            big = pen[j]
+    tol = tol_rel * big
+    for it in range(max_iter + 2):
+        if it == 0:  # nodes that no longer touch leave
+            drop = np.empty(S.size, np.bool_)
+            for k in range(S.size):
+                drop[k] = not touching[S[k]]
+        elif S.size == 0:  # start from every touching node
+            drop = np.zeros(0, np.bool_)
+        else:
+            pS = M @ np.ascontiguousarray(pen[S])
+            drop = pS < 0.0
+        if drop.any():
+            keep = ~drop
+            if not keep.any() or updates >= refresh:
+                S = np.sort(S[keep])
+                M = inverse_subset(C, K, S) if S.size else np.zeros((0, 0))
+                updates = 0
+                rebuilds += 1
+                in_set[:] = False
+                in_set[S] = True
+            else:
+                M = inverse_without(M, np.flatnonzero(keep), np.flatnonzero(drop))
+                in_set[S[drop]] = False
+                S = S[keep]
+                updates += 1
+            if S.size == 0 and it > 0:
+                return True, M, S, updates, rebuilds  # everything left: no load
+            continue
+        if it == 0:
+            continue
+        if S.size == 0:
+            A = np.flatnonzero(touching)
+        else:
+            rest = np.flatnonzero(touching & ~in_set)
+            m = S.size
+            cnt = 0
+            A = np.empty(rest.size, np.int64)
+            for r in range(rest.size):
+                j = rest[r]
+                u = 0.0
+                for k in range(m):
+                    u += C[j, S[k]] * pS[k]
+                if pen[j] - u > tol:
+                    A[cnt] = j
+                    cnt += 1
+            A = A[:cnt]
+        if A.size:  # nodes still inside the plate join the set
+            if S.size == 0 or updates >= refresh:
+                S = np.sort(np.concatenate((S, A)))
+                M = inverse_subset(C, K, S)
+                updates = 0
+                rebuilds += 1
+                in_set[:] = False
+                in_set[S] = True
+            else:
+                M = inverse_with(M, C, S, A)
+                S = np.concatenate((S, A))
+                in_set[A] = True
+                updates += 1
+            continue
+        for k in range(S.size):
+            p[S[k]] = pS[k]
+        return True, M, S, updates, rebuilds
+    return False, M, S, updates, rebuilds
+
+
+@numba.njit(cache=True)
+def force_loop(
+    M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p, try_same=True
+):
+    """:meth:`ActiveSet.solve_force` in one call. Returns ``(status, dz, M, S, updates,
+    rebuilds)``: status 1 converged (pressures in ``p``), 0 not converged, 2 no node within
+    the margin."""
+    n = pen.shape[0]
+    rebuilds = 0
+    if try_same and S.size:  # the common case: the set holds at the shift it implies
+        d = force_same_set(M, S, pen, C, in_set, tol_rel, total, p, M @ np.ones(S.size))
+        if d == d:
+            return 1, d, M, S, updates, rebuilds
+    top = -np.inf
+    for j in range(n):
+        if pen[j] > top:
+            top = pen[j]
+    if top == -np.inf:
+        return 2, 0.0, M, S, updates, rebuilds
+    dz = 0.0
+    shifted = np.empty(n)
+    for _ in range(max_iter):
+        finite = S.size > 0
+        for k in range(S.size):
+            if not np.isfinite(pen[S[k]]):
+                finite = False
+        if finite:  # else the solve below updates the set first
+            kk = (M @ np.ones(S.size)).sum()  # BLAS: a plain sum over M is sequential
+            if kk > 0:
+                dz = (total - (M @ np.ascontiguousarray(pen[S])).sum()) / kk
+        for sink in range(2):
+            for j in range(n):
+                shifted[j] = pen[j] + dz
+            if not (S.size and kkt_same_set(M, S, shifted, C, in_set, tol_rel, p)):
+                ok, M, S, updates, rb = solve_loop(
+                    M, S, in_set, C, K, shifted, tol_rel, updates, refresh, max_iter, p
+                )
+                rebuilds += rb
+                if not ok:
+                    return 0, dz, M, S, updates, rebuilds
+            got = p.sum()
+            if abs(got - total) <= 1e-9 * total:
+                return 1, dz, M, S, updates, rebuilds
+            if S.size or sink:
+                break
+            # nothing touches at this shift: sink to the first touch and solve there
+            dz = -top
+            dz += 1e-9 * max(abs(dz), 1e-6)
+    return 0, dz, M, S, updates, rebuilds
+
+
+@numba.njit(cache=True)
+def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b) -> float:
+    """:meth:`ActiveSet.solve_force` on the set S alone: the shift ``dz`` at which the set's
+    pressures sum to ``total``, and the pressures (into ``p``) if S still solves the contact
+    problem at ``pen + dz`` (the checks of :func:`kkt_same_set`); NaN if it does not. ``b``:
+    the row sums of M."""
+    n = pen.shape[0]
+    m = S.shape[0]
+    pen_S = np.empty(m)
+    for i in range(m):
+        if not np.isfinite(pen[S[i]]):
+            return np.nan
+        pen_S[i] = pen[S[i]]
+    a = M @ pen_S  # M pen_S (BLAS); b = M 1
+    ra = 0.0
+    rb = 0.0
+    for i in range(m):
+        ra += a[i]
+        rb += b[i]
+    if not rb > 0.0:
+        return np.nan
+    dz = (total - ra) / rb
+    big = 0.0
+    for j in range(n):
+        if pen[j] + dz > big:
+            big = pen[j] + dz
+    for k in range(m):
+        if pen[S[k]] + dz <= 0.0:
+            return np.nan
+    pS = np.empty(m)
+    for i in range(m):
+        pS[i] = a[i] + dz * b[i]
+        if pS[i] < 0.0:
+            return np.nan
+    tol = tol_rel * big
+    for j in range(n):
+        if pen[j] + dz > 0.0 and not in_set[j]:
+            u = 0.0
+            for k in range(m):
+                u += C[j, S[k]] * pS[k]
+            if pen[j] + dz - u > tol:
+                return np.nan
+    for j in range(n):
+        p[j] = 0.0
+    for k in range(m):
+        p[S[k]] = pS[k]
+    return dz
+
+
+@numba.njit(cache=True)
+def inverse_without(M, keep, drop):
+    """inv(C_KK) from M = inv(C_SS), S = K + R: the Schur complement M_KK - M_KR inv(M_RR) M_RK."""
+    Mkr = take(M, keep, drop)
+    Mrr = take(M, drop, drop)
+    Mkk = take(M, keep, keep)
+    X = np.linalg.solve(Mrr, np.ascontiguousarray(Mkr.T))
+    return Mkk - Mkr @ X
+
+
+@numba.njit(cache=True)
+def inverse_with(M, C, S, A):
+    """inv(C_TT) for T = S + A from M = inv(C_SS), through the Schur complement of C_SS:
+    Z = C_AA - C_AS M C_SA, inv = [[M + M B Z^-1 B' M, -M B Z^-1], [-Z^-1 B' M, Z^-1]]."""
+    n, a = S.size, A.size
+    B = take(C, S, A)
+    D = take(C, A, A)
+    MB = M @ B
+    Zi = np.linalg.inv(D - np.ascontiguousarray(B.T) @ MB)
+    G = MB @ Zi
+    out = np.empty((n + a, n + a))
+    out[:n, :n] = M + G @ np.ascontiguousarray(MB.T)
+    out[:n, n:] = -G
+    out[n:, :n] = -G.T
+    out[n:, n:] = Zi
+    return out

@@ -1,0 +1,158 @@
+"""The slide protocol and its window: what the pad does, where, and for how long.
+
+:class:`Protocol` is the recipe of one slide (speed, force, window, rate, the phases before
+the slide, and how much speed, force and offset vary from slide to slide); :meth:`Protocol.
+drawn` is the one place where a slide's values are drawn from its seed. :class:`SlideWindow`
+says where a slide starts and stops on a given plate, for a pad of a given length, and how
+many samples it records. This module imports no simulator: the task and data-set layers
+describe slides with it without loading MuJoCo.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .. import _validate as v
+from ..errors import ConfigError
+
+#: Approach speed [m/s] and the clearance the pad starts at above the plate [m].
+APPROACH_SPEED = 0.01
+APPROACH_CLEARANCE_M = 0.3e-3
+#: Flat ground [m] between the pad and the textured area where a crossing starts and ends.
+START_MARGIN_M = 2e-3
+#: The slide's speed ramps up over this time [s] at the start of each stroke.
+SPEED_RAMP_S = 0.02
+
+#: How the press force is held during press, settle and slide (``Protocol.force_control``):
+#:
+#: - ``dynamic``: the bone is a mass on the press joint, pushed by the commanded force against
+#:   the skin's load, with damping critical at the flat pad's stiffness (MuJoCo integrates
+#:   it). The force overshoots where the load changes fast (a ridge's edge) and the pad leaves
+#:   the plate behind tall features; the coupling limits the time step (omega * dt).
+#: - ``quasi-static``: an ideal force controller: every step the pad is moved to the height at
+#:   which the skin carries exactly the commanded force (the held step,
+#:   :mod:`sim_tactile.sim.held`), so the load is a function of the pad's position alone: no
+#:   transients and no step limit from the coupling.
+FORCE_CONTROLS = ("dynamic", "quasi-static")
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """The slide protocol, SI units. ``duration_s`` None: cross the whole textured area,
+    starting and ending with the pad on flat ground. ``rate_hz`` None: the sensor's rate.
+    The jitters are relative standard deviations (speed, force) and one in metres (the
+    offset across the slide), drawn once per slide (:meth:`drawn`)."""
+
+    speed_m_s: float = 0.06
+    force_n: float = 1.0
+    duration_s: float | None = None
+    rate_hz: float | None = None
+    press_s: float = 0.1
+    settle_s: float = 0.2
+    passes: int = 1
+    return_stroke: bool = False
+    offset_y_m: float = 0.0
+    speed_jitter: float = 0.0
+    force_jitter: float = 0.0
+    offset_jitter_m: float = 0.0
+    force_control: str = "quasi-static"
+
+    def __post_init__(self) -> None:
+        v.in_range("speed_m_s", self.speed_m_s, 0.0, 1.0, unit="m/s")
+        v.in_range("force_n", self.force_n, 1e-3, 50.0, lo_open=False, unit="N")
+        if self.duration_s is not None:
+            v.in_range("duration_s", self.duration_s, 1e-3, 600.0, unit="s")
+        if self.rate_hz is not None:
+            v.in_range("rate_hz", self.rate_hz, 1.0, 100_000.0, unit="Hz")
+        v.in_range("press_s", self.press_s, 0.0, 10.0, unit="s")
+        v.in_range("settle_s", self.settle_s, 0.0, 10.0, unit="s")
+        v.integer("passes", self.passes, 1, 100)
+        v.in_range("offset_y_m", self.offset_y_m, -0.05, 0.05, unit="m")
+        v.in_range("speed_jitter", self.speed_jitter, 0.0, 0.5)
+        v.in_range("force_jitter", self.force_jitter, 0.0, 0.5)
+        v.in_range("offset_jitter_m", self.offset_jitter_m, 0.0, 0.01, unit="m")
+        v.one_of("force_control", self.force_control, FORCE_CONTROLS)
+
+    def at_rate(self, rate_hz: float) -> Protocol:
+        """This protocol with its rate set (the sensor's ``rate_hz`` unless it has its own)."""
+        return self if self.rate_hz is not None else replace(self, rate_hz=float(rate_hz))
+
+    def varied(self, rng: np.random.Generator) -> Protocol:
+        """This protocol with speed, force and offset drawn around their nominal values."""
+        return replace(
+            self,
+            speed_m_s=self.speed_m_s
+            * float(np.clip(1 + self.speed_jitter * rng.standard_normal(), 0.2, 2)),
+            force_n=self.force_n
+            * float(np.clip(1 + self.force_jitter * rng.standard_normal(), 0.2, 2)),
+            offset_y_m=self.offset_y_m + self.offset_jitter_m * float(rng.standard_normal()),
+            speed_jitter=0.0,
+            force_jitter=0.0,
+            offset_jitter_m=0.0,
+        )
+
+    def drawn(self, seed: int) -> Protocol:
+        """The protocol of the slide seeded ``seed``: speed, force and offset drawn from
+        ``default_rng(seed)``, whoever simulates the slide and whoever records its values."""
+        return self.varied(np.random.default_rng(v.integer("seed", seed, 0, 2**63 - 1)))
+
+
+@dataclass(frozen=True)
+class SlideWindow:
+    """Where a slide starts and stops on a plate and how many samples it records.
+
+    The pad (``pad_length_m`` along the slide) starts on flat ground with
+    :data:`START_MARGIN_M` between its edge and the textured area, and a stroke ends as far
+    past it on the other side; a stroke that would carry the pad off the plate stops at
+    ``x_limit_m`` and the pad rests there. Positions are the pad centre's x [m]."""
+
+    x_start_m: float
+    x_end_m: float
+    x_limit_m: float
+    strokes: tuple[tuple[float, float, float], ...]
+    n_samples: int
+
+    @staticmethod
+    def crossing_s(area_length_m: float, pad_length_m: float, speed_m_s: float) -> float:
+        """Time [s] for a pad to cross a textured area from flat ground to flat ground."""
+        return (area_length_m + pad_length_m + 2 * START_MARGIN_M) / speed_m_s
+
+    @classmethod
+    def window_s(
+        cls, area_lengths_m, pad_length_m: float, speed_m_s: float, rate_hz: float
+    ) -> float:
+        """A window [s] that covers the crossing of the longest of the areas, whole samples."""
+        t = max(cls.crossing_s(a, pad_length_m, speed_m_s) for a in area_lengths_m)
+        return math.ceil(t * rate_hz) / rate_hz
+
+    @classmethod
+    def of(cls, plate, pad_length_m: float, protocol: Protocol) -> SlideWindow:
+        """The window of ``protocol`` (its rate set) on ``plate`` for a pad this long."""
+        if protocol.rate_hz is None:
+            raise ConfigError("the slide window needs the protocol's rate; give rate_hz")
+        half = plate.area_length_m / 2 + pad_length_m / 2 + START_MARGIN_M
+        x_start = -half
+        x_end = -x_start
+        if plate.length_m / 2 < x_end + 1e-9:
+            raise ConfigError(
+                f"plate {plate.name or plate.hash} ({plate.length_m:g} m long) is too short for a "
+                f"{pad_length_m:g} m pad to enter and leave the textured area on flat ground"
+            )
+        x_limit = max(x_end, plate.length_m / 2 - pad_length_m / 2)
+        strokes = []
+        for _ in range(protocol.passes):
+            strokes.append((x_start, x_end, 1.0))
+            if protocol.return_stroke:
+                strokes.append((x_end, x_start, -1.0))
+        rate, speed = protocol.rate_hz, protocol.speed_m_s
+        if protocol.duration_s is not None:
+            n = max(1, round(protocol.duration_s * rate))
+        else:
+            if speed == 0:
+                raise ConfigError("speed_m_s = 0 needs a duration_s")
+            length = sum(abs(b - a) for a, b, _ in strokes)
+            n = max(1, math.ceil(length / max(speed, 1e-9) * rate))
+        return cls(x_start, x_end, x_limit, tuple(strokes), n)

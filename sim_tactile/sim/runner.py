@@ -1,0 +1,239 @@
+"""One simulation step of the finger: collision query, skin solve, forces on the bone, MuJoCo.
+
+:class:`Runner` owns the moving parts of one slide: the scene's MuJoCo model stepping the bone
+(``m_dyn``), the collider (:func:`~.collide.make_collider`), the skin model
+(:func:`~.skin.make_skin`) and, under quasi-static force control, the held step
+(:mod:`.held`). Every step checks for a non-finite load, a skin pressed to the bottom and a
+runaway pad, and under the dynamic force loop the coupling's stability limit; any of these
+stops the run with a :class:`~sim_tactile.errors.PhysicsError` naming the cause.
+
+:class:`StepOptions` switches each fast path off for its plain reference, so tests and
+benchmarks compare them without reaching into the runner.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from ..errors import ConfigError, PhysicsError
+from ..plates import Plate
+from ..scene.model import Scene
+from ..sensors.pad import Finger
+from .collide import make_collider
+from .fidelity import MAX_OMEGA_DT, Fidelity
+from .held import CompiledHeldStep, HeldStep
+from .skin import SkinModel
+
+#: Velocity of the friction regularisation [m/s]: Coulomb drag mu*N*tanh(v / V_STICK).
+V_STICK = 1e-3
+#: Steps between checks of the dynamic coupling's omega * dt.
+_STIFFNESS_CHECK_STEPS = 50
+
+
+@dataclass(frozen=True)
+class StepOptions:
+    """Which implementation of each part of a step runs (all fast by default).
+
+    primitive_collider: the compiled collider where the plate is made of boxes and spheres
+        (else MuJoCo's collider, the reference);
+    compiled_hold: the held step as one compiled call where the compiled collider serves
+        (else the plain loop, the reference);
+    reduce_skin: the compiled held step on the smallest exact problem (columns, mirror half).
+    """
+
+    primitive_collider: bool = True
+    compiled_hold: bool = True
+    reduce_skin: bool = True
+
+
+class Runner:
+    """Steps the finger of ``scene`` (see the module docstring). ``z0_m``: the pad's lowest
+    point at ``qpos = 0`` above the plate's base surface [m]."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        skin: SkinModel,
+        fid: Fidelity,
+        finger: Finger,
+        dt: float,
+        *,
+        z0_m: float,
+        plate: Plate,
+        quasi_static: bool,
+        options: StepOptions = StepOptions(),
+    ):
+        self.s, self.skin, self.fid, self.finger = scene, skin, fid, finger
+        self.quasi_static = quasi_static
+        self.dt = dt
+        self.d_dyn = mujoco.MjData(scene.m_dyn)
+        self.d_dyn.qpos[:] = 0.0
+        self.collider = make_collider(scene, options.primitive_collider)
+        nodes = np.flatnonzero(scene.node_of_geom >= 0)
+        self._margin = float(scene.m_col.geom_margin[nodes[0]]) if nodes.size else 0.0
+        if quasi_static and not self._margin > 0:
+            raise ConfigError("quasi-static force control needs skin nodes with a collider margin")
+        self._area = scene.grid.area_m2
+        self.hold = None
+        if quasi_static:
+            if self.collider.compiled and options.compiled_hold:
+                self.hold = CompiledHeldStep(
+                    self.collider, skin, scene.W, self._area, self._margin, options.reduce_skin
+                )
+            else:
+                self.hold = HeldStep(self.collider, skin, scene.W, self._area, self._margin)
+        self._taxel_tmp = np.zeros(scene.layout.n)
+        self._qpos, self._qvel = self.d_dyn.qpos, self.d_dyn.qvel
+        self._qfrc, self._ctrl = self.d_dyn.qfrc_applied, self.d_dyn.ctrl
+        self._jx, self._jz = scene.jx, scene.jz
+        self._m_dyn = scene.m_dyn
+        self._friction = finger.friction
+        self.pen = np.zeros(scene.n_nodes)
+        self.loads = np.zeros(scene.n_nodes)
+        self.drag_sum = 0.0
+        self.n_slide_steps = 0
+        self.max_pen_allowed = finger.thickness_m
+        # The pad's lowest point starts at z0 (qpos 0); the plate's base surface is at 0. A
+        # node pressed into a feature narrower than the skin is thick, or deeper than half the
+        # base box, is measured to the nearest other face, so its depth is no longer read
+        # right; the pad's own depth below the base is checked against both limits.
+        self.z0 = z0_m
+        self.max_depth = finger.thickness_m
+        self.depth_limit = "the skin thickness"
+        if plate.thickness_m / 2 < self.max_depth:
+            self.max_depth = plate.thickness_m / 2
+            self.depth_limit = (
+                f"half the plate's {plate.thickness_m * 1e3:g} mm base, below which the "
+                "collider reads depths from the base's bottom face"
+            )
+        self._stiff_check = 0
+
+    # ------------------------------------------------------------------ the pad's state
+    @property
+    def x_m(self) -> float:
+        """The pad's travel along the slide since the start [m]."""
+        return float(self._qpos[self._jx])
+
+    @property
+    def z_speed_m_s(self) -> float:
+        return float(self._qvel[self._jz])
+
+    def describe(self) -> str:
+        """Which skin problem the held step solves (``full problem`` without one)."""
+        return self.hold.describe() if self.hold is not None else "full problem"
+
+    # ------------------------------------------------------------------ steps
+    def step(
+        self,
+        *,
+        force_cmd: float,
+        slide_v: float = 0.0,
+        z_vel: float | None = None,
+        taxel_out: np.ndarray | None = None,
+    ) -> float:
+        """One step; returns the skin's normal load [N]. ``z_vel``: move the pad down at
+        this speed (the approach: no force control), else hold ``force_cmd`` [N] (quasi-
+        static: exactly; dynamic: through the damped bone). ``slide_v``: the slide's speed
+        command [m/s]. ``taxel_out``: receives the taxel loads [N]."""
+        if self.hold is not None and z_vel is None and force_cmd > 0:
+            return self._step_held(force_cmd, slide_v, taxel_out)
+        s, dd = self.s, self.d_dyn
+        if z_vel is not None:  # kinematic approach
+            dd.qpos[s.jz] += z_vel * self.dt
+            dd.qvel[s.jz] = 0.0
+        pen = self.pen
+        n = self.collider.depths_at(self._qpos, pen)
+        p = self.skin.solve(pen)
+        loads = self.loads
+        np.multiply(p, s.grid.area_m2, out=loads)
+        Fs = float(loads.sum())
+        drag = self._after_skin(Fs, pen.max() if n else -math.inf, force_cmd, slide_v)
+        if not self.quasi_static:
+            self._check_coupling(Fs, p)
+        dd.qfrc_applied[s.jz] = 0.0 if z_vel is not None else Fs - force_cmd
+        dd.qfrc_applied[s.jx] = drag
+        dd.ctrl[0] = slide_v
+        mujoco.mj_step(s.m_dyn, dd)
+        self._check_depth(force_cmd)
+        if taxel_out is not None:
+            np.matmul(s.W, loads, out=taxel_out)
+        return Fs
+
+    def _step_held(self, force_cmd, slide_v, taxel_out) -> float:
+        """:meth:`step` under quasi-static force control: the held step moves the pad to the
+        height that carries the force; the bone holds it there while MuJoCo slides it."""
+        qpos, qvel, jz = self._qpos, self._qvel, self._jz
+        out = taxel_out if taxel_out is not None else self._taxel_tmp
+        Fs, top = self.hold.step(qpos, jz, force_cmd / self._area, out)
+        drag = self._after_skin(Fs, top, force_cmd, slide_v)
+        qvel[jz] = 0.0
+        frc = self._qfrc
+        frc[jz] = 0.0
+        frc[self._jx] = drag
+        self._ctrl[0] = slide_v
+        mujoco.mj_step(self._m_dyn, self.d_dyn)
+        z = qpos[jz]
+        if self.z0 + z < -self.max_depth or not (math.isfinite(z) and abs(z) < 0.05):
+            self._check_depth(force_cmd)
+        return Fs
+
+    def _after_skin(self, Fs: float, top: float, force_cmd: float, slide_v: float) -> float:
+        """Check the skin's load and depth; returns the friction drag on the bone [N]."""
+        if not math.isfinite(Fs):
+            raise PhysicsError("the skin load is not finite (NaN or infinity)")
+        if top > self.max_pen_allowed:
+            raise PhysicsError(
+                f"skin pressed to the bottom: a node is {top * 1e3:.3g} mm deep, beyond the "
+                f"skin thickness {self.max_pen_allowed * 1e3:.3g} mm (lower the force or use a thicker skin)"
+            )
+        if slide_v == 0.0:
+            return 0.0
+        drag = -self._friction * Fs * math.tanh(self._qvel[self._jx] / V_STICK)
+        self.drag_sum += abs(drag)
+        self.n_slide_steps += 1
+        return drag
+
+    def _check_coupling(self, Fs: float, p: np.ndarray) -> None:
+        """The dynamic loop couples skin and bone explicitly: refuse a step beyond its
+        stability limit (checked every few steps)."""
+        self._stiff_check -= 1
+        if self._stiff_check > 0 or Fs <= 0:
+            return
+        k = self.skin.stiffness(p, self._area)
+        w_dt = math.sqrt(k / self.finger.bone_mass_kg) * self.dt
+        if w_dt > MAX_OMEGA_DT:
+            raise PhysicsError(
+                f"time step too coarse: the skin-bone coupling has omega*dt = {w_dt:.2f} "
+                f"(contact stiffness {k:.3g} N/m, dt {self.dt:g} s); valid: omega*dt <= {MAX_OMEGA_DT} "
+                f"(dt <= {self.dt * MAX_OMEGA_DT / w_dt:.3g} s)"
+            )
+        self._stiff_check = _STIFFNESS_CHECK_STEPS
+
+    def _check_depth(self, force_cmd: float) -> None:
+        """Raise if the pad is below what the skin carries, or ran away."""
+        z = self._qpos[self._jz]
+        low = self.z0 + z
+        if low < -self.max_depth:
+            raise PhysicsError(
+                f"skin pressed to the bottom: the pad's lowest point is {-low * 1e3:.3g} mm below "
+                f"the plate's base surface, beyond {self.max_depth * 1e3:.3g} mm "
+                f"({self.depth_limit}; the skin is {self.max_pen_allowed * 1e3:.3g} mm thick): "
+                f"{force_cmd:g} N is more than this pad carries here; lower the force or use a "
+                "thicker or stiffer skin"
+            )
+        if not (math.isfinite(z) and abs(z) < 0.05):
+            raise PhysicsError(f"the finger ran away (z = {z:.3g} m): the simulation diverged")
+
+    def check_warnings(self) -> None:
+        """Raise if MuJoCo warned while stepping or colliding (the run is not trustworthy)."""
+        d = self.d_dyn
+        bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
+        bad += self.collider.warnings()
+        if bad:
+            raise PhysicsError(
+                f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"
+            )
