@@ -79,7 +79,10 @@ class MujocoCollider:
 
     def warnings(self) -> list[str]:
         """Names of the warnings MuJoCo raised while colliding (e.g. a full contact buffer)."""
-        return [mujoco.mjtWarning(i).name for i, w in enumerate(self.d.warning) if w.number]
+        d = self.d
+        if not d.warning.number.any():
+            return []
+        return [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
 
 
 #: Collider margin [m] of the skin nodes when the pad is held at a force: nodes this far above

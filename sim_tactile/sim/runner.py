@@ -231,7 +231,9 @@ class Runner:
     def check_warnings(self) -> None:
         """Raise if MuJoCo warned while stepping or colliding (the run is not trustworthy)."""
         d = self.d_dyn
-        bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
+        bad = []
+        if d.warning.number.any():
+            bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
         bad += self.collider.warnings()
         if bad:
             raise PhysicsError(
