@@ -36,6 +36,10 @@ class MissingDependencyError(SimTactileError, ImportError):
     """An optional dependency is missing; the message gives the exact install command."""
 
 
+class WorkerError(SimTactileError):
+    """A worker process running slides died (killed, or out of memory)."""
+
+
 class StoreError(SimTactileError):
     """A data set's store is missing, of another configuration, incomplete or corrupted."""
 

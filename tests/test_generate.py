@@ -19,9 +19,12 @@ import numpy as np
 import pytest
 
 from sim_tactile import datasets
-from sim_tactile.datasets.store import StoreError, from_tactile
-from sim_tactile.errors import ConfigError
-from sim_tactile.generate import generate, simulate_slide
+from sim_tactile.cache import default_root
+from sim_tactile.datasets import from_tactile
+from sim_tactile.errors import ConfigError, StoreError
+from sim_tactile.generate import generate
+from sim_tactile.records import Recording
+from sim_tactile.slides import SlideOutcome, SlideWorker
 
 EXE = str(Path(sys.executable).parent / "sim-tactile")
 ARRAYS = ("data", "checksum", "lengths", "labels", "slide", "seed", "params")
@@ -152,11 +155,16 @@ def _wait_for(out: Path, n: int, proc: subprocess.Popen, timeout: float = 60.0) 
     raise AssertionError(f"the run did not reach {n} slides: {proc.poll()}, {_count_done(out)}")
 
 
+def _slide(job):
+    """What generate's own worker does: the slide through the cache, never writing it."""
+    return SlideWorker(str(default_root()), write=False)(job)
+
+
 def _interrupt_on(seed: int):
-    def fn(job: dict):
-        if job["seed"] == seed:
+    def fn(job):
+        if job.seed == seed:
             raise KeyboardInterrupt  # Ctrl-C while this slide runs
-        return simulate_slide(job)
+        return _slide(job)
 
     return fn
 
@@ -176,7 +184,7 @@ def test_interrupted_and_killed_runs_resume_to_the_same_data_set(tmp_path, cli_e
             workers=1,
             progress=False,
             log=lines.append,
-            _simulate=_interrupt_on(int(seeds[3])),
+            _worker=_interrupt_on(int(seeds[3])),
         )
     assert any("interrupted: 3 of 12 slides" in m and "--resume" in m for m in lines), lines
     assert _count_done(out) == 3
@@ -198,10 +206,10 @@ def test_interrupted_and_killed_runs_resume_to_the_same_data_set(tmp_path, cli_e
 _DIE_SEED: list[int] = []
 
 
-def _die_on_last(job: dict):
-    if job["seed"] in _DIE_SEED:
+def _die_on_last(job):
+    if job.seed in _DIE_SEED:
         os._exit(9)  # a worker killed half-way through the run
-    return simulate_slide(job)
+    return _slide(job)
 
 
 def test_a_killed_worker_stops_the_run_and_resume_completes_it(tiny, tmp_path):
@@ -209,7 +217,7 @@ def test_a_killed_worker_stops_the_run_and_resume_completes_it(tiny, tmp_path):
     out = tmp_path / "w.zarr"
     _DIE_SEED[:] = [int(datasets.open(ref).seeds[-1])]
     with pytest.raises(StoreError, match="worker process died.*--resume"):
-        _quiet(str(cfg), out, workers=2, _simulate=_die_on_last)
+        _quiet(str(cfg), out, workers=2, _worker=_die_on_last)
     assert 0 < int((datasets.open(out).checksums() != 0).sum()) < 6
     res = _quiet(str(cfg), out, workers=2, resume=True)
     assert res["resumed"] and res["written"] + res["reused"] == 6
@@ -376,9 +384,9 @@ def tiny_task():
     """A registered task whose quick data is the tiny set (removed again afterwards)."""
     from sim_tactile.learn.classifiers import threshold_encoding
     from sim_tactile.sim.protocol import Protocol
+    from sim_tactile.slides import SlideSet
     from sim_tactile.tasks import Settings, TaskSpec, register
-    from sim_tactile.tasks import registry as R
-    from sim_tactile.tasks.synthetic import SlideSet
+    from sim_tactile.tasks.registry import unregister
 
     spec = TaskSpec(
         id="generate-tiny-v1",
@@ -397,12 +405,12 @@ def tiny_task():
     )
     register(spec)
     yield spec
-    R._TASKS.pop(spec.id, None)
+    unregister(spec.id)
 
 
 def test_tasks_read_their_data_from_a_store(tiny_task, tmp_path):
     from sim_tactile.tasks import DataRequest, run_task
-    from sim_tactile.tasks.stored import task_data
+    from sim_tactile.tasks.runner import task_data
 
     out = tmp_path / "task.zarr"
     res = _quiet("generate-tiny-v1", out, quick=True, workers=2, seed=3)
@@ -426,21 +434,17 @@ def test_tasks_read_their_data_from_a_store(tiny_task, tmp_path):
     assert rep["timing"]["simulate_s"] == 0.0
 
 
-def _fake_slide(job: dict):
-    """Zeros of the slide's shape and the protocol's own draw (no physics): for layouts."""
-    from sim_tactile.sensors import get_sensor
-    from sim_tactile.sim.protocol import Protocol
-
-    proto = Protocol(**job["protocol"])
-    p = proto.varied(np.random.default_rng(job["seed"]))
-    n = get_sensor(job["sensor"]).layout.n
-    x = np.full((round(proto.duration_s * proto.rate_hz), n), job["seed"] % 97, np.float32)
-    return x, [], 0.0, (p.speed_m_s, p.force_n, p.offset_y_m)
+def _fake_slide(job):
+    """A constant of the slide's shape (no physics): for the store's layout of a suite."""
+    taxels = job.sensor.layout.positions
+    x = np.full((job.n_samples(), len(taxels)), job.seed % 97, np.float32)
+    times = np.arange(len(x)) / job.protocol.rate_hz
+    return SlideOutcome(Recording(x, times, taxels), (), 0.0, False)
 
 
 def test_a_suite_gets_one_group_per_part(tmp_path):
     out = tmp_path / "t20.zarr"
-    res = _quiet("textures20-v1", out, quick=True, workers=1, _simulate=_fake_slide)
+    res = _quiet("textures20-v1", out, quick=True, workers=1, _worker=_fake_slide)
     assert res["parts"] == ["textures20-biotac19-v1", "textures20-icub60-v1"]
     assert res["trials"] == 2 * 4 * 3
     with pytest.raises(StoreError, match="holds the parts of textures20-v1"):
@@ -455,6 +459,6 @@ def test_a_suite_gets_one_group_per_part(tmp_path):
         doc["slides"] == 24 and (tmp_path / "npy" / "textures20-icub60-v1" / "data.npy").is_file()
     )
     with pytest.raises(StoreError, match="already exists"):
-        _quiet("textures20-v1", out, quick=True, _simulate=_fake_slide)
-    res = _quiet("textures20-v1", out, quick=True, resume=True, _simulate=_fake_slide)
+        _quiet("textures20-v1", out, quick=True, _worker=_fake_slide)
+    res = _quiet("textures20-v1", out, quick=True, resume=True, _worker=_fake_slide)
     assert res["reused"] == 24 and res["written"] == 0

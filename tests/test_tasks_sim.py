@@ -16,9 +16,7 @@ from sklearn.svm import SVC
 
 from sim_tactile.errors import ConfigError
 from sim_tactile.learn.precomputed import OnDistances, OnFeatures, sample_index
-from sim_tactile.sim.protocol import Protocol
 from sim_tactile.tasks import PaperCell, Run, TaskSpec, get_task, register, task_ids
-from sim_tactile.tasks.synthetic import SlideSet, simulate_slides
 
 EXE = str(Path(sys.executable).with_name("sim-tactile"))
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -37,18 +35,6 @@ def test_sim_tasks_are_registered():
     assert get_task("textures20-v1").parts == ("textures20-biotac19-v1", "textures20-icub60-v1")
 
 
-def test_slide_set_validation():
-    proto = Protocol()
-    with pytest.raises(ConfigError, match="at least 2 plates"):
-        SlideSet(("finger7/flat",), "grid3x3", proto, 4, 2)
-    with pytest.raises(ConfigError, match="not a preset"):
-        SlideSet(("finger7/flat", "finger7/nope"), "grid3x3", proto, 4, 2)
-    with pytest.raises(ConfigError, match="sensor 'grid9'"):
-        SlideSet(("finger7/flat", "finger7/ridges-2"), "grid9", proto, 4, 2)
-    with pytest.raises(ConfigError, match="quick_slides"):
-        SlideSet(("finger7/flat", "finger7/ridges-2"), "grid3x3", proto, 4, 5)
-
-
 def test_registry_rejects_bad_runs():
     base = get_task("finger7-v1")
     kw = {"title": "t", "get_data": base.get_data, "classifiers": ("svm",)}
@@ -58,33 +44,6 @@ def test_registry_rejects_bad_runs():
         register(TaskSpec(id="bad-labels-v1", runs=(Run("svm"), Run("svm")), **kw))
     with pytest.raises(ConfigError, match="already registered"):
         register(base)
-
-
-def test_slides_are_cached_and_reproducible(cache):
-    """Two slides of two plates: a second call reads the cache and gives identical data; the
-    window is the crossing time at the nominal speed, so every slide has one length."""
-    ss = SlideSet(
-        ("finger7/flat", "finger7/ridges-2"),
-        "grid3x3",
-        Protocol(speed_m_s=0.12, speed_jitter=0.05, force_jitter=0.1),
-        slides=2,
-        quick_slides=2,
-    )
-    jobs = ss.jobs(2, seed=3)
-    assert len({j["seed"] for j in jobs}) == 4
-    recs, stats = simulate_slides(jobs, cache=cache, workers=1)
-    assert stats["slides_simulated"] + stats["slides_cached"] == 4
-    again, stats2 = simulate_slides(jobs, cache=cache, workers=1)
-    assert stats2["slides_simulated"] == 0 and stats2["simulate_s"] == 0.0
-    for a, b in zip(recs, again, strict=True):
-        np.testing.assert_array_equal(a.data, b.data)
-    n = recs[0].data.shape[0]
-    assert n == round(ss.window_protocol().duration_s * 100)
-    # flat ground: no pulses; ridges: load moves with the ridges under the pad
-    assert np.ptp(recs[2].data[:, 4]) > 5 * np.ptp(recs[0].data[:, 4])
-    # a different seed is a different slide (jittered speed and force, sensor noise)
-    other, _ = simulate_slides(ss.jobs(1, seed=4)[:1], cache=cache, workers=1)
-    assert not np.array_equal(other[0].data, recs[0].data)
 
 
 def test_on_features_matches_a_direct_fit():

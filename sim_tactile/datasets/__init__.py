@@ -5,8 +5,10 @@ and data sets in Zarr stores (``sim-tactile generate``): :func:`open` reads one 
 
 from __future__ import annotations
 
+from ..errors import StoreError
+from .export import export, from_tactile
+from .reader import SlideStore, open_store, parts_of
 from .real import load_biotac, load_icub
-from .store import SlideStore, StoreError, export, from_tactile, open_store, parts_of
 
 #: ``sim_tactile.datasets.open(path, part=None)``: a store's data set, read lazily
 open = open_store  # noqa: A001

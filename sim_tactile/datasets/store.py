@@ -1,5 +1,5 @@
-"""Data sets of slides in a Zarr store: the layout, writing one slide at a time, lazy reading,
-checks and export to plain numpy files.
+"""Data sets of slides in a Zarr store: the layout, and writing one slide at a time
+(:mod:`.reader` reads them lazily, :mod:`.export` writes recordings in and plain files out).
 
 Layout of one data set (a Zarr v3 group: the store's root, or one group per part of a suite
 such as ``textures20-v1``)::
@@ -32,12 +32,9 @@ altered: every read verifies it.
 from __future__ import annotations
 
 import hashlib
-import json
-import math
 import platform
 import shutil
 import sys
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -46,7 +43,6 @@ import numpy as np
 from .. import __version__
 from ..errors import MissingDependencyError, StoreError
 from ..hashing import content_hash
-from ..records import Recording, TactileDataset
 
 FORMAT = "sim_tactile.slides"
 FORMAT_VERSION = 1
@@ -228,10 +224,10 @@ class SlideWriter:
 
     def check(self, i: int, expected: int | None = None) -> str | None:
         """None if slide ``i`` reads back with its checksum, else why not."""
-        return _check_slide(self.data, self.lengths, i, expected or int(self.checksum[i]))
+        return check_slide(self.data, self.lengths, i, expected or int(self.checksum[i]))
 
 
-def _check_slide(data, lengths, i: int, expected: int) -> str | None:
+def check_slide(data, lengths, i: int, expected: int) -> str | None:
     if expected == 0:
         return "not written"
     try:
@@ -244,8 +240,9 @@ def _check_slide(data, lengths, i: int, expected: int) -> str | None:
     return None
 
 
-# ------------------------------------------------------------------------------- reading
-def _open_root(path: str | Path, mode: str = "r"):
+def open_root(path: str | Path, mode: str = "r"):
+    """The store's root group at ``path``, checked to be a sim_tactile data set of this
+    format version."""
     zarr = _zarr()
     path = Path(path)
     if not (path / "zarr.json").is_file():
@@ -257,299 +254,3 @@ def _open_root(path: str | Path, mode: str = "r"):
     if v != FORMAT_VERSION:
         raise StoreError(f"{str(path)!r} has format version {v}; this code reads {FORMAT_VERSION}")
     return root
-
-
-def parts_of(path: str | Path) -> list[str]:
-    """The part groups of a suite's store ([] for a store holding one data set)."""
-    return list(_open_root(path).attrs.get("parts") or [])
-
-
-class SlideStore:
-    """A data set in a store, read lazily: the per-slide indices (labels, seeds, parameters)
-    are loaded on open, the samples only when a slide is read; every read checks the slide's
-    checksum. ``len(store)`` slides; ``store[i]`` is slide ``i``'s ``(T_i, N)`` samples;
-    iterating yields ``(samples, label)`` pairs one slide at a time."""
-
-    def __init__(self, group, path: Path) -> None:
-        self.path = path
-        self.group = group
-        self.meta: dict = group.attrs.asdict()
-        if self.meta.get("format") != FORMAT or "data" not in group:
-            raise StoreError(f"{str(path)!r} holds no sim_tactile data set")
-        self.labels: np.ndarray = group["labels"][:]
-        self.lengths: np.ndarray = group["lengths"][:]
-        self.slide_numbers: np.ndarray = group["slide"][:]
-        self.seeds: np.ndarray = group["seed"][:]
-        p = group["params"][:]
-        self.params: dict[str, np.ndarray] = {k: p[:, j] for j, k in enumerate(PARAM_NAMES)}
-        self.data = group["data"]  # the Zarr array itself: slicing reads only those chunks
-        self._checksum = group["checksum"]
-        self.class_names = tuple(self.meta["class_names"])
-        self.channel_names = tuple(self.meta["channel_names"])
-        self.rate_hz = float(self.meta["rate_hz"])
-        self.units = str(self.meta["units"])
-        pos = self.meta.get("taxel_positions")
-        self.taxel_positions = None if pos is None else np.asarray(pos, dtype=np.float64)
-
-    @property
-    def config(self) -> dict:
-        return self.meta["config"]
-
-    @property
-    def config_hash(self) -> str:
-        return self.meta["config_hash"]
-
-    @property
-    def complete(self) -> bool:
-        return bool(self.meta.get("complete")) or bool(self.checksums().all())
-
-    def checksums(self) -> np.ndarray:
-        return self._checksum[:]
-
-    def __len__(self) -> int:
-        return int(self.labels.shape[0])
-
-    def _index(self, i: int) -> int:
-        n = len(self)
-        if not isinstance(i, int | np.integer) or not -n <= i < n:
-            raise IndexError(f"slide index {i} out of range; valid: [{-n}, {n - 1}]")
-        return int(i) % n
-
-    def __getitem__(self, i: int) -> np.ndarray:
-        i = self._index(i)
-        expected = int(self._checksum[i])
-        bad = _check_slide(self.data, self.lengths, i, expected)
-        if bad:
-            raise StoreError(
-                f"slide {i} of {str(self.path)!r}: {bad}; 'sim-tactile generate ... --resume' "
-                f"writes it again"
-            )
-        return np.asarray(self.data[i, : int(self.lengths[i])])
-
-    def __iter__(self) -> Iterator[tuple[np.ndarray, int]]:
-        for i in range(len(self)):
-            yield self[i], int(self.labels[i])
-
-    def batches(self, size: int = 256) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        """``(samples (b, T, N), labels (b,))`` for consecutive slides, ``size`` at a time
-        (one read per batch; the slides must have one length)."""
-        sums = self.checksums()
-        for a in range(0, len(self), size):
-            b = min(a + size, len(self))
-            x = np.asarray(self.data[a:b])
-            for k in range(a, b):
-                if int(sums[k]) == 0 or slide_digest(x[k - a, : self.lengths[k]]) != sums[k]:
-                    self[k]  # raises with the reason
-            if (self.lengths[a:b] != x.shape[1]).any():
-                raise StoreError("batches needs slides of one length; index slides instead")
-            yield x, self.labels[a:b].copy()
-
-    def verify(self) -> list[tuple[int, str]]:
-        """``(slide, reason)`` of every slide that is absent or fails its checksum."""
-        sums = self.checksums()
-        out = []
-        for i in range(len(self)):
-            bad = _check_slide(self.data, self.lengths, i, int(sums[i]))
-            if bad:
-                out.append((i, bad))
-        return out
-
-    def recording(self, i: int) -> Recording:
-        """Slide ``i`` as a :class:`Recording` (times, taxels, units, per-slide metadata)."""
-        i = self._index(i)
-        x = self[i]
-        pos = self.taxel_positions
-        if pos is None:
-            pos = np.full((x.shape[1], 3), np.nan)
-        meta = {
-            "rate_hz": self.rate_hz,
-            "class": self.class_names[int(self.labels[i])],
-            "label": int(self.labels[i]),
-            "slide": int(self.slide_numbers[i]),
-            "seed": int(self.seeds[i]),
-            "params": {k: _num(v[i]) for k, v in self.params.items()},
-            "store": str(self.path),
-            "config_hash": self.config_hash,
-            "channel_names": list(self.channel_names),
-        }
-        return Recording(x, (np.arange(x.shape[0]) + 0.5) / self.rate_hz, pos, self.units, meta)
-
-    def to_tactile(self) -> TactileDataset:
-        """The whole data set in memory, as the classifiers and protocols take it."""
-        if len(set(self.lengths.tolist())) != 1:
-            raise StoreError(
-                f"{str(self.path)!r}: slides of several lengths ({sorted(set(self.lengths))}); "
-                "a TactileDataset needs one length: crop them first"
-            )
-        missing = int((self.checksums() == 0).sum())
-        if missing:
-            raise StoreError(
-                f"{str(self.path)!r} is incomplete: {missing} of {len(self)} slides are not "
-                "written; finish it with 'sim-tactile generate ... --resume'"
-            )
-        x = np.concatenate([b for b, _ in self.batches()]) if len(self) else None
-        meta = dict(self.meta.get("dataset_meta") or {})
-        meta.update(
-            store=str(self.path),
-            config_hash=self.config_hash,
-            simulate_s=0.0,
-            slides_simulated=0,
-            slides_cached=len(self),
-            sim_warnings=[f"{w} (x{c})" for w, c in (self.meta.get("sim_warnings") or {}).items()],
-        )
-        return TactileDataset(
-            x,
-            self.labels,
-            self.rate_hz,
-            self.channel_names,
-            self.class_names,
-            self.taxel_positions,
-            self.units,
-            meta,
-        )
-
-    def describe(self) -> dict:
-        return {
-            "path": str(self.path),
-            "name": self.meta.get("name"),
-            "slides": len(self),
-            "written": int((self.checksums() != 0).sum()),
-            "config_hash": self.config_hash,
-            "classes": list(self.class_names),
-            "channels": len(self.channel_names),
-            "n_time": int(self.meta["n_time"]),
-            "rate_hz": self.rate_hz,
-            "units": self.units,
-        }
-
-
-def _num(v) -> float | None:
-    v = float(v)
-    return v if math.isfinite(v) else None
-
-
-def open_store(path: str | Path, part: str | None = None) -> SlideStore:
-    """Open a data set written by ``sim-tactile generate`` (or :func:`from_tactile`) for
-    reading. A suite's store (e.g. ``textures20-v1``) holds one data set per part: name it
-    with ``part`` (or open ``path/part``)."""
-    path = Path(path)
-    if not path.exists():
-        raise StoreError(f"data set {str(path)!r} does not exist")
-    root = _open_root(path)
-    parts = list(root.attrs.get("parts") or [])
-    if part is None:
-        if parts:
-            raise StoreError(
-                f"{str(path)!r} holds the parts of {root.attrs.get('suite')}: open one with "
-                f"part=... ({', '.join(parts)})"
-            )
-        return SlideStore(root, path)
-    if part not in parts:
-        raise StoreError(
-            f"{str(path)!r} has no part {part!r}; valid: {', '.join(parts) or '(none)'}"
-        )
-    return SlideStore(root[part], path / part)
-
-
-# ------------------------------------------------------------------------------- from data
-def spec_from_tactile(ds: TactileDataset, name: str, config: dict | None = None) -> StoreSpec:
-    """The store layout of a :class:`TactileDataset` (e.g. real recordings), so measured and
-    simulated data sets take the same form on disk."""
-    n = ds.n_samples
-    counts: dict[int, int] = {}
-    slide = np.empty(n, np.int64)
-    for i, y in enumerate(ds.labels.tolist()):
-        slide[i] = counts.get(y, 0)
-        counts[y] = slide[i] + 1
-    meta = json.loads(json.dumps(ds.meta, default=str))
-    cfg = config or {"kind": "recorded", "name": name, "meta": meta}
-    cfg = dict(cfg, shape=list(ds.data.shape), data_digest=_dataset_digest(ds))
-    return StoreSpec(
-        name=name,
-        config=cfg,
-        labels=ds.labels,
-        slide=slide,
-        seeds=np.zeros(n, np.uint64),
-        params=np.full((n, len(PARAM_NAMES)), np.nan),
-        lengths=np.full(n, ds.n_time, np.int64),
-        channel_names=ds.channel_names,
-        class_names=ds.class_names,
-        rate_hz=ds.rate_hz,
-        units=ds.units,
-        taxel_positions=ds.taxel_positions,
-        dataset_meta=meta,
-    )
-
-
-def _dataset_digest(ds: TactileDataset) -> str:
-    h = hashlib.sha256(np.ascontiguousarray(ds.data).tobytes())
-    h.update(ds.labels.tobytes())
-    return h.hexdigest()[:16]
-
-
-def from_tactile(ds: TactileDataset, path: str | Path, *, name: str = "dataset") -> SlideStore:
-    """Write a :class:`TactileDataset` (e.g. :func:`~sim_tactile.datasets.load_biotac`) into a
-    new store at ``path`` and open it."""
-    path = Path(path)
-    if path.exists():
-        raise StoreError(f"{str(path)!r} exists; give a new path")
-    spec = spec_from_tactile(ds, name)
-    create_store(path, {"": spec}, {})
-    root = _zarr().open_group(str(path), mode="r+")
-    w = SlideWriter(root)
-    for i in range(ds.n_samples):
-        w.write(i, ds.data[i])
-    root.attrs.update({"complete": True})
-    return open_store(path)
-
-
-# ------------------------------------------------------------------------------- export
-def export(path: str | Path, out: str | Path, *, part: str | None = None) -> dict:
-    """Write a complete data set as plain numpy files into the folder ``out``: ``data.npy``
-    (slides, T, N) float32 (NaN past each slide's length), ``labels.npy``, ``lengths.npy``,
-    ``slide.npy``, ``seed.npy``, ``params.npy`` (slides, 3), ``taxel_positions.npy`` (if
-    known) and ``meta.json`` (configuration, names, versions). A suite's store exports each
-    part into ``out/<part>/``. Slides are copied a batch at a time: memory stays flat."""
-    path, out = Path(path), Path(out)
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise StoreError(f"--out {str(out)!r} exists and is not an empty folder")
-    parts = parts_of(path)
-    if parts and part is None:
-        files = {p: export(path, out / p, part=p) for p in parts}
-        return {"out": str(out), "parts": files, "slides": sum(f["slides"] for f in files.values())}
-    st = open_store(path, part)
-    missing = int((st.checksums() == 0).sum())
-    if missing:
-        raise StoreError(
-            f"{str(st.path)!r} is incomplete ({missing} of {len(st)} slides missing); finish it "
-            "with 'sim-tactile generate ... --resume' before exporting"
-        )
-    out.mkdir(parents=True, exist_ok=True)
-    n, t, c = st.data.shape
-    mm = np.lib.format.open_memmap(out / "data.npy", mode="w+", dtype=np.float32, shape=(n, t, c))
-    sums = st.checksums()
-    for a in range(0, n, 256):
-        b = min(a + 256, n)
-        x = np.asarray(st.data[a:b])
-        for k in range(a, b):
-            if slide_digest(x[k - a, : st.lengths[k]]) != sums[k]:
-                st[k]  # raises with the reason
-        mm[a:b] = x
-    mm.flush()
-    del mm
-    files = {"data": "data.npy"}
-    arrays = {
-        "labels": st.labels,
-        "lengths": st.lengths,
-        "slide": st.slide_numbers,
-        "seed": st.seeds,
-        "params": np.stack([st.params[k] for k in PARAM_NAMES], axis=1),
-    }
-    if st.taxel_positions is not None:
-        arrays["taxel_positions"] = st.taxel_positions
-    for k, arr in arrays.items():
-        np.save(out / f"{k}.npy", arr, allow_pickle=False)
-        files[k] = f"{k}.npy"
-    (out / "meta.json").write_text(json.dumps(st.meta, indent=1, sort_keys=True))
-    files["meta"] = "meta.json"
-    return {"out": str(out), "slides": n, "files": files}

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..errors import UnknownNameError
+from ..errors import ConfigError, UnknownNameError
 from .layouts import Layout, dense_layout, get_layout, grid_layout
 from .pad import Finger
 from .transducers import (
@@ -175,6 +175,18 @@ def get_sensor(name: str) -> Sensor:
         ) from None
 
 
+def check_pad(layout: Layout, finger: Finger) -> None:
+    """Raise a ConfigError unless ``finger``'s pad carries every taxel of ``layout``."""
+    ex, ey = layout.extent_m
+    px, py = finger.patch_m
+    if ex > px / 2 + 1e-9 or ey > py / 2 + 1e-9:
+        raise ConfigError(
+            f"the {layout.name} layout spans +-({ex:g}, {ey:g}) m, beyond the pad's "
+            f"+-({px / 2:g}, {py / 2:g}) m: the pad is smaller than the {layout.name} layout; "
+            "valid: a pad that carries the taxels"
+        )
+
+
 def resolve_sensor(sensor: Sensor | Layout | str) -> Sensor:
     """A :class:`Sensor` from a sensor, a sensor name, a bare layout or a layout name
     (``dense-<pitch>mm``): the last two report the ideal normal loads on a default pad."""
@@ -202,6 +214,7 @@ __all__ = [
     "Piezoelectric",
     "PiezoResistive",
     "Sensor",
+    "check_pad",
     "dense_layout",
     "get_layout",
     "get_sensor",

@@ -19,12 +19,12 @@ import mujoco
 import numpy as np
 
 from .. import __version__
-from ..errors import ConfigError, PhysicsError
+from ..errors import PhysicsError
 from ..plates import Plate, get_plate, height_at
 from ..records import Recording
 from ..scene.model import build_scene
 from ..scene.nodes import SkinGrid, skin_grid
-from ..sensors import Finger, Layout, Sensor, resolve_sensor
+from ..sensors import Finger, Layout, Sensor, check_pad, resolve_sensor
 from .collide import node_margin_m
 from .fidelity import Fidelity, choose_fidelity, flat_stiffness
 from .micro import micro_loads
@@ -152,7 +152,7 @@ def prepare(
     finger = finger or sensor.finger
     nominal = (protocol or Protocol()).at_rate(sensor.rate_hz)
     proto = nominal.drawn(seed)
-    _check_pad(layout, finger)
+    check_pad(layout, finger)
     fid = choose_fidelity(plate, layout, finger, proto, fidelity, pitch_m=pitch_m, dt_s=dt_s)
     window = SlideWindow.of(plate, finger.patch_m[0], proto)
     runner = _setup(plate, layout, finger, proto, fid, window, options or StepOptions(), cache)
@@ -235,16 +235,6 @@ def _simulate(
     }
     rec = Recording(out.astype(np.float32), times, layout.positions, units=units, meta=meta)
     return SimResult(rec, fid, sim_s, wall, warnings)
-
-
-def _check_pad(layout: Layout, finger: Finger) -> None:
-    ex, ey = layout.extent_m
-    px, py = finger.patch_m
-    if ex > px / 2 + 1e-9 or ey > py / 2 + 1e-9:
-        raise ConfigError(
-            f"layout {layout.name!r} spans +-({ex:g}, {ey:g}) m, beyond the pad's "
-            f"+-({px / 2:g}, {py / 2:g}) m; valid: taxels on the pad"
-        )
 
 
 def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:

@@ -3,7 +3,7 @@
 ``get_task(id)`` / ``task_ids()`` look tasks up; :func:`run_task` runs one and writes its
 report. Real-data tasks: ``biotac20-real``, ``icub20-real`` (seed paper 000, Table I).
 Simulated tasks (:mod:`.sim_tasks`): ``finger7-v1``, ... with a ``get_data`` that
-simulates (:class:`.synthetic.SlideSet`).
+simulates (:class:`~sim_tactile.slides.SlideSet`).
 """
 
 from __future__ import annotations

@@ -42,7 +42,7 @@ class DataRequest:
     seed: int
     log: Callable[[str], None]
     #: a store written by ``sim-tactile generate`` to read the data from (see
-    #: :func:`sim_tactile.tasks.stored.task_data`)
+    #: :func:`sim_tactile.tasks.runner.task_data`)
     store: Path | None = None
 
 
@@ -147,6 +147,8 @@ class TaskSpec:
 
 
 _TASKS: dict[str, TaskSpec] = {}
+#: Other names of released ids (an alias, like the id it names, never changes meaning).
+_ALIASES: dict[str, str] = {}
 
 
 def register(spec: TaskSpec) -> TaskSpec:
@@ -168,13 +170,33 @@ def register(spec: TaskSpec) -> TaskSpec:
     return spec
 
 
-def task_ids() -> tuple[str, ...]:
-    return tuple(_TASKS)
+def alias(name: str, task_id: str) -> None:
+    """Let ``name`` stand for the registered ``task_id`` (an older id of the same task)."""
+    if name in _TASKS or name in _ALIASES:
+        raise ConfigError(f"task id {name!r} is already registered")
+    get_task(task_id)
+    _ALIASES[name] = task_id
+
+
+def unregister(task_id: str) -> None:
+    """Remove a task registered by :func:`register` (for tests and scripts; the package's
+    own tasks are released and stay)."""
+    if task_id not in _TASKS:
+        raise UnknownNameError(f"task {task_id!r} is not registered")
+    del _TASKS[task_id]
+    for name in [a for a, t in _ALIASES.items() if t == task_id]:
+        del _ALIASES[name]
+
+
+def task_ids(*, aliases: bool = False) -> tuple[str, ...]:
+    """The registered ids (with ``aliases``: and the other names they go by)."""
+    return tuple(_TASKS) + (tuple(_ALIASES) if aliases else ())
 
 
 def get_task(task_id: str) -> TaskSpec:
+    """The task ``task_id`` (an id or an alias)."""
     try:
-        return _TASKS[task_id]
+        return _TASKS[_ALIASES.get(task_id, task_id)]
     except KeyError:
         raise UnknownNameError(
             f"task {task_id!r} is not known; valid: {', '.join(_TASKS) or '(none)'}"

@@ -20,7 +20,8 @@ from sklearn.pipeline import Pipeline
 
 from .. import __version__
 from .._validate import integer
-from ..errors import ConfigError, require
+from ..datasets.reader import open_store, parts_of
+from ..errors import ConfigError, StoreError, require
 from ..hashing import derive_seed
 from ..learn.classifiers import (
     FEATURE_MODELS,
@@ -32,12 +33,14 @@ from ..learn.classifiers import (
 )
 from ..learn.precomputed import OnDistances, OnFeatures, sample_index
 from ..learn.protocols import EvalResult, evaluate, repeated_splits
+from ..records import TactileDataset
+from ..slides import SlideSet
+from ..slides.plan import task_slide_config
 from ..spikes import SpikeFeatures
 from ..spikes.multichannel import pairwise_multichannel
 from ..spikes.trains import SpikeTrains
 from .registry import DataRequest, Run, TaskSpec, get_task
 from .report import compare, paper_text, write_figures, write_markdown
-from .stored import task_data
 
 
 def _path(p: str | Path | None) -> Path | None:
@@ -159,6 +162,38 @@ class _Precomputed:
             self._dist[key] = pairwise_multichannel(trains, metric, combine=combine, **params)
             self.distance_s += time.perf_counter() - t0
         return OnDistances(self._dist[key], n_neighbors=k)
+
+
+def task_data(spec: TaskSpec, req: DataRequest) -> TactileDataset:
+    """The task's data set: ``spec.get_data(req)``, or, with ``req.store``, the store's data
+    set after checking that it was generated for this task with the same quick flag and seed
+    (and, for simulated tasks, the same configuration and slide code)."""
+    if req.store is None:
+        return spec.get_data(req)
+    path = req.store
+    st = open_store(path, spec.id if spec.id in parts_of(path) else None)
+    cfg = st.config
+    if cfg.get("task") != spec.id or bool(cfg.get("quick")) != req.quick:
+        raise StoreError(
+            f"{st.path} holds {cfg.get('task') or 'a configuration file'}'s "
+            f"{'quick ' if cfg.get('quick') else ''}data, not {spec.id}"
+            f"{' --quick' if req.quick else ''}: generate it with 'sim-tactile generate "
+            f"{spec.id}{' --quick' if req.quick else ''} --out DIR.zarr'"
+        )
+    if isinstance(spec.get_data, SlideSet):
+        want, code = task_slide_config(spec.get_data, spec.id, req.quick, req.seed)
+        if st.config_hash != want:
+            raise StoreError(
+                f"{st.path} was generated with another configuration (hash {st.config_hash}, "
+                f"{spec.id} with seed {req.seed} is {want}); generate it again"
+            )
+        if st.meta.get("code_version") != code:
+            raise StoreError(
+                f"{st.path} was simulated by another version of the simulating code "
+                f"({st.meta.get('code_version')}, now {code}); generate it again"
+            )
+    req.log(f"{spec.id}: reading {len(st)} slides from {st.path} ({st.config_hash})")
+    return st.to_tactile()
 
 
 def run_task(

@@ -12,8 +12,8 @@ from ..encoders import IzhikevichEncoder
 from ..learn.classifiers import LearnContext, Steps
 from ..plates import preset_names
 from ..sim.protocol import Protocol
+from ..slides import SlideSet
 from .registry import PaperCell, Run, Settings, TaskSpec, register
-from .synthetic import SlideSet
 
 # ------------------------------------------------------------------------------ finger7-v1
 FINGER7_REF = (

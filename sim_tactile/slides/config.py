@@ -1,0 +1,191 @@
+"""Configuration files of slide sets (TOML or JSON, read as data; no code is run).
+
+::
+
+    name = "my-set"              # optional, a label
+    seed = 0                     # integer >= 0
+    plates = ["finger7/flat", "finger7/ridges-2"]   # >= 2 preset plates (the classes)
+    sensor = "grid3x3"           # a sensor (its layout, rate, transducer and pad)
+    slides_per_plate = 100       # [2, 100000]
+    quick_slides_per_plate = 2   # optional: the slides per plate under --quick
+    fidelity = "auto"            # auto, L0, L1, L2
+    ideal = false                # record the noise-free normal loads [N]
+
+    [protocol]                   # sim.protocol.Protocol: speed_m_s, force_n, duration_s,
+    speed_m_s = 0.06             # rate_hz, press_s, settle_s, passes, return_stroke,
+    force_n = 1.0                # offset_y_m, force_control (duration_s absent: cross
+                                 # the texture; rate_hz absent: the sensor's)
+    [randomise]                  # per-slide variation (one SD)
+    speed_jitter = 0.05          # relative, [0, 0.5]
+    force_jitter = 0.1           # relative, [0, 0.5]
+    offset_jitter_m = 0.5e-3     # [0, 0.01] m
+
+    [finger]                     # optional: change fields of the sensor's pad
+    young_pa = 0.3e6
+
+:func:`config_slide_set` checks every value before anything runs; an error names the file,
+the key, the value and what would be valid.
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from dataclasses import fields, replace
+from pathlib import Path
+
+from .. import _validate as v
+from ..errors import ConfigError
+from ..plates import preset_names
+from ..sensors import Finger, check_pad, get_sensor, sensor_names
+from ..sim.fidelity import FIDELITIES
+from ..sim.protocol import Protocol
+from .slide_set import SLIDES_RANGE, SlideSet
+
+#: The keys of a configuration file, and what each takes.
+TOP_KEYS = {
+    "name": "a label",
+    "seed": "integer >= 0",
+    "plates": "list of >= 2 preset plate names",
+    "sensor": "sensor name",
+    "slides_per_plate": f"integer in [{SLIDES_RANGE[0]}, {SLIDES_RANGE[1]}]",
+    "quick_slides_per_plate": "integer in [2, slides_per_plate]",
+    "fidelity": ", ".join(FIDELITIES),
+    "ideal": "true or false",
+    "protocol": "table",
+    "randomise": "table",
+    "finger": "table",
+}
+#: The keys of ``[randomise]``: the protocol's per-slide jitters.
+RANDOMISE = ("speed_jitter", "force_jitter", "offset_jitter_m")
+
+
+def load_config(path: str | Path) -> dict:
+    """Read a configuration file (TOML or JSON) as data; no code is run."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"configuration file {str(path)!r} does not exist")
+    text = path.read_bytes()
+    try:
+        if path.suffix.lower() == ".json":
+            cfg = json.loads(text)
+        else:
+            cfg = tomllib.loads(text.decode())
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"configuration file {path}: cannot be parsed: {exc}") from None
+    if not isinstance(cfg, dict):
+        raise ConfigError(f"configuration file {path}: the top level must be a table / object")
+    return cfg
+
+
+def config_slide_set(cfg: dict, where: str = "configuration") -> tuple[SlideSet, int, str]:
+    """Validate a configuration (from :func:`load_config`) and build its slide set; returns
+    ``(slide_set, seed, name)``. Every error names the parameter and its valid values."""
+    try:
+        return _slide_set(cfg)
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _slide_set(cfg: dict) -> tuple[SlideSet, int, str]:
+    unknown = sorted(set(cfg) - set(TOP_KEYS))
+    if unknown:
+        raise ConfigError(
+            f"unknown key(s) {', '.join(unknown)}; valid: "
+            + ", ".join(f"{k} ({d})" for k, d in TOP_KEYS.items())
+        )
+    for key in ("plates", "sensor", "slides_per_plate"):
+        if key not in cfg:
+            raise ConfigError(f"{key} is missing ({TOP_KEYS[key]})")
+    plates = cfg["plates"]
+    if not isinstance(plates, list) or not all(isinstance(p, str) for p in plates):
+        raise ConfigError(f"plates must be a list of preset plate names, got {plates!r}")
+    if len(plates) < 2 or len(set(plates)) != len(plates):
+        raise ConfigError(f"plates must name at least 2 distinct plates, got {plates}")
+    bad = [p for p in plates if p not in preset_names()]
+    if bad:
+        raise ConfigError(f"plate {bad[0]!r} is not a preset; valid: {', '.join(preset_names())}")
+    sensor = v.one_of("sensor", cfg["sensor"], sensor_names())
+    name = cfg.get("name", "")
+    if not isinstance(name, str):
+        raise ConfigError(f"name must be a string, got {name!r}")
+    seed = v.integer("seed", cfg.get("seed", 0), 0, 2**32 - 1)
+    slides = v.integer("slides_per_plate", cfg["slides_per_plate"], *SLIDES_RANGE)
+    quick = v.integer("quick_slides_per_plate", cfg.get("quick_slides_per_plate", 2), 2, slides)
+    fidelity = v.one_of("fidelity", cfg.get("fidelity", "auto"), FIDELITIES)
+    ideal = cfg.get("ideal", False)
+    if not isinstance(ideal, bool):
+        raise ConfigError(f"ideal must be true or false, got {ideal!r}")
+    ss = SlideSet(
+        plates=tuple(plates),
+        sensor=sensor,
+        protocol=_protocol(_table(cfg, "protocol"), _table(cfg, "randomise")),
+        slides=slides,
+        quick_slides=quick,
+        fidelity=fidelity,
+        ideal=ideal,
+        finger=_finger(_table(cfg, "finger"), sensor),
+    )
+    return ss, seed, name
+
+
+def _table(cfg: dict, key: str) -> dict:
+    t = cfg.get(key, {})
+    if not isinstance(t, dict):
+        raise ConfigError(f"{key} must be a table, got {t!r}")
+    return t
+
+
+def _is_number(x: object) -> bool:
+    return isinstance(x, int | float) and not isinstance(x, bool)
+
+
+def _protocol(proto_t: dict, rand_t: dict) -> Protocol:
+    names = [f.name for f in fields(Protocol) if f.name not in RANDOMISE]
+    bad = sorted(set(proto_t) - set(names))
+    if bad:
+        hint = " (put the jitters under [randomise])" if set(bad) & set(RANDOMISE) else ""
+        raise ConfigError(
+            f"unknown protocol key(s) {', '.join(bad)}{hint}; valid: {', '.join(names)}"
+        )
+    bad = sorted(set(rand_t) - set(RANDOMISE))
+    if bad:
+        raise ConfigError(
+            f"unknown randomise key(s) {', '.join(bad)}; valid: {', '.join(RANDOMISE)}"
+        )
+    for sect, t in (("protocol", proto_t), ("randomise", rand_t)):
+        for k, val in t.items():
+            if k == "force_control":
+                ok, kind = isinstance(val, str), "string"
+            elif k == "return_stroke":
+                ok, kind = isinstance(val, bool), "boolean"
+            else:
+                ok, kind = _is_number(val), "number"
+            if not ok:
+                raise ConfigError(f"{sect}.{k} must be a {kind}, got {val!r}")
+    try:
+        proto = Protocol(**proto_t, **rand_t)
+    except ConfigError as exc:
+        sect = "randomise" if str(exc).split(" ")[0] in RANDOMISE else "protocol"
+        raise ConfigError(f"{sect}.{exc}") from None
+    if proto.speed_m_s == 0 and proto.duration_s is None:
+        raise ConfigError("protocol.speed_m_s = 0 needs a protocol.duration_s")
+    return proto
+
+
+def _finger(finger_t: dict, sensor: str) -> Finger | None:
+    """The sensor's pad with the fields of ``[finger]`` changed (None: no change)."""
+    if not finger_t:
+        return None
+    base = get_sensor(sensor)
+    names = [f.name for f in fields(base.finger)]
+    bad = sorted(set(finger_t) - set(names))
+    if bad:
+        raise ConfigError(f"unknown finger key(s) {', '.join(bad)}; valid: {', '.join(names)}")
+    kw = {k: tuple(x) if isinstance(x, list) else x for k, x in finger_t.items()}
+    try:
+        f = replace(base.finger, **kw)
+    except TypeError as exc:
+        raise ConfigError(f"finger: {exc}") from None
+    check_pad(base.layout, f)
+    return f

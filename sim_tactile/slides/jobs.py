@@ -1,0 +1,133 @@
+"""One slide to simulate, and its key: everything that determines its recording.
+
+A :class:`SlideJob` holds the plate itself (its parameters, not a name), the whole sensor, the
+nominal protocol with its jitters, the slide's own seed, the fidelity, whether to record the
+ideal loads, and the pad when it replaces the sensor's. Its :meth:`~SlideJob.key` is the
+content hash of all of that and of :func:`slide_code_version`, so a cached slide is never
+served after any of it, or any code that makes a slide, has changed.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..cache import ArtefactCache
+from ..errors import SimTactileError
+from ..hashing import code_version, content_hash
+from ..plates import Plate
+from ..records import Recording
+from ..sensors import Finger, Sensor
+from ..sim.protocol import Protocol, SlideWindow
+
+#: The module whose import closure makes a slide (with this one, which calls it), and the
+#: libraries whose versions change what it computes.
+SLIDE_MODULES = ("sim_tactile.sim.simulate", "sim_tactile.slides.jobs")
+SLIDE_LIBRARIES = ("mujoco", "numba", "numpy", "scipy")
+
+
+def slide_code_version() -> str:
+    """The version of the code that makes a slide (:func:`~sim_tactile.hashing.code_version`
+    of :data:`SLIDE_MODULES`): the source of every module they import, and the libraries."""
+    return code_version(*SLIDE_MODULES, libraries=SLIDE_LIBRARIES)
+
+
+@dataclass(frozen=True)
+class SlideJob:
+    """One slide (see the module docstring). ``protocol`` is nominal, its rate and window
+    set; :meth:`drawn` is the protocol the slide runs."""
+
+    plate: Plate
+    sensor: Sensor
+    protocol: Protocol
+    seed: int
+    fidelity: str = "auto"
+    ideal: bool = False
+    finger: Finger | None = None
+    #: what the job is called in messages (its plate's name and place in a set)
+    label: str = field(default="", compare=False)
+
+    def drawn(self) -> Protocol:
+        """The slide's own speed, force and offset, as the simulation draws them."""
+        return self.protocol.drawn(self.seed)
+
+    def n_samples(self) -> int:
+        """Samples the slide records (its window, :class:`~sim_tactile.sim.protocol.SlideWindow`)."""
+        pad = (self.finger or self.sensor.finger).patch_m[0]
+        return SlideWindow.of(self.plate, pad, self.protocol.at_rate(self.sensor.rate_hz)).n_samples
+
+    def describe(self) -> dict:
+        """Everything that determines the slide, as JSON data."""
+        return {
+            "kind": "slide",
+            "plate": self.plate.params(),
+            "sensor": self.sensor.to_json(),
+            "protocol": asdict(self.protocol),
+            "seed": int(self.seed),
+            "fidelity": self.fidelity,
+            "ideal": bool(self.ideal),
+            "finger": None if self.finger is None else self.finger.to_json(),
+        }
+
+    def key(self) -> str:
+        """The slide's cache key: the content hash of :meth:`describe` and the code version."""
+        return content_hash({**self.describe(), "code": slide_code_version()})
+
+    def simulate(self, cache: ArtefactCache | None = None):
+        """Simulate the slide; a :class:`~sim_tactile.sim.simulate.SimResult`. An error names
+        the plate and the seed."""
+        from ..sim.simulate import simulate
+
+        try:
+            return simulate(
+                self.plate,
+                self.sensor,
+                protocol=self.protocol,
+                finger=self.finger,
+                fidelity=self.fidelity,
+                seed=self.seed,
+                ideal=self.ideal,
+                cache=cache,
+            )
+        except SimTactileError as exc:
+            what = self.label or self.plate.name or self.plate.hash
+            raise type(exc)(f"slide of {what} (seed {self.seed}): {exc}") from exc
+
+
+@dataclass(frozen=True)
+class SlideOutcome:
+    """What simulating (or reading) one slide gave: the recording, the simulation's warnings
+    (none when it came from the cache), the wall time [s] and whether it was cached."""
+
+    recording: Recording
+    warnings: tuple[str, ...]
+    wall_s: float
+    cached: bool
+
+    @property
+    def data(self) -> np.ndarray:
+        return np.asarray(self.recording.data, np.float32)
+
+
+@dataclass(frozen=True)
+class SlideWorker:
+    """Simulates a job in a worker, through the slide cache at ``cache_root``: a cached slide
+    is read, else simulated and, with ``write``, saved there. Picklable, so any backend can
+    send it to its workers."""
+
+    cache_root: str
+    write: bool = True
+
+    def __call__(self, job: SlideJob) -> SlideOutcome:
+        t0 = time.perf_counter()
+        cache = ArtefactCache(self.cache_root)
+        key = job.key()
+        hit = cache.get(key, "slide.npz")
+        if hit is not None:
+            return SlideOutcome(Recording.load(hit), (), time.perf_counter() - t0, True)
+        res = job.simulate(cache)
+        if self.write:
+            res.recording.save(cache.path(key, "slide.npz"))
+        return SlideOutcome(res.recording, tuple(res.warnings), time.perf_counter() - t0, False)

@@ -1,0 +1,196 @@
+"""Simulated data of a task or a configuration: plates x slides -> one :class:`TactileDataset`.
+
+A :class:`SlideSet` says which plates (the classes), which sensor (and optionally another pad
+for it), the slide protocol (its nominal speed and force, how much they vary from slide to
+slide, and the window length) and how many slides per plate. Slide ``k`` of plate ``i`` is
+seeded by ``derive_seed(seed, i, k)``, so the quick run's slides are the first slides of the
+full run and a re-run with the same seed gives the same recordings bit for bit. Every slide
+is cached under its job's content key (:meth:`~.jobs.SlideJob.key`): a second run,
+``ablate`` and a run with other classifiers read them instead of simulating again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from .. import _validate as v
+from ..errors import ConfigError
+from ..hashing import derive_seed
+from ..plates import get_plate, preset_names
+from ..records import TactileDataset
+from ..sensors import Finger, Sensor, get_sensor, sensor_names
+from ..sim.protocol import Protocol, SlideWindow
+from .jobs import SlideJob
+from .run import run_slides
+
+#: Slides per plate a set may ask for (per plate and class).
+SLIDES_RANGE = (2, 100_000)
+
+
+def class_name(plate: str) -> str:
+    """A plate's class name: the part of its preset name after the family."""
+    return plate.split("/", 1)[-1]
+
+
+@dataclass(frozen=True)
+class SlideSet:
+    """The simulated data of a task (see the module docstring).
+
+    plates: preset plate names, one class each (class names: the part after ``/``).
+    sensor: a sensor name of :mod:`sim_tactile.sensors` (its layout, pad, transducer, rate).
+    protocol: nominal protocol with its per-slide jitters; ``duration_s`` None = the time to
+        cross the largest textured area at the nominal speed (every slide gets that window);
+        ``rate_hz`` None = the sensor's.
+    slides / quick_slides: slides per plate in the full and the quick run.
+    quick_plates: the plates of the quick run (a subset of ``plates``; None: all).
+    ideal: record the noise-free normal loads [N] instead of the sensor's output.
+    finger: a pad that replaces the sensor's (None: the sensor's own).
+    """
+
+    plates: tuple[str, ...]
+    sensor: str
+    protocol: Protocol
+    slides: int
+    quick_slides: int
+    fidelity: str = "auto"
+    ideal: bool = False
+    quick_plates: tuple[str, ...] | None = None
+    finger: Finger | None = None
+
+    def __post_init__(self) -> None:
+        if len(self.plates) < 2:
+            raise ConfigError(f"a task needs at least 2 plates, got {len(self.plates)}")
+        for p in self.plates:
+            if p not in preset_names():
+                raise ConfigError(f"plate {p!r} is not a preset; valid: {preset_names()}")
+        if self.sensor not in sensor_names():
+            raise ConfigError(f"sensor {self.sensor!r} is not known; valid: {sensor_names()}")
+        v.integer("slides", self.slides, *SLIDES_RANGE)
+        v.integer("quick_slides", self.quick_slides, SLIDES_RANGE[0], self.slides)
+        if self.quick_plates is not None:
+            extra = [p for p in self.quick_plates if p not in self.plates]
+            if extra or len(self.quick_plates) < 2:
+                raise ConfigError(
+                    f"quick_plates must be at least 2 of the task's plates; not among them: {extra}"
+                )
+
+    @property
+    def class_names(self) -> tuple[str, ...]:
+        return tuple(class_name(p) for p in self.plates)
+
+    def sensor_def(self) -> Sensor:
+        return get_sensor(self.sensor)
+
+    def pad(self) -> Finger:
+        """The pad the slides are made with: ``finger``, else the sensor's."""
+        return self.finger or self.sensor_def().finger
+
+    def window_protocol(self) -> Protocol:
+        """The protocol with its rate (the sensor's unless it has its own) and its window
+        (crossing the longest textured area with this set's pad, in whole samples) fixed."""
+        proto = self.protocol.at_rate(self.sensor_def().rate_hz)
+        if proto.duration_s is None:
+            areas = [get_plate(p).area_length_m for p in self.plates]
+            t = SlideWindow.window_s(areas, self.pad().patch_m[0], proto.speed_m_s, proto.rate_hz)
+            proto = replace(proto, duration_s=t)
+        return proto
+
+    def n_time(self) -> int:
+        """Samples in every slide's window."""
+        plate = get_plate(self.plates[0])
+        return SlideWindow.of(plate, self.pad().patch_m[0], self.window_protocol()).n_samples
+
+    def describe(self) -> dict:
+        """The set's configuration as JSON data, each plate with its parameters (so a data
+        set records its plates whole, and a changed preset is another configuration)."""
+        return {
+            "plates": list(self.plates),
+            "plate_params": [get_plate(p).params() for p in self.plates],
+            "sensor": self.sensor,
+            "protocol": asdict(self.window_protocol()),
+            "slides": self.slides,
+            "quick_slides": self.quick_slides,
+            "fidelity": self.fidelity,
+            "ideal": self.ideal,
+            "finger": None if self.finger is None else self.finger.to_json(),
+        }
+
+    def setup(self, quick: bool) -> dict:
+        """:meth:`describe` with the plates of the quick or the full run."""
+        d = self.describe()
+        keep = [self.plates.index(p) for p in self.plates_for(quick)]
+        d["plates"] = [d["plates"][i] for i in keep]
+        d["plate_params"] = [d["plate_params"][i] for i in keep]
+        return d
+
+    def plates_for(self, quick: bool) -> tuple[str, ...]:
+        if quick and self.quick_plates is not None:
+            return tuple(self.quick_plates)
+        return self.plates
+
+    def slides_for(self, quick: bool) -> int:
+        return self.quick_slides if quick else self.slides
+
+    def jobs(self, seed: int, quick: bool = False) -> list[SlideJob]:
+        """The set's slides, plate after plate; slide ``k`` of plate ``i`` has the seed
+        ``derive_seed(seed, i, k)`` (``i`` its index among all the plates, so a quick run's
+        slides are the full run's first ones)."""
+        proto = self.window_protocol()
+        sensor = self.sensor_def()
+        n = self.slides_for(quick)
+        out = []
+        for name in self.plates_for(quick):
+            i = self.plates.index(name)
+            plate = get_plate(name)
+            for k in range(n):
+                out.append(
+                    SlideJob(
+                        plate,
+                        sensor,
+                        proto,
+                        derive_seed(seed, i, k, bits=63),
+                        self.fidelity,
+                        self.ideal,
+                        self.finger,
+                        label=f"{name} slide {k}",
+                    )
+                )
+        return out
+
+    def dataset_meta(self, quick: bool) -> dict:
+        """The metadata of the set's data set (what a run or a store records of it)."""
+        plates = self.plates_for(quick)
+        n = self.slides_for(quick)
+        proto = self.window_protocol()
+        sensor = self.sensor_def()
+        meta = {
+            "source": f"simulated: {len(plates)} plates x {n} slides, {self.sensor}",
+            "sensor": self.sensor,
+            "slides_per_class": n,
+            "window_s": self.n_time() / proto.rate_hz,
+            "setup": self.setup(quick),
+        }
+        if sensor.grid_shape is not None:
+            meta["grid_shape"] = list(sensor.grid_shape)
+        return meta
+
+    def __call__(self, req) -> TactileDataset:
+        """The set's data set (a task's ``get_data``), simulating what is not cached."""
+        jobs = self.jobs(req.seed, req.quick)
+        recs, stats = run_slides(jobs, log=req.log)
+        plates = self.plates_for(req.quick)
+        n = self.slides_for(req.quick)
+        first = recs[0]
+        layout = self.sensor_def().layout
+        return TactileDataset(
+            np.stack([r.data for r in recs]),
+            np.repeat(np.arange(len(plates)), n),
+            first.rate_hz,
+            tuple(layout.names),
+            tuple(class_name(p) for p in plates),
+            first.taxels,
+            first.units,
+            {**self.dataset_meta(req.quick), **stats},
+        )

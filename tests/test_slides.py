@@ -1,0 +1,187 @@
+"""The slide engine: jobs keyed by content, one random draw, backends that agree, and a
+cache that never serves a stale slide (tested on an edited copy of the package)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import sim_tactile
+from sim_tactile.errors import ConfigError
+from sim_tactile.plates import Plate, Ridges, get_plate
+from sim_tactile.sensors import get_sensor
+from sim_tactile.sim.protocol import Protocol
+from sim_tactile.slides import SlideJob, SlideSet, make_backend, run_slides, stream
+from sim_tactile.slides.jobs import SLIDE_MODULES
+
+TWO = ("finger7/flat", "finger7/ridges-2")
+
+
+def _job(**change) -> SlideJob:
+    base = SlideJob(
+        get_plate("finger7/ridges-4"),
+        get_sensor("grid3x3"),
+        Protocol(duration_s=0.2, rate_hz=100.0, speed_jitter=0.05),
+        seed=11,
+    )
+    return replace(base, **change)
+
+
+def test_a_slide_is_keyed_by_everything_that_determines_it():
+    job = _job()
+    assert job.key() == _job().key()
+    # the plate by its parameters, not its name
+    renamed = Plate(get_plate("finger7/ridges-4").texture, name="my/ridges")
+    assert _job(plate=renamed).key() == job.key()
+    wider = Plate(Ridges(count=4, width_m=2.6e-3, height_m=2.5e-3), name="finger7/ridges-4")
+    others = [
+        _job(plate=wider),
+        _job(seed=12),
+        _job(fidelity="L0"),
+        _job(ideal=True),
+        _job(protocol=replace(job.protocol, force_n=1.5)),
+        _job(protocol=replace(job.protocol, speed_jitter=0.06)),
+        _job(finger=replace(job.sensor.finger, young_pa=0.4e6)),
+        _job(
+            sensor=replace(
+                job.sensor, imperfections=replace(job.sensor.imperfections, noise_std=0.01)
+            )
+        ),
+        _job(sensor=get_sensor("multilayer3x3x2")),
+    ]
+    keys = [o.key() for o in others]
+    assert job.key() not in keys and len(set(keys)) == len(keys)
+    assert job.describe()["plate"] == get_plate("finger7/ridges-4").params()
+
+
+def test_the_draw_is_the_simulations(cache):
+    """A job's drawn protocol is the one the simulation ran (made in one place)."""
+    job = _job(
+        protocol=Protocol(duration_s=0.1, speed_jitter=0.2, force_jitter=0.2, offset_jitter_m=1e-3)
+    )
+    rec = job.simulate(cache).recording
+    drawn = job.drawn()
+    assert rec.meta["protocol"]["speed_m_s"] == drawn.speed_m_s
+    assert rec.meta["protocol"]["force_n"] == drawn.force_n
+    assert rec.meta["protocol"]["offset_y_m"] == drawn.offset_y_m
+    assert drawn.speed_m_s != job.protocol.speed_m_s  # it did vary
+    assert rec.data.shape[0] == job.n_samples() == 10
+
+
+def test_slide_set_validation():
+    proto = Protocol()
+    with pytest.raises(ConfigError, match="at least 2 plates"):
+        SlideSet(("finger7/flat",), "grid3x3", proto, 4, 2)
+    with pytest.raises(ConfigError, match="not a preset"):
+        SlideSet(("finger7/flat", "finger7/nope"), "grid3x3", proto, 4, 2)
+    with pytest.raises(ConfigError, match="sensor 'grid9'"):
+        SlideSet(TWO, "grid9", proto, 4, 2)
+    with pytest.raises(ConfigError, match="quick_slides"):
+        SlideSet(TWO, "grid3x3", proto, 4, 5)
+
+
+def test_slides_are_cached_and_reproducible(cache):
+    """Two slides of two plates: a second call reads the cache and gives identical data; the
+    window is the crossing time at the nominal speed, so every slide has one length."""
+    ss = SlideSet(
+        TWO,
+        "grid3x3",
+        Protocol(speed_m_s=0.12, speed_jitter=0.05, force_jitter=0.1),
+        slides=2,
+        quick_slides=2,
+    )
+    jobs = ss.jobs(seed=3)
+    assert len({j.seed for j in jobs}) == 4
+    recs, stats = run_slides(jobs, cache=cache, workers=1)
+    assert stats["slides_simulated"] + stats["slides_cached"] == 4
+    again, stats2 = run_slides(jobs, cache=cache, workers=1)
+    assert stats2["slides_simulated"] == 0 and stats2["simulate_s"] == 0.0
+    for a, b in zip(recs, again, strict=True):
+        assert a.data.tobytes() == b.data.tobytes()
+    assert recs[0].data.shape[0] == ss.n_time() == jobs[0].n_samples()
+    # flat ground: no pulses; ridges: load moves with the ridges under the pad
+    assert np.ptp(recs[2].data[:, 4]) > 5 * np.ptp(recs[0].data[:, 4])
+    # a different seed is a different slide (jittered speed and force, sensor noise)
+    other, _ = run_slides(ss.jobs(seed=4)[:1], cache=cache, workers=1)
+    assert not np.array_equal(other[0].data, recs[0].data)
+
+
+def _square(x: int) -> int:
+    return x * x
+
+
+def test_the_backends_run_every_item_once():
+    items = [(k, k + 1) for k in range(9)]
+    for workers in (1, 2):
+        backend = make_backend(_square, workers=workers)
+        try:
+            got = dict(stream(backend, items))
+        finally:
+            backend.close()
+        assert got == {k: (k + 1) ** 2 for k in range(9)}, workers
+    with pytest.raises(ConfigError, match="backend = 'gpu'"):
+        make_backend(_square, kind="gpu")
+    with pytest.raises(ConfigError, match="ray backend"):
+        make_backend(_square, address="localhost:6379")
+
+
+def test_the_slide_code_is_the_simulations_import_closure():
+    from sim_tactile.hashing import import_closure
+
+    closure = import_closure(*SLIDE_MODULES)
+    for m in ("plates.presets", "plates.spec", "plates.mjcf", "sim.held", "sensors.transducers"):
+        assert f"sim_tactile.{m}" in closure, m
+    for m in ("learn", "tasks", "datasets.store", "generate", "cli"):  # nothing downstream
+        assert not any(c.startswith(f"sim_tactile.{m}") for c in closure), m
+
+
+_SCRIPT = """
+import json, sys
+from sim_tactile.sim.protocol import Protocol
+from sim_tactile.slides import SlideSet, run_slides
+ss = SlideSet(("finger7/flat", "finger7/ridges-2"), "grid3x3",
+              Protocol(duration_s=0.4, speed_jitter=0.05), slides=2, quick_slides=2)
+recs, stats = run_slides(ss.jobs(seed=0), workers=1)
+print(json.dumps({"simulated": stats["slides_simulated"], "ridges": recs[-1].data.tolist()}))
+"""
+
+
+@pytest.mark.slow
+def test_an_edited_preset_is_simulated_again(tmp_path):
+    """Edit a preset's ridge width in a copy of the package: the slides are simulated again
+    (their key holds the plate's parameters and the source of every module that makes them),
+    while an edit to a module no slide imports keeps them cached."""
+    src = Path(sim_tactile.__file__).parent
+    pkg = tmp_path / "copy" / "sim_tactile"
+    shutil.copytree(src, pkg)  # with its compiled caches (mtimes kept: numba reuses them)
+    env = {**os.environ, "PYTHONPATH": str(pkg.parent), "SIM_TACTILE_CACHE": str(tmp_path / "c")}
+
+    def run() -> dict:
+        p = subprocess.run(
+            [sys.executable, "-c", _SCRIPT], env=env, capture_output=True, text=True, cwd=tmp_path
+        )
+        assert p.returncode == 0, p.stderr[-2000:]
+        return json.loads(p.stdout)
+
+    first = run()
+    assert first["simulated"] == 4
+    assert run()["simulated"] == 0  # cached
+    learn = pkg / "learn" / "src.py"
+    learn.write_text(learn.read_text() + "\n# an edit no slide can see\n")
+    assert run()["simulated"] == 0
+    presets = pkg / "plates" / "presets.py"
+    text = presets.read_text()
+    old = "Ridges(count=n, width_m=2.5 * MM, height_m=2.5 * MM)"
+    assert old in text
+    presets.write_text(text.replace(old, "Ridges(count=n, width_m=2.5 * MM, height_m=1.0 * MM)"))
+    edited = run()
+    assert edited["simulated"] == 4
+    assert edited["ridges"] != first["ridges"]  # and the lower ridges read differently
