@@ -28,7 +28,8 @@ import mujoco
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from sim_tactile.bench.speed_error import Sweep, run_speed_error
+from sim_tactile.bench.speed_error import run_speed_error
+from sim_tactile.bench.sweep import Sweep
 from sim_tactile.sim.protocol import Protocol
 from sim_tactile.sim.simulate import prepare
 

@@ -1,8 +1,12 @@
-"""Shared fixtures: one artefact cache per test session, so each preset is built once."""
+"""Shared fixtures: one artefact cache per test session (each preset is built once), the
+console script, and the real data set (tests that need it skip, saying why, without it)."""
 
 from __future__ import annotations
 
 import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -10,6 +14,8 @@ import pytest
 from sim_tactile.cache import ArtefactCache
 
 _NAME = "biotac_slide_20_50"
+#: The console script of this environment.
+EXE = shutil.which("sim-tactile", path=str(Path(sys.executable).parent)) or "sim-tactile"
 
 
 def _find_dataset() -> Path:
@@ -25,7 +31,13 @@ def _find_dataset() -> Path:
     return next((c for c in cands if c.is_dir()), cands[0])
 
 
-DATASET_DIR = _find_dataset()
+@pytest.fixture(scope="session")
+def dataset_dir() -> Path:
+    """The real data set's folder; the test skips, naming the path, when it is absent."""
+    path = _find_dataset()
+    if not path.is_dir():
+        pytest.skip(f"real data set not found at {path} (set SIM_TACTILE_DATASETS)")
+    return path
 
 
 @pytest.fixture(scope="session")
@@ -45,3 +57,22 @@ def cli_env(cache_dir) -> dict:
     env["SIM_TACTILE_CACHE"] = str(cache_dir)
     env["MPLBACKEND"] = "Agg"
     return env
+
+
+@pytest.fixture
+def cli(cli_env):
+    """Run the console script: ``cli(args, check=True, env=None, timeout=600)`` returns the
+    completed process (stdout and stderr as text); ``cli.exe`` is its path."""
+
+    def run(args, *, check: bool = True, env: dict | None = None, timeout: float = 600):
+        return subprocess.run(
+            [EXE, *(str(a) for a in args)],
+            env=env or cli_env,
+            capture_output=True,
+            text=True,
+            check=check,
+            timeout=timeout,
+        )
+
+    run.exe = EXE
+    return run

@@ -1,35 +1,27 @@
-"""The contract's plate commands, through the real console script."""
+"""The plate commands, through the real console script."""
 
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-EXE = shutil.which("sim-tactile", path=str(Path(sys.executable).parent)) or "sim-tactile"
+from sim_tactile.plates import get_plate, preset_names
 
 
-def run(args: list[str], env: dict, check: bool = True) -> subprocess.CompletedProcess:
-    return subprocess.run([EXE, *args], env=env, capture_output=True, text=True, check=check)
+def test_plates_list_json_is_the_python_api(cli):
+    rows = json.loads(cli(["plates", "list", "--json"]).stdout)
+    assert [r["name"] for r in rows] == preset_names()
+    for r in rows:
+        plate = get_plate(r["name"])
+        assert (r["family"], r["params"], r["hash"]) == (plate.family, plate.params(), plate.hash)
+    text = cli(["plates", "list"]).stdout.splitlines()
+    assert text[0].split() == ["name", "family", "hash"] and len(text) == len(rows) + 1
 
 
-def test_plates_list_json(cli_env):
-    out = run(["plates", "list", "--json"], cli_env)
-    rows = json.loads(out.stdout)
-    names = {r["name"] for r in rows}
-    assert {"finger7/ridges-4", "multilayer3/grating-9", "roughness8/ra-0.4"} <= names
-    assert all(set(r) >= {"name", "family", "params", "hash"} for r in rows)
-    assert len(rows) == 38
-
-
-def test_plates_build_json_writes_the_four_files(cli_env, tmp_path):
-    out = run(
-        ["plates", "build", "multilayer3/grating-9", "--out", str(tmp_path), "--json"], cli_env
-    )
+def test_plates_build_json_writes_the_four_files(cli, tmp_path):
+    out = cli(["plates", "build", "multilayer3/grating-9", "--out", tmp_path, "--json"])
     doc = json.loads(out.stdout)
     assert doc["name"] == "multilayer3/grating-9"
     assert set(doc["files"]) == {"stl", "step", "mjcf", "png"}
@@ -50,8 +42,8 @@ def test_plates_build_json_writes_the_four_files(cli_env, tmp_path):
         (["plates", "build", "--out", "x", "--json"], "give a plate NAME or --all"),
     ],
 )
-def test_errors_exit_nonzero_with_one_line(cli_env, tmp_path, args, needle):
-    out = run(args, cli_env, check=False)
+def test_errors_exit_nonzero_with_one_line(cli, args, needle):
+    out = cli(args, check=False)
     assert out.returncode != 0
     assert out.stdout == ""
     lines = out.stderr.strip().splitlines()

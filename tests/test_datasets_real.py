@@ -5,40 +5,33 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import DATASET_DIR
 
 from sim_tactile.datasets import load_biotac, load_icub
 from sim_tactile.datasets.real import read_biotac_csv
 from sim_tactile.errors import ConfigError
 from sim_tactile.records import Recording, TactileDataset
 
-needs_data = pytest.mark.skipif(
-    not DATASET_DIR.is_dir(), reason=f"real data set not found at {DATASET_DIR}"
-)
 
-
-@needs_data
-def test_biotac_window_channels_and_labels():
-    ds = load_biotac(DATASET_DIR, slides=2, materials=3)
+def test_biotac_window_channels_and_labels(dataset_dir):
+    ds = load_biotac(dataset_dir, slides=2, materials=3)
     assert ds.data.shape == (6, 400, 19) and ds.data.dtype == np.float32
     assert ds.rate_hz == 100.0 and ds.duration_s == pytest.approx(4.0)
     assert ds.channel_names[0] == "ele1" and ds.channel_names[-1] == "ele19"
     np.testing.assert_array_equal(ds.labels, [0, 0, 1, 1, 2, 2])
     assert ds.class_names == ("mat1", "mat2", "mat3")
     # the window is rows 100..499 of the electrode columns of mat1_1_bio.csv
-    f = DATASET_DIR / "raw_data" / "mat1" / "mat1_1_bio.csv"
+    f = dataset_dir / "raw_data" / "mat1" / "mat1_1_bio.csv"
     header = f.read_text().splitlines()[0].split(",")
     rows = np.loadtxt(f, delimiter=",", skiprows=1, usecols=[header.index("ele1")])
     np.testing.assert_array_equal(ds.data[0, :, 0], rows[100:500])
 
 
-@needs_data
-def test_icub_all_slides():
-    ds = load_icub(DATASET_DIR)
+def test_icub_all_slides(dataset_dir):
+    ds = load_icub(dataset_dir)
     assert ds.data.shape == (1000, 75, 60)
     assert ds.rate_hz == 50.0 and ds.meta["grid_shape"] == [6, 10]
     np.testing.assert_array_equal(ds.class_counts(), np.full(20, 50))
-    raw = np.load(DATASET_DIR / "compiled_data" / "icub_test.npy")
+    raw = np.load(dataset_dir / "compiled_data" / "icub_test.npy")
     np.testing.assert_array_equal(ds.data[0, :, 13], raw[0, 1, 3, :])  # patch 1, taxel 3
     assert ds.channel_names[13] == "p1t3"
 

@@ -11,12 +11,12 @@ import os
 import shutil
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import EXE  # noqa: E402  (the console script, for processes killed mid-run)
 
 from sim_tactile import datasets
 from sim_tactile.cache import default_root
@@ -26,7 +26,6 @@ from sim_tactile.generate import generate
 from sim_tactile.records import Recording
 from sim_tactile.slides import SlideOutcome, SlideWorker
 
-EXE = str(Path(sys.executable).parent / "sim-tactile")
 ARRAYS = ("data", "checksum", "lengths", "labels", "slide", "seed", "params")
 
 TINY = {
@@ -365,13 +364,8 @@ def test_open_iterates_lazily_and_export_round_trips(tiny, tmp_path, cli_env):
         datasets.export(ref, out)
 
 
-def test_recorded_data_takes_the_same_form(tiny, tmp_path):
-    from conftest import DATASET_DIR
-
-    ds = datasets.open(tiny[1]).to_tactile()
-    if DATASET_DIR.is_dir():  # the real recordings, when the data set is here
-        ds = datasets.load_biotac(DATASET_DIR, slides=2, materials=2)
-    st = from_tactile(ds, tmp_path / "real.zarr", name="real")
+def _round_trip(ds, path):
+    st = from_tactile(ds, path, name="real")
     back = st.to_tactile()
     np.testing.assert_array_equal(back.data, ds.data)
     np.testing.assert_array_equal(back.labels, ds.labels)
@@ -379,10 +373,18 @@ def test_recorded_data_takes_the_same_form(tiny, tmp_path):
     assert st.verify() == [] and st.complete
 
 
+def test_any_data_set_takes_the_store_form(tiny, tmp_path):
+    _round_trip(datasets.open(tiny[1]).to_tactile(), tmp_path / "sim.zarr")
+
+
+def test_real_recordings_take_the_same_form(tmp_path, dataset_dir):
+    _round_trip(datasets.load_biotac(dataset_dir, slides=2, materials=2), tmp_path / "real.zarr")
+
+
 @pytest.fixture
 def tiny_task():
     """A registered task whose quick data is the tiny set (removed again afterwards)."""
-    from sim_tactile.learn.classifiers import threshold_encoding
+    from sim_tactile.encoders.encodings import threshold_encoding
     from sim_tactile.sim.protocol import Protocol
     from sim_tactile.slides import SlideSet
     from sim_tactile.tasks import Settings, TaskSpec, register

@@ -7,21 +7,16 @@ import numpy as np
 import pytest
 from sklearn.base import clone
 
+from sim_tactile.encoders.encodings import range_threshold_encoding
+from sim_tactile.encoders.scaling import RangeScaler, SampleStandardizer
 from sim_tactile.errors import ConfigError, UnknownNameError
 from sim_tactile.learn.classifiers import (
     LearnContext,
     classifier_names,
     get_classifier,
     make_classifier,
-    range_threshold_encoding,
 )
-from sim_tactile.learn.preprocess import (
-    RangeScaler,
-    SampleStandardizer,
-    SpikeCounts,
-    SpikeRaster,
-    TimeCollapse,
-)
+from sim_tactile.learn.preprocess import SpikeCounts, SpikeRaster, TimeCollapse
 from sim_tactile.spikes import SpikeTrains
 
 RATE_HZ = 100.0

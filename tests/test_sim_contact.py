@@ -108,7 +108,7 @@ def test_active_set_updates_agree_with_the_fresh_solve(with_k):
             S = np.flatnonzero(a)
             want = np.linalg.solve(C[np.ix_(S, S)], np.ones(S.size)).sum()
             assert solver.stiffness_per_area() == pytest.approx(want, rel=1e-8)
-    assert solver.rebuilds > 1 and solver.updates >= 0
+    assert solver.rebuilds > 1
 
 
 def test_active_set_is_deterministic():

@@ -2,12 +2,23 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
-from sim_tactile.plates import get_plate
+from sim_tactile.errors import ConfigError
+from sim_tactile.plates import Bumps, Plate, get_plate
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, get_sensor
-from sim_tactile.sim.fidelity import MAX_NODES, choose_fidelity
+from sim_tactile.sim.fidelity import (
+    AUTO_OMEGA_DT,
+    DT_MAX_S,
+    MAX_NODES,
+    MAX_OMEGA_DT,
+    STEPS_PER_FEATURE,
+    choose_fidelity,
+    flat_stiffness,
+)
 from sim_tactile.sim.protocol import Protocol
 
 
@@ -39,3 +50,72 @@ def test_a_curved_pad_keeps_square_nodes_over_ridges():
         "finger7/ridges-4", finger=Finger(shape="sphere", radius_m=0.01, size_m=(0.012, 0.012))
     )
     assert fid.pitch_y_m is None
+
+
+def test_auto_steps_let_every_feature_take_twenty_steps():
+    """2.5 mm ridges at 60 mm/s: a feature takes >= STEPS_PER_FEATURE steps; the step is a
+    whole fraction of the 10 ms sample, and the one simulate() takes."""
+    fid, _ = _auto("finger7/ridges-4")
+    speed, scale = 0.06, 2.5e-3
+    assert scale / (speed * fid.dt_s) >= STEPS_PER_FEATURE
+    assert fid.dt_s <= DT_MAX_S
+    assert fid.dt_s == 1.0 / (100.0 * fid.steps_per_sample) == 1.0 / (100.0 * 5)
+    fast = choose_fidelity(
+        get_plate("finger7/ridges-4"),
+        get_sensor("grid3x3").layout,
+        Finger(),
+        Protocol(speed_m_s=0.2),
+        "auto",
+    )
+    assert scale / (0.2 * fast.dt_s) >= STEPS_PER_FEATURE > scale / (0.2 * fast.dt_s) / 2
+
+
+def test_the_dynamic_loop_keeps_its_coupling_stable():
+    """Under the dynamic force loop auto keeps omega * dt at AUTO_OMEGA_DT on a flat plate
+    (the stiffest contact the bone meets); quasi-static control has no such limit."""
+    sen = get_sensor("grid3x3")
+    plate = get_plate("finger7/flat")
+    dyn = choose_fidelity(plate, sen.layout, sen.finger, Protocol(force_control="dynamic"), "L1")
+    qs = choose_fidelity(plate, sen.layout, sen.finger, Protocol(), "L1")
+    k = flat_stiffness(sen.finger, True, dyn.winkler_k_pa_per_m)
+    omega = math.sqrt(k / sen.finger.bone_mass_kg)
+    assert omega * dyn.dt_s <= AUTO_OMEGA_DT < MAX_OMEGA_DT
+    assert qs.dt_s > dyn.dt_s and qs.dt_s == pytest.approx(DT_MAX_S)
+
+
+def test_the_node_count_is_capped_and_says_so():
+    """0.3 mm bumps want 0.12 mm nodes; on the 16 mm pad that is over MAX_NODES: the pitch
+    is raised to the floor, with a warning that the smaller features are smeared."""
+    plate = Plate(
+        Bumps(rows=30, cols=30, shape="box", size_m=0.3e-3, height_m=0.3e-3, spacing_m=1.2e-3)
+    )
+    sen = get_sensor("multilayer3x3x2")
+    fid = choose_fidelity(plate, sen.layout, sen.finger, Protocol(), "auto")
+    assert skin_grid(sen.finger, fid.pitch_m, fid.pitch_y_m).n <= MAX_NODES["L1"] * 1.05
+    assert any("node pitch raised" in w for w in fid.warnings)
+    assert any("smeared" in w for w in fid.warnings)
+
+
+@pytest.mark.parametrize(
+    ("plate", "sensor", "kw", "words"),
+    [
+        ("multilayer3/grating-9", "multilayer3x3x2", {}, "aliases the texture"),
+        ("textures20/grating-1.5mm", "icub60", {}, "larger than the texture period"),
+        ("roughness8/ra-50", "pvdf2", {}, "micro-roughness"),
+        ("finger7/ridges-4", "grid3x3", {"dt_s": 0.01}, "time step 0.01 s is too coarse"),
+        ("finger7/ridges-4", "grid3x3", {"pitch_m": 2e-3}, "node pitch 2 mm is too coarse"),
+    ],
+)
+def test_each_warning(plate, sensor, kw, words):
+    sen = get_sensor(sensor)
+    fid = choose_fidelity(get_plate(plate), sen.layout, sen.finger, Protocol(), "auto", **kw)
+    assert any(words in w for w in fid.warnings), fid.warnings
+
+
+def test_levels_and_bad_input():
+    l0, _ = _auto("finger7/ridges-4", level="L0")
+    l1, _ = _auto("finger7/ridges-4", level="L1")
+    assert (l0.level, l0.coupled, l1.coupled) == ("L0", False, True)
+    assert (l0.pitch_m, l0.dt_s) == (l1.pitch_m, l1.dt_s)
+    with pytest.raises(ConfigError, match="fidelity = 'L3' is not valid; valid: auto, L0"):
+        _auto("finger7/ridges-4", level="L3")

@@ -92,41 +92,6 @@ def test_the_force_is_held_exactly_and_the_pulses_repeat(v, cache):
     assert rec.data[-1, 4] > 0.5 * rec.data[0, 4] > 0
 
 
-def test_flat_plate_is_flat(cache):
-    rec = simulate(
-        "finger7/flat",
-        "grid3x3",
-        protocol=Protocol(duration_s=0.3, force_control=QS),
-        ideal=True,
-        cache=cache,
-    ).recording
-    d = rec.data.astype(float)
-    assert (np.ptp(d, axis=0) <= 1e-6 * d.mean(axis=0)).all()
-
-
-def test_no_coupling_step_limit_but_the_coarse_step_warns(cache):
-    """The dynamic loop refuses dt = 10 ms (omega * dt); quasi-static force control has no
-    bone coupling, so it runs and only warns that features take too few steps."""
-    with pytest.raises(PhysicsError, match="time step too coarse"):
-        simulate(
-            "finger7/ridges-4",
-            "grid3x3",
-            dt_s=0.01,
-            protocol=Protocol(force_control="dynamic"),
-            ideal=True,
-            cache=cache,
-        )
-    res = simulate(
-        "finger7/ridges-4",
-        "grid3x3",
-        dt_s=0.01,
-        protocol=Protocol(force_control=QS, duration_s=0.5),
-        ideal=True,
-        cache=cache,
-    )
-    assert any("too coarse" in w for w in res.warnings)
-
-
 def test_bad_force_control_is_refused(cache):
     with pytest.raises(ConfigError, match="force_control.*dynamic, quasi-static"):
         Protocol(force_control="pid")
@@ -154,11 +119,3 @@ def test_winkler_force_is_the_water_level(seed):
     p, dz = winkler_force(pen, 1e8, total)
     assert p.sum() == pytest.approx(total, rel=1e-10)
     np.testing.assert_array_equal(p, 1e8 * np.maximum(pen + dz, 0))
-
-
-def test_same_seed_same_bits(cache):
-    proto = Protocol(duration_s=0.3, speed_jitter=0.1, force_jitter=0.1, force_control=QS)
-    a = simulate("finger7/bumps-4x4", "grid3x3", protocol=proto, seed=3, ideal=True, cache=cache)
-    b = simulate("finger7/bumps-4x4", "grid3x3", protocol=proto, seed=3, ideal=True, cache=cache)
-    assert a.recording.data.tobytes() == b.recording.data.tobytes()
-    assert a.recording.meta["protocol"]["force_control"] == QS

@@ -4,20 +4,15 @@ the iCub data set (written here, so it always runs) and on the real data when pr
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import DATASET_DIR
 
 from sim_tactile.errors import ConfigError, UnknownNameError
 from sim_tactile.tasks import PaperCell, get_task, register, run_task, task_ids
 from sim_tactile.tasks.report import compare
 
-EXE = shutil.which("sim-tactile", path=str(Path(sys.executable).parent)) or "sim-tactile"
 REPORT_KEYS = {"task", "results", "timing", "figures"}
 RESULT_KEYS = {"classifier", "features", "accuracy_mean", "accuracy_std", "paper"}
 TIMING_KEYS = {"simulate_s", "encode_s", "classify_s"}
@@ -41,27 +36,16 @@ def fake_icub(tmp_path_factory) -> Path:
     return root
 
 
-def _run_cli(args: list[str], env: dict) -> subprocess.CompletedProcess:
-    return subprocess.run([EXE, *args], env=env, capture_output=True, text=True, check=False)
-
-
-def test_registry_ids_and_errors():
-    assert {"biotac20-real", "icub20-real"} <= set(task_ids())
-    spec = get_task("icub20-real")
-    assert spec.split == "7:3" and spec.full.repeats == 5
-    assert spec.full.params["snn"]["hidden"] == 1200
-    assert (spec.full.params["snn"]["target_true"], spec.full.params["snn"]["target_false"]) == (
-        70,
-        3,
-    )
-    assert get_task("biotac20-real").full.params["snn"]["hidden"] == 60
-    assert get_task("biotac20-real").paper["svm-raw"] == PaperCell(
-        0.942, 0.007, "Taunyazov et al. 2020, Table I"
-    )
+def test_registry_ids_aliases_and_errors():
+    """The real-data tasks are versioned; their first ids stay as aliases of the same task."""
+    assert {"biotac20-real-v1", "icub20-real-v1"} <= set(task_ids())
+    assert {"biotac20-real", "icub20-real"} <= set(task_ids(aliases=True))
+    assert not {"biotac20-real", "icub20-real"} & set(task_ids())
+    assert get_task("icub20-real") is get_task("icub20-real-v1")
     with pytest.raises(UnknownNameError, match="'finger9-v1' is not known"):
         get_task("finger9-v1")
     with pytest.raises(ConfigError, match="already registered"):
-        register(spec)
+        register(get_task("icub20-real"))
 
 
 def test_compare_to_the_paper():
@@ -98,7 +82,7 @@ def test_run_task_writes_report_and_figures(fake_icub, tmp_path):
     }
     for f in report["figures"]:
         assert Path(f).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert json.loads((tmp_path / "report.json").read_text())["task"] == "icub20-real"
+    assert json.loads((tmp_path / "report.json").read_text())["task"] == "icub20-real-v1"
     md = (tmp_path / "report.md").read_text()
     assert "| snn |" in md and "0.922 (0.005)" in md and "Accuracy over time" in md
 
@@ -112,8 +96,8 @@ def test_run_task_input_errors(fake_icub, tmp_path):
         run_task("icub20-real", tmp_path, repeats=0, data=fake_icub)
 
 
-def test_cli_run_json_and_errors(fake_icub, tmp_path, cli_env):
-    out = _run_cli(
+def test_cli_run_json_and_errors(fake_icub, tmp_path, cli):
+    out = cli(
         [
             "run",
             "icub20-real",
@@ -128,13 +112,13 @@ def test_cli_run_json_and_errors(fake_icub, tmp_path, cli_env):
             str(tmp_path),
             "--json",
         ],
-        cli_env,
+        check=False,
     )
     assert out.returncode == 0, out.stderr
     doc = json.loads(out.stdout)
-    assert doc["task"] == "icub20-real" and doc["results"][0]["classifier"] == "svm-raw"
+    assert doc["task"] == "icub20-real-v1" and doc["results"][0]["classifier"] == "svm-raw"
     assert doc["results"][0]["repeats"] == 1
-    bad = _run_cli(
+    bad = cli(
         [
             "run",
             "icub20-real",
@@ -144,29 +128,29 @@ def test_cli_run_json_and_errors(fake_icub, tmp_path, cli_env):
             str(tmp_path),
             "--json",
         ],
-        cli_env,
+        check=False,
     )
     assert bad.returncode != 0 and bad.stdout == ""
     lines = bad.stderr.strip().splitlines()
     assert len(lines) == 1 and "absent" in lines[0] and "--data PATH" in lines[0]
 
 
-@pytest.mark.skipif(not DATASET_DIR.is_dir(), reason=f"real data set not found at {DATASET_DIR}")
-def test_cli_run_biotac_quick_on_the_real_data(tmp_path, cli_env):
-    out = _run_cli(
+@pytest.mark.slow
+def test_cli_run_biotac_quick_on_the_real_data(tmp_path, cli, dataset_dir):
+    out = cli(
         [
             "run",
             "biotac20-real",
             "--quick",
             "--data",
-            str(DATASET_DIR),
+            str(dataset_dir),
             "--classifiers",
             "svm-raw",
             "--out",
             str(tmp_path),
             "--json",
         ],
-        cli_env,
+        check=False,
     )
     assert out.returncode == 0, out.stderr
     (row,) = json.loads(out.stdout)["results"]

@@ -2,7 +2,7 @@
 
 Real and synthetic recordings go through the same code: ``X`` is any array of shape
 ``(n_samples, n_time, n_channels)`` sampled at ``rate_hz``; ``transform`` returns one
-:class:`~sim_tactile.spikes.trains.SpikeTrains` per sample with window ``[0, n_time / rate_hz]``
+:class:`~sim_tactile.records.SpikeTrains` per sample with window ``[0, n_time / rate_hz]``
 s. Chain with :class:`~sim_tactile.spikes.features.SpikeFeatures` or
 :class:`~sim_tactile.spikes.multichannel.SpikeTrainDistances` in a ``Pipeline``.
 """
@@ -18,7 +18,7 @@ from sklearn.base import BaseEstimator, TransformerMixin
 
 from .._validate import finite, one_of, positive
 from ..errors import ConfigError
-from ..spikes.trains import SpikeTrains
+from ..records import SpikeTrains
 from ._common import check_current
 from .izhikevich import simulate_izhikevich
 from .lif import DEFAULT_LIF_DT_S, simulate_lif

@@ -20,10 +20,9 @@ from typing import Any
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 
-from .._validate import integer, one_of, positive
+from .._validate import check_array, check_classes, check_labels, integer, one_of, positive
 from ..errors import ConfigError, require
 from ..hashing import derive_seed
-from ._checks import check_array, check_classes, check_labels
 
 DEVICES = ("auto", "cpu", "cuda")
 LR_SCHEDULES = ("constant", "cosine")

@@ -26,7 +26,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.discriminant_analysis import LinearDiscriminantAnalysis
 from sklearn.neighbors import KNeighborsClassifier
@@ -34,40 +33,11 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
-from ..encoders import ThresholdEncoder
+from ..encoders.encodings import Steps, threshold_encoding
 from ..errors import ConfigError, UnknownNameError
 from ..spikes import SpikeFeatures, SpikeTrainDistances
-from .preprocess import RangeScaler, SampleStandardizer, SpikeCounts, SpikeRaster, TimeCollapse
+from .preprocess import SpikeCounts, SpikeRaster, TimeCollapse
 from .src import SRCClassifier
-
-Steps = list[tuple[str, Any]]
-
-#: Thresholds (in standard deviations of each sample's channel) of :func:`threshold_encoding`.
-THRESHOLDS_SD = (-0.5, 0.5)
-#: Percentiles of the training data that :func:`range_threshold_encoding` maps to 0 and K + 1.
-RANGE_PCT = (1.0, 99.0)
-
-
-def threshold_encoding(ctx: LearnContext) -> Steps:
-    """Threshold encoding of each slide's fluctuations (the default): each channel of each
-    sample standardised over its own window, then K = 2 thresholds at -0.5 and +0.5 standard
-    deviations (2K + 1 = 5 spike channels per input; see :mod:`sim_tactile.encoders.threshold`).
-    The spikes carry how a signal moves, not its level."""
-    return [
-        ("standardize", SampleStandardizer()),
-        ("encode", ThresholdEncoder(rate_hz=ctx.rate_hz, thresholds=np.array(THRESHOLDS_SD))),
-    ]
-
-
-def range_threshold_encoding(ctx: LearnContext) -> Steps:
-    """Threshold encoding against the training data's range: each channel scaled so that
-    its 1st..99th percentile over the training set becomes [0, K + 1] = [0, 3], then the
-    K = 2 thresholds at 1 and 2, as eq. 1 of seed paper 000 writes them. The spikes carry
-    when a signal reaches which level of its channel's range."""
-    return [
-        ("scale", RangeScaler(*RANGE_PCT, span=3.0)),
-        ("encode", ThresholdEncoder(rate_hz=ctx.rate_hz, thresholds=np.array([1.0, 2.0]))),
-    ]
 
 
 @dataclass(frozen=True)

@@ -27,9 +27,8 @@ from sklearn.base import BaseEstimator
 from sklearn.metrics import confusion_matrix
 from sklearn.model_selection import StratifiedShuffleSplit
 
-from .._validate import integer, positive
+from .._validate import check_labels, integer, positive
 from ..errors import ConfigError
-from ._checks import check_labels
 
 _RATIO = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*:\s*(\d+(?:\.\d+)?)\s*$")
 _COUNTS = re.compile(r"^\s*(\d+)\s*/\s*(\d+)\s*$")

@@ -18,9 +18,8 @@ from sklearn.linear_model import orthogonal_mp
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from .._validate import integer
+from .._validate import check_classes, integer
 from ..errors import ConfigError
-from ._checks import check_classes
 
 
 class SRCClassifier(ClassifierMixin, BaseEstimator):

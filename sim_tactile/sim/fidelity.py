@@ -26,6 +26,9 @@ from ..plates.spec import Roughness
 LEVELS = ("L0", "L1", "L2")
 #: What a ``fidelity`` argument may be (a :class:`Fidelity` too, in Python).
 FIDELITIES = ("auto", *LEVELS)
+#: The levels of a static press (:func:`~sim_tactile.sim.press.press`): its finest node
+#: pitch is its own reference, so it has no L2.
+PRESS_LEVELS = ("L0", "L1")
 #: Coarsest and finest node pitch auto may pick [m].
 PITCH_MAX_M = 1.0e-3
 PITCH_MIN_M = 0.25e-3
@@ -168,7 +171,7 @@ def choose_fidelity(
             f"node pitch {pitch_m * 1e3:.3g} mm is too coarse for {scale * 1e3:.3g} mm features"
         )
     sample = 1.0 / protocol.rate_hz
-    n_sub = max(1, math.ceil(sample / dt_target - 1e-9))
+    n_sub = steps_per_sample(protocol.rate_hz, dt_target)
     dt = 1.0 / (protocol.rate_hz * n_sub)  # the step simulate() takes
     shape = (
         f"{pitch * 1e3:.3g} mm"
@@ -190,6 +193,12 @@ def choose_fidelity(
         tuple(warnings),
         None if aspect == 1.0 else float(pitch_y),
     )
+
+
+def steps_per_sample(rate_hz: float, dt_s: float) -> int:
+    """Whole steps per sample period for a step of at most ``dt_s`` (one at least)."""
+    sample = 1.0 / rate_hz
+    return max(1, math.ceil(sample / dt_s - 1e-9))
 
 
 def _varies_along_x_only(plate: Plate, finger) -> bool:

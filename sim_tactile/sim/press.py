@@ -22,12 +22,11 @@ from ..scene.nodes import skin_grid
 from ..sensors.layouts import Layout, dense_layout
 from ..sensors.pad import Finger
 from .collide import make_collider, node_margin_m
+from .fidelity import PRESS_LEVELS
 from .held import HeldStep
 from .protocol import APPROACH_CLEARANCE_M
 from .skin import make_skin
 
-#: Fidelity levels a static press takes: the Winkler bed or the coupled skin.
-PRESS_LEVELS = ("L0", "L1")
 #: Smallest side of a spherical pad's node patch [m], and how many Hertz contact radii it
 #: spans at least (the pad's edge must lie beyond the contact).
 SPHERE_PAD_MIN_M = 12e-3

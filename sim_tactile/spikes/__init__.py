@@ -13,10 +13,10 @@
 
 from __future__ import annotations
 
+from ..records import SpikeTrains, as_spike_times
 from . import distances
 from .features import FEATURES, SpikeFeatures, spike_features
 from .multichannel import COMBINE, SpikeTrainDistances, cross_multichannel, pairwise_multichannel
-from .trains import SpikeTrains, as_spike_times
 
 __all__ = [
     "COMBINE",

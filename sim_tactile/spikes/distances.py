@@ -28,8 +28,8 @@ import numpy as np
 
 from .._validate import non_negative, positive
 from ..errors import ConfigError
+from ..records import as_spike_times, check_window
 from . import _kernels as K
-from .trains import as_spike_times, check_window
 
 METRICS = (
     "victor_purpura",

@@ -31,7 +31,7 @@ from sklearn.base import BaseEstimator, TransformerMixin
 
 from .._validate import positive
 from ..errors import ConfigError
-from .trains import SpikeTrains
+from ..records import SpikeTrains
 
 FEATURES = (
     "count",

@@ -1,6 +1,6 @@
 """Distances between multi-channel samples, and a transformer for precomputed-metric kNN.
 
-A sample is a :class:`~sim_tactile.spikes.trains.SpikeTrains` (or any sequence of per-channel
+A sample is a :class:`~sim_tactile.records.SpikeTrains` (or any sequence of per-channel
 spike-time arrays [s]). The distance between two samples combines the per-channel distances
 ``d_c`` (channel ``c`` of one sample against channel ``c`` of the other):
 
@@ -22,8 +22,8 @@ from sklearn.base import BaseEstimator, TransformerMixin
 
 from .._validate import one_of
 from ..errors import ConfigError
+from ..records import SpikeTrains
 from . import distances as D
-from .trains import SpikeTrains
 
 COMBINE = ("sum", "mean", "rms", "max", "none")
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from .trains import SpikeTrains
+from ..records import SpikeTrains
 
 
 def raster(

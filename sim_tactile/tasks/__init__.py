@@ -8,7 +8,7 @@ simulates (:class:`~sim_tactile.slides.SlideSet`).
 
 from __future__ import annotations
 
-from . import real, sim_tasks  # noqa: F401  (register the tasks)
+from . import defs  # noqa: F401  (register the tasks)
 from .registry import (
     DataRequest,
     PaperCell,

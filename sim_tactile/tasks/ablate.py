@@ -37,11 +37,16 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from sklearn.pipeline import Pipeline
 
 from ..encoders import IzhikevichEncoder, ThresholdEncoder
+from ..encoders.encodings import Steps
 from ..encoders.neurons import izhikevich_preset
+from ..encoders.scaling import RangeScaler
 from ..errors import ConfigError
-from .registry import DataRequest, Run, TaskSpec, get_task
+from ..tables import markdown_table
+from .registry import Run, TaskSpec, get_task
+from .runner import _stderr, evaluate_task, load_task, task_runs
 
 ENCODER_PARAMS = ("gain", "max_rate_hz", "preset", "a", "b", "c", "d", "K")
 CLASSIFIER_PARAMS = ("q", "tau", "k", "C")
@@ -89,7 +94,8 @@ def _value(name: str, text: str):
     return text
 
 
-def _izh_params(enc: IzhikevichEncoder, point: Mapping) -> None:
+def _izh_params(enc: IzhikevichEncoder, point: Mapping) -> dict:
+    """An Izhikevich encoder's parameters at ``point`` (its own names)."""
     kw = {}
     if "preset" in point:
         kw["preset"] = point["preset"]
@@ -103,16 +109,27 @@ def _izh_params(enc: IzhikevichEncoder, point: Mapping) -> None:
         kw.update(gain=point["gain"], max_rate_hz=None)
     if "max_rate_hz" in point:
         kw["max_rate_hz"] = point["max_rate_hz"]
-    enc.set_params(**kw)
+    return kw
 
 
-def _threshold_params(steps: list, enc: ThresholdEncoder, k: int) -> None:
-    scaler = next((s for _, s in steps if type(s).__name__ == "RangeScaler"), None)
-    if scaler is not None:
-        scaler.set_params(span=float(k + 1))
-        enc.set_params(thresholds=np.arange(1.0, k + 1.0))
-    else:
-        enc.set_params(thresholds=np.arange(k) - (k - 1) / 2.0)
+def encoding_params(steps: Steps, point: Mapping) -> dict:
+    """The encoding's parameters at ``point``, by scikit-learn's ``step__param`` names of the
+    pipeline of ``steps`` (``encode__gain``, ``scale__span``, ...). ``K`` thresholds sit 1 SD
+    apart around 0 after a per-sample standardisation, or at 1 .. K after a range scaler
+    (whose span becomes K + 1)."""
+    out = {}
+    scaler = next((n for n, s in steps if isinstance(s, RangeScaler)), None)
+    for name, est in steps:
+        if isinstance(est, IzhikevichEncoder):
+            out.update({f"{name}__{k}": x for k, x in _izh_params(est, point).items()})
+        if isinstance(est, ThresholdEncoder) and "K" in point:
+            k = int(point["K"])
+            if scaler is not None:
+                out[f"{scaler}__span"] = float(k + 1)
+                out[f"{name}__thresholds"] = np.arange(1.0, k + 1.0)
+            else:
+                out[f"{name}__thresholds"] = np.arange(k) - (k - 1) / 2.0
+    return out
 
 
 def _used(spec: TaskSpec) -> set[str]:
@@ -154,11 +171,7 @@ def _point_spec(spec: TaskSpec, point: Mapping) -> TaskSpec:
 
     def encoder(ctx, base=base_encoder, p=enc_point):
         steps = base(ctx)
-        for _, est in steps:
-            if isinstance(est, IzhikevichEncoder):
-                _izh_params(est, p)
-            if isinstance(est, ThresholdEncoder) and "K" in p:
-                _threshold_params(steps, est, int(p["K"]))
+        Pipeline(steps).set_params(**encoding_params(steps, p))  # sets the steps' estimators
         return steps
 
     runs = []
@@ -194,23 +207,18 @@ def ablate(
     """Sweep the grid ``sets`` (name -> values) over the task's data (or the data set in
     ``store``); returns ``{task, rows: [{params, classifier, label, accuracy_mean,
     accuracy_std}], figures}``."""
-    from .runner import _classifier_list, _path, _runs, _stderr, evaluate_task, task_data
-
     log = log or _stderr
     spec = get_task(task_id)
     if spec.parts:
         raise ConfigError(
             f"task {task_id} is made of parts; ablate one of them: {', '.join(spec.parts)}"
         )
-    if spec.needs_data_path and data is None and store is None:
-        raise ConfigError(f"task {task_id} runs on real recordings: pass --data PATH")
     sets = {k: list(v) for k, v in sets.items()}
     for k, v in sets.items():
         if k not in PARAMS:
             raise ConfigError(f"ablate: unknown parameter {k!r}; valid: {', '.join(PARAMS)}")
         if not v:
             raise ConfigError(f"ablate: parameter {k} has no values")
-    names = _classifier_list(spec, classifiers)
     unused = sorted(set(sets) - _used(spec))
     if unused:
         raise ConfigError(
@@ -220,9 +228,10 @@ def ablate(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    ds = task_data(spec, DataRequest(_path(data), quick, seed, log, _path(store)))
-    load_s = time.perf_counter() - t0
-    base_runs = _runs(spec, classifiers, names)
+    task = load_task(
+        spec, quick=quick, data=data, classifiers=classifiers, seed=seed, log=log, store=store
+    )
+    base_runs = task.runs
     keys = list(sets)
     grid = [dict(zip(keys, vals, strict=True)) for vals in itertools.product(*sets.values())]
     rows = []
@@ -230,42 +239,46 @@ def ablate(
         log(f"ablate {task_id}: point {n + 1}/{len(grid)}: {point}")
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
+            pspec = _point_spec(spec, point)
             rep = evaluate_task(
-                _point_spec(spec, point),
-                ds,
+                pspec,
+                task.ds,
                 out / f"point-{n:03d}",
                 quick=quick,
-                classifiers=classifiers,
-                names=names,
+                runs=task_runs(pspec, classifiers),
                 repeats=repeats,
                 seed=seed,
                 log=lambda m: None,
                 figures=False,
             )
+            rep.write(out / f"point-{n:03d}")
         notes = sorted({str(w.message) for w in caught})
         for msg in notes:
             log(f"  warning: {msg}")
-        for base, r in zip(base_runs, rep["results"], strict=True):
+        for base, r in zip(base_runs, rep.results, strict=True):
             rows.append(
                 {
                     "params": point,
                     "run": base.name,
-                    "classifier": r["classifier"],
-                    "label": r.get("label", r["classifier"]),
-                    "accuracy_mean": r["accuracy_mean"],
-                    "accuracy_std": r["accuracy_std"],
-                    "repeats": r["repeats"],
+                    "classifier": r.classifier,
+                    "label": r.label,
+                    "accuracy_mean": r.accuracy_mean,
+                    "accuracy_std": r.accuracy_std,
+                    "repeats": r.repeats,
                     "warnings": notes,
                 }
             )
-        best = max(rep["results"], key=lambda r: r["accuracy_mean"])
-        log(f"  best: {best.get('label')} {best['accuracy_mean']:.3f}")
+        best = max(rep.results, key=lambda r: r.accuracy_mean)
+        log(f"  best: {best.label} {best.accuracy_mean:.3f}")
     report = {
         "task": task_id,
         "quick": quick,
         "sets": sets,
         "rows": rows,
-        "timing": {"load_s": round(load_s, 3), "wall_s": round(time.perf_counter() - t0, 2)},
+        "timing": {
+            "load_s": round(task.load_s, 3),
+            "wall_s": round(time.perf_counter() - t0, 2),
+        },
         "figures": [],
     }
     f = out / "ablation.png"
@@ -276,21 +289,21 @@ def ablate(
     return report
 
 
-def _markdown(path: Path, report: dict) -> None:
+def ablation_rows(report: dict) -> tuple[list[str], list[list[str]]]:
+    """The ablation's table: the swept parameters, the run, its accuracy and repeats."""
     keys = list(report["sets"])
-    lines = [
-        f"# Ablation of {report['task']}" + (" (quick)" if report["quick"] else ""),
-        "",
-        "| " + " | ".join(keys) + " | run | accuracy (SD) | repeats |",
-        "|" + "---|" * (len(keys) + 3),
+    head = [*keys, "run", "accuracy (SD)", "repeats"]
+    rows = [
+        [*(str(r["params"][k]) for k in keys), r["label"]]
+        + [f"{r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f})", str(r["repeats"])]
+        for r in report["rows"]
     ]
-    for r in report["rows"]:
-        vals = " | ".join(str(r["params"][k]) for k in keys)
-        lines.append(
-            f"| {vals} | {r['label']} | {r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f}) | "
-            f"{r['repeats']} |"
-        )
-    path.write_text("\n".join(lines) + "\n")
+    return head, rows
+
+
+def _markdown(path: Path, report: dict) -> None:
+    title = f"# Ablation of {report['task']}" + (" (quick)" if report["quick"] else "")
+    path.write_text("\n".join([title, "", *markdown_table(*ablation_rows(report))]) + "\n")
 
 
 def plot_ablation(rows: list[dict], sets: Mapping[str, Sequence], title: str, out: Path) -> None:

@@ -9,13 +9,15 @@ accuracy-over-time curve) and the numbers of the paper it reproduces.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
+from ..encoders.encodings import Steps, threshold_encoding
 from ..errors import ConfigError, UnknownNameError
-from ..learn.classifiers import LearnContext, Steps, get_classifier, threshold_encoding
+from ..learn.classifiers import LearnContext, get_classifier
 from ..records import TactileDataset
 
 
@@ -92,6 +94,18 @@ class Settings:
 
 
 @dataclass(frozen=True)
+class BenchScene:
+    """A task's scene in ``sim-tactile bench speed-error``: one of its plates (one whose
+    texture has a closed-form pulse period to check), slid with the task's sensor at its
+    nominal speed and force. ``key`` names it on the command line; ``left_out`` says why the
+    full sweep leaves it out by default ("": it runs)."""
+
+    key: str
+    plate: str
+    left_out: str = ""
+
+
+@dataclass(frozen=True)
 class TaskSpec:
     """One benchmark task (see the module docstring).
 
@@ -99,12 +113,13 @@ class TaskSpec:
     a sentence on why a cell differs from the paper (shown when it differs by more than two
     of the paper's standard deviations); ``remarks`` are sentences shown in every report (the
     choices the paper leaves open). ``features`` are the spike features of svm / lda / knn /
-    src.
+    src. ``get_data`` is None for a suite, whose ``parts`` are tasks of their own.
+    ``bench``: the task's scene in the speed-against-error benchmark (None: not in it).
     """
 
     id: str
     title: str
-    get_data: Callable[[DataRequest], TactileDataset]
+    get_data: Callable[[DataRequest], TactileDataset] | None
     classifiers: tuple[str, ...]
     split: str = "7:3"
     full: Settings = Settings()
@@ -121,6 +136,25 @@ class TaskSpec:
     channel_sets: Mapping[str, tuple[int, ...]] = field(default_factory=dict)
     encode_once: bool = False
     parts: tuple[str, ...] = ()
+    bench: BenchScene | None = None
+
+    def describe(self) -> dict:
+        """The whole definition as JSON data (a released id's never changes)."""
+        data = self.get_data
+        if data is not None:
+            data = data.describe() if hasattr(data, "describe") else _qualname(data)
+        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        d.update(
+            get_data=data,
+            encoder=_qualname(self.encoder),
+            full=asdict(self.full),
+            quick=asdict(self.quick),
+            paper={k: c.to_json() for k, c in self.paper.items()},
+            runs=[{**asdict(r), "paper": r.paper.to_json() if r.paper else None} for r in self.runs],
+            bench=None if self.bench is None else asdict(self.bench),
+            aliases=sorted(a for a, t in _ALIASES.items() if t == self.id),
+        )
+        return json.loads(json.dumps(d))
 
     def all_runs(self) -> tuple[Run, ...]:
         if self.runs:
@@ -146,6 +180,10 @@ class TaskSpec:
         )
 
 
+def _qualname(f: Callable) -> str:
+    return f"{f.__module__}.{f.__qualname__}"
+
+
 _TASKS: dict[str, TaskSpec] = {}
 #: Other names of released ids (an alias, like the id it names, never changes meaning).
 _ALIASES: dict[str, str] = {}
@@ -153,8 +191,12 @@ _ALIASES: dict[str, str] = {}
 
 def register(spec: TaskSpec) -> TaskSpec:
     """Add a task; an id can be registered once (ids never change meaning)."""
-    if spec.id in _TASKS:
+    if spec.id in _TASKS or spec.id in _ALIASES:
         raise ConfigError(f"task id {spec.id!r} is already registered; give a new version")
+    if (spec.get_data is None) == (not spec.parts):
+        raise ConfigError(
+            f"task {spec.id}: give get_data (its data) or parts (a suite of tasks), not both"
+        )
     for name in (*spec.classifiers, *spec.paper, *(r.classifier for r in spec.runs)):
         get_classifier(name)
     for r in spec.runs:

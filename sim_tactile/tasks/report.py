@@ -1,19 +1,23 @@
-"""The task report: comparison with the paper, ``report.md`` and the PNG figures."""
+"""The task report: comparison with the paper, the typed report (:class:`Report`, one
+Markdown and one text renderer) and the PNG figures."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..learn.protocols import EvalResult
-from ..records import TactileDataset
-from ..spikes.trains import SpikeTrains
+from ..plates import Plate
+from ..records import SpikeTrains, TactileDataset
+from ..tables import markdown_table, text_table
 from .registry import PaperCell, TaskSpec
 
 #: A cell reproduces the paper when it lies within this many of the paper's standard
-#: deviations (issue 6), or above.
+#: deviations, or above.
 TOLERANCE_SD = 2.0
 
 
@@ -52,64 +56,198 @@ def paper_text(cell: dict | None) -> str:
     return f"{cell['mean']:.3f}" + ("" if sd is None else f" ({sd:.3f})")
 
 
-def write_markdown(path: Path, report: dict, spec: TaskSpec) -> None:
-    """``report.md``: the table next to the paper's, the timing and the figures."""
-    lines = [f"# {report['task']}: {spec.title}", ""]
-    if report["quick"]:
-        lines += [
-            "**Quick run**: fewer epochs, repeats and time points than the paper's protocol; "
-            "the neural models are not trained to convergence.",
-            "",
-        ]
-    p = report["protocol"]
-    lines += [
-        f"Protocol: split {p['split']}, repeats {p['repeats']}, seed {p['seed']}; "
-        f"encoding: {p['encoding']}.",
-        f"Data: {report['dataset']['samples']} samples, {report['dataset']['time_steps']} "
-        f"steps at {report['dataset']['rate_hz']:g} Hz, {report['dataset']['channels']} "
-        f"channels, {report['dataset']['classes']} classes.",
-        "",
-        "| run | features | accuracy (SD) | paper (SD) | repeats | vs paper | wall [s] |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for r in report["results"]:
-        ptxt = paper_text(r["paper"])
-        label = r.get("label", r["classifier"])
-        lines.append(
-            f"| {label} | {r['features']} | {r['accuracy_mean']:.3f} "
-            f"({r['accuracy_std']:.3f}) | {ptxt} | {r['repeats']} | "
-            f"{r['comparison']['message']} | {r['wall_s']:.1f} |"
-        )
-    t = report["timing"]
-    lines += [
-        "",
-        f"Timing: load {t['load_s']:.1f} s, encode {t['encode_s']:.1f} s, classify "
-        f"{t['classify_s']:.1f} s, simulate {t['simulate_s']:.1f} s, wall {t['wall_s']:.1f} s.",
-    ]
-    curves = [r for r in report["results"] if r["over_time"]]
-    if curves:
-        pts = sorted({float(t) for r in curves for t in r["over_time"]})
-        lines += [
-            "",
-            "## Accuracy over time",
-            "",
-            "| classifier | " + " | ".join(f"{t:g} s" for t in pts) + " |",
-            "|---|" + "---|" * len(pts),
-        ]
-        for r in curves:
-            cells = [
-                f"{r['over_time'][f'{t:g}']['mean']:.3f}" if f"{t:g}" in r["over_time"] else "-"
-                for t in pts
+@dataclass
+class ResultRow:
+    """One row of a task's report: a classifier on a set of channels under a split, its
+    accuracy over the repeats, the paper's number and how they compare. ``extra`` holds the
+    per-repeat details (accuracies, confusion, accuracy over time, timings); ``part`` the
+    part of a suite the row comes from."""
+
+    classifier: str
+    label: str
+    features: str
+    accuracy_mean: float
+    accuracy_std: float
+    paper: dict | None
+    repeats: int
+    comparison: dict
+    wall_s: float = 0.0
+    channels: str = "all"
+    split: str = ""
+    part: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def over_time(self) -> dict:
+        return self.extra.get("over_time") or {}
+
+    def to_json(self) -> dict:
+        d = {k: getattr(self, k) for k in _ROW_KEYS}
+        if self.part is not None:
+            d["part"] = self.part
+        return {**d, **self.extra}
+
+    @classmethod
+    def from_json(cls, d: dict) -> ResultRow:
+        known = {k: d[k] for k in (*_ROW_KEYS, "part") if k in d}
+        return cls(**known, extra={k: x for k, x in d.items() if k not in known})
+
+
+_ROW_KEYS = (
+    "classifier",
+    "label",
+    "features",
+    "accuracy_mean",
+    "accuracy_std",
+    "paper",
+    "repeats",
+    "comparison",
+    "wall_s",
+    "channels",
+    "split",
+)
+
+
+@dataclass
+class Report:
+    """A task's report (``report.json``): its rows and how they were made. A suite's report
+    holds its parts' rows, each labelled ``<part>: <row>``, and ``parts`` (part -> its own
+    report's path)."""
+
+    task: str
+    title: str
+    quick: bool
+    results: list[ResultRow]
+    timing: dict
+    figures: list[str]
+    protocol: dict
+    dataset: dict
+    remarks: list[str]
+    reference: str
+    environment: dict
+    parts: dict | None = None
+
+    def to_json(self) -> dict:
+        d = {k: getattr(self, k) for k in _REPORT_KEYS}
+        d["results"] = [r.to_json() for r in self.results]
+        if self.parts is not None:
+            d["parts"] = self.parts
+        return d
+
+    @classmethod
+    def from_json(cls, d: dict) -> Report:
+        known = {k: d[k] for k in (*_REPORT_KEYS, "parts") if k in d}
+        known["results"] = [ResultRow.from_json(r) for r in d["results"]]
+        return cls(**known)
+
+    def write(self, out: Path) -> None:
+        """``report.json`` and ``report.md`` into ``out``."""
+        (out / "report.json").write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        (out / "report.md").write_text(self.markdown())
+
+    def markdown(self) -> str:
+        """``report.md``: the table beside the paper's, the protocol, timing and figures."""
+        lines = [f"# {self.task}: {self.title}", ""]
+        if self.quick:
+            lines += [
+                "**Quick run**: fewer plates, slides, epochs, repeats and time points than the "
+                "paper's protocol; the neural models are not trained to convergence.",
+                "",
             ]
-            lines.append(f"| {r.get('label', r['classifier'])} | " + " | ".join(cells) + " |")
-    if report["figures"]:
-        lines += ["", "## Figures", ""]
-        lines += [f"![{Path(f).stem}]({Path(f).name})" for f in report["figures"]]
-    if spec.remarks:
-        lines += ["", "## Notes", ""] + [f"- {r}" for r in spec.remarks]
-    if spec.reference:
-        lines += ["", f"Reference: {spec.reference}"]
-    path.write_text("\n".join(lines) + "\n")
+        if self.parts is None:
+            p, d = self.protocol, self.dataset
+            lines += [
+                f"Protocol: split {p['split']}, repeats {p['repeats']}, seed {p['seed']}; "
+                f"encoding: {p['encoding']}.",
+                f"Data: {d['samples']} samples, {d['time_steps']} steps at {d['rate_hz']:g} Hz, "
+                f"{d['channels']} channels, {d['classes']} classes.",
+                "",
+            ]
+        head = ["run", "features", "accuracy (SD)", "paper (SD)", "repeats", "vs paper", "wall [s]"]
+        lines += markdown_table(head, [_cells(r) for r in self.results])
+        lines += ["", _timing(self.timing)]
+        lines += _over_time_table(self.results)
+        if self.parts is not None:
+            lines += ["", "Parts: " + ", ".join(f"[{p}]({p}/report.md)" for p in self.parts)]
+        if self.figures:
+            lines += ["", "## Figures", ""]
+            lines += [f"![{Path(f).stem}]({_relative(f, self.parts)})" for f in self.figures]
+        if self.remarks:
+            lines += ["", "## Notes", ""] + [f"- {r}" for r in self.remarks]
+        if self.reference:
+            lines += ["", f"Reference: {self.reference}"]
+        return "\n".join(lines) + "\n"
+
+    def text(self) -> str:
+        """The report for a terminal: one line a row, the timing and the figures."""
+        lines = [f"{self.task}" + (" (quick)" if self.quick else ""), ""]
+        rows = [
+            [
+                r.label,
+                f"{r.accuracy_mean:.3f} ({r.accuracy_std:.3f})",
+                paper_text(r.paper),
+                r.comparison["message"],
+            ]
+            for r in self.results
+        ]
+        lines += text_table(["run", "accuracy", "paper", "vs paper"], rows, right=(1, 2))
+        lines += ["", _timing(self.timing)]
+        lines += [f"figure: {f}" for f in self.figures]
+        return "\n".join(lines)
+
+
+_REPORT_KEYS = (
+    "task",
+    "title",
+    "quick",
+    "results",
+    "timing",
+    "figures",
+    "protocol",
+    "dataset",
+    "remarks",
+    "reference",
+    "environment",
+)
+
+
+def _cells(r: ResultRow) -> list[str]:
+    return [
+        r.label,
+        r.features,
+        f"{r.accuracy_mean:.3f} ({r.accuracy_std:.3f})",
+        paper_text(r.paper),
+        str(r.repeats),
+        r.comparison["message"],
+        f"{r.wall_s:.1f}",
+    ]
+
+
+def _timing(t: dict) -> str:
+    return (
+        f"Timing: simulate {t['simulate_s']:.1f} s, load {t.get('load_s', 0.0):.1f} s, encode "
+        f"{t['encode_s']:.1f} s, classify {t['classify_s']:.1f} s, wall {t.get('wall_s', 0.0):.1f} s."
+    )
+
+
+def _over_time_table(rows: list[ResultRow]) -> list[str]:
+    curves = [r for r in rows if r.over_time]
+    if not curves:
+        return []
+    pts = sorted({float(t) for r in curves for t in r.over_time})
+    body = [
+        [r.label]
+        + [f"{r.over_time[f'{t:g}']['mean']:.3f}" if f"{t:g}" in r.over_time else "-" for t in pts]
+        for r in curves
+    ]
+    head = ["classifier"] + [f"{t:g} s" for t in pts]
+    return ["", "## Accuracy over time", "", *markdown_table(head, body)]
+
+
+def _relative(figure: str, parts: dict | None) -> str:
+    """A figure's path from its report's folder (a suite's figures lie in its parts')."""
+    f = Path(figure)
+    return f"{f.parent.name}/{f.name}" if parts is not None else f.name
 
 
 # ------------------------------------------------------------------------------- figures
@@ -234,9 +372,9 @@ def plot_streams(ds: TactileDataset, out: Path):
     fig.savefig(out, dpi=100)
 
 
-def plot_plates(plates: Sequence[str], class_names: Sequence[str], out: Path):
-    """Top view of each plate's surface height (the analytic definition the simulation uses)."""
-    from ..plates import get_plate, height_at
+def plot_plates(plates: Sequence[Plate], class_names: Sequence[str], out: Path):
+    """Top view of each plate's surface height (the analytic definition the simulation used)."""
+    from ..plates import height_at
 
     n = len(plates)
     cols = min(5, n)
@@ -247,7 +385,7 @@ def plot_plates(plates: Sequence[str], class_names: Sequence[str], out: Path):
         if k >= n:
             ax.set_axis_off()
             continue
-        p = get_plate(plates[k])
+        p = plates[k]
         hx, hy = 0.5 * p.area_length_m + 3e-3, 0.5 * p.area_width_m + 3e-3
         x = np.linspace(-hx, hx, 360)
         y = np.linspace(-hy, hy, 240)
@@ -288,9 +426,9 @@ def write_figures(
     f = out / "raster_per_class.png"
     plot_rasters(ds, encoded, f)
     files.append(str(f))
-    plates = ds.meta.get("setup", {}).get("plates")
-    if plates:
+    params = (ds.meta.get("setup") or {}).get("plate_params")
+    if params:  # the plates the data set recorded, whole (no lookup by name)
         f = out / "plates.png"
-        plot_plates(plates, ds.class_names, f)
+        plot_plates([Plate.from_params(p) for p in params], ds.class_names, f)
         files.append(str(f))
     return files

@@ -1,6 +1,7 @@
 """The real-data tasks of seed paper 000 (Taunyazov et al. 2020, Table I).
 
-``biotac20-real`` and ``icub20-real``: 20 materials x 50 slides, the paper's protocol: a 7:3
+``biotac20-real-v1`` and ``icub20-real-v1`` (also called by their first ids,
+``biotac20-real`` and ``icub20-real``): 20 materials x 50 slides, the paper's protocol: a 7:3
 stratified split repeated 5 times (the LSTM, as in the paper, twice), threshold encoding with
 K = 2, and the four models of Table I: a linear SVM on the raw data collapsed in time, a
 linear SVM on spike counts, the LSTM and the spiking network, with the paper's network sizes
@@ -31,9 +32,11 @@ Choices the paper leaves open (fixed here, so these ids keep their meaning):
 
 from __future__ import annotations
 
-from ..datasets.real import load_biotac, load_icub
-from ..learn.classifiers import range_threshold_encoding, threshold_encoding
-from .registry import DataRequest, PaperCell, Settings, TaskSpec, register
+from collections.abc import Mapping
+
+from ...datasets.real import load_biotac, load_icub
+from ...encoders.encodings import range_threshold_encoding, threshold_encoding
+from ..registry import DataRequest, PaperCell, Settings, TaskSpec, alias, register
 
 TABLE_I = "Taunyazov et al. 2020, Table I"
 REFERENCE = (
@@ -43,6 +46,19 @@ REFERENCE = (
 MODELS = ("svm-raw", "svm-spike", "lstm", "snn")
 #: torch runs single-threaded: robust on a shared machine (see learn._torch.torch_threads).
 _TORCH = {"num_threads": 1}
+
+
+def paper000_settings(times_s, params: Mapping, *, quick: bool = False, split=None) -> Settings:
+    """Paper 000's protocol: 5 splits (the LSTM 2), or in a quick run 2 (each network 1),
+    accuracy over time at ``times_s`` (once each), the networks' ``params``."""
+    return Settings(
+        repeats=2 if quick else 5,
+        repeats_by_classifier={"lstm": 1, "snn": 1} if quick else {"lstm": 2},
+        time_points_s=tuple(times_s),
+        time_repeats=1,
+        params=params,
+        split=split,
+    )
 
 
 def _biotac(req: DataRequest):
@@ -67,7 +83,7 @@ BIOTAC_LSTM = {**_LSTM, "weight_decay": 1e-4, **_TORCH}
 
 BIOTAC_TASK = register(
     TaskSpec(
-        id="biotac20-real",
+        id="biotac20-real-v1",
         title="BioTac, 20 materials x 50 slides, 19 electrodes, 1-5 s at 100 Hz (real data)",
         get_data=_biotac,
         classifiers=MODELS,
@@ -75,25 +91,14 @@ BIOTAC_TASK = register(
         needs_data_path=True,
         encoder=threshold_encoding,
         encoding="threshold encoding, K = 2, thresholds at -0.5 / +0.5 SD of each slide",
-        full=Settings(
-            repeats=5,
-            repeats_by_classifier={"lstm": 2},
-            time_points_s=(0.25, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0),
-            time_repeats=1,
-            params={
-                "snn": {**BIOTAC_SNN, "epochs": 300},
-                "lstm": {**BIOTAC_LSTM, "epochs": 150},
-            },
+        full=paper000_settings(
+            (0.25, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0),
+            {"snn": {**BIOTAC_SNN, "epochs": 300}, "lstm": {**BIOTAC_LSTM, "epochs": 150}},
         ),
-        quick=Settings(
-            repeats=2,
-            repeats_by_classifier={"lstm": 1, "snn": 1},
-            time_points_s=(0.5, 2.0, 4.0),
-            time_repeats=1,
-            params={
-                "snn": {**BIOTAC_SNN, "epochs": 12},
-                "lstm": {**BIOTAC_LSTM, "epochs": 6},
-            },
+        quick=paper000_settings(
+            (0.5, 2.0, 4.0),
+            {"snn": {**BIOTAC_SNN, "epochs": 12}, "lstm": {**BIOTAC_LSTM, "epochs": 6}},
+            quick=True,
         ),
         paper={
             "snn": PaperCell(0.946, 0.013, TABLE_I),
@@ -140,7 +145,7 @@ ICUB_LSTM = {**_LSTM, "weight_decay": 1e-4, **_TORCH}
 
 ICUB_TASK = register(
     TaskSpec(
-        id="icub20-real",
+        id="icub20-real-v1",
         title="iCub forearm RoboSkin, 20 materials x 50 slides, 60 taxels, 1.5 s at 50 Hz "
         "(real data)",
         get_data=_icub,
@@ -150,25 +155,14 @@ ICUB_TASK = register(
         encoder=range_threshold_encoding,
         encoding="threshold encoding, K = 2, taxel range (1st-99th percentile) -> [0, 3], "
         "thresholds at 1 and 2",
-        full=Settings(
-            repeats=5,
-            repeats_by_classifier={"lstm": 2},
-            time_points_s=(0.1, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5),
-            time_repeats=1,
-            params={
-                "snn": {**ICUB_SNN, "epochs": 100},
-                "lstm": {**ICUB_LSTM, "epochs": 150},
-            },
+        full=paper000_settings(
+            (0.1, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5),
+            {"snn": {**ICUB_SNN, "epochs": 100}, "lstm": {**ICUB_LSTM, "epochs": 150}},
         ),
-        quick=Settings(
-            repeats=2,
-            repeats_by_classifier={"lstm": 1, "snn": 1},
-            time_points_s=(0.25, 0.75, 1.5),
-            time_repeats=1,
-            params={
-                "snn": {**ICUB_SNN, "epochs": 8},
-                "lstm": {**ICUB_LSTM, "epochs": 10},
-            },
+        quick=paper000_settings(
+            (0.25, 0.75, 1.5),
+            {"snn": {**ICUB_SNN, "epochs": 8}, "lstm": {**ICUB_LSTM, "epochs": 10}},
+            quick=True,
         ),
         paper={
             "snn": PaperCell(0.922, 0.005, TABLE_I),
@@ -209,6 +203,9 @@ ICUB_TASK = register(
         reference=REFERENCE,
     )
 )
+
+alias("biotac20-real", BIOTAC_TASK.id)
+alias("icub20-real", ICUB_TASK.id)
 
 #: the real-data task of each sensor (the simulated textures20 parts reuse their settings)
 TASKS_BY_SENSOR = {"biotac19": BIOTAC_TASK, "icub60": ICUB_TASK}

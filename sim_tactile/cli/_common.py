@@ -1,0 +1,57 @@
+"""What every command shares: logging to stderr, one JSON document on stdout."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable, Sequence
+
+from ..errors import ConfigError
+
+
+def log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def emit(args: argparse.Namespace, payload: object, text: Callable[[], str]) -> None:
+    """Print ``payload`` as JSON under ``--json``, else ``text()`` for people."""
+    if args.json:
+        json.dump(finite_json(payload), sys.stdout, indent=2, sort_keys=False)
+        sys.stdout.write("\n")
+    else:
+        print(text())
+
+
+def finite_json(obj: object) -> object:
+    """The document with non-finite floats as None: stdout must stay valid JSON."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: finite_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [finite_json(v) for v in obj]
+    return obj
+
+
+def names_arg(value: str | None, option: str, valid: Sequence[str]) -> list[str] | None:
+    """A comma-separated list of names, each one of ``valid`` (None: not given)."""
+    if value is None:
+        return None
+    names = [n.strip() for n in value.split(",") if n.strip()]
+    bad = [n for n in names if n not in valid]
+    if bad or not names:
+        raise ConfigError(
+            f"{option} {value!r}: {bad[0] if bad else 'nothing'} is not valid; valid: "
+            f"a comma-separated list of {', '.join(valid)}"
+        )
+    return names
+
+
+def add_command(parent, name: str, func, help: str) -> argparse.ArgumentParser:
+    """A subcommand with ``--json`` that runs ``func(args)``."""
+    sp = parent.add_parser(name, help=help, description=help)
+    sp.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+    sp.set_defaults(func=func)
+    return sp

@@ -1,0 +1,109 @@
+"""``sim-tactile bench speed-error`` and ``bench stability``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .. import _validate as v
+from ..errors import ConfigError
+from ._common import add_command, emit, finite_json, log, names_arg
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    raise ConfigError(
+        "bench: give a benchmark: 'sim-tactile bench speed-error [--quick] --out DIR' or "
+        "'sim-tactile bench stability'"
+    )
+
+
+def cmd_bench_speed_error(args: argparse.Namespace) -> int:
+    """Speed against error of the fidelity levels on each task's scene."""
+    from ..bench.pareto import markdown
+    from ..bench.speed_error import run_speed_error
+    from ..bench.sweep import ALL_SCENES, sweep_for
+    from ..sim.fidelity import LEVELS
+
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {args.out!r} exists and is not a directory")
+    if args.duration is not None:
+        v.in_range("--duration", args.duration, 0.05, 60.0, unit="s")
+    sweep = sweep_for(
+        args.quick,
+        scenes=names_arg(args.scenes, "--scenes", list(ALL_SCENES)),
+        levels=names_arg(args.levels, "--levels", list(LEVELS)),
+        duration_s=args.duration,
+    )
+    doc = finite_json(run_speed_error(sweep, out, log=log))
+    emit(
+        args, doc, lambda: markdown(doc) + "\n" + "\n".join(f"figure: {f}" for f in doc["figures"])
+    )
+    if doc["crashes"]:
+        log(f"sim-tactile: error: bench speed-error: {doc['crashes']} configuration(s) crashed")
+        return 1
+    return 0
+
+
+def cmd_bench_stability(args: argparse.Namespace) -> int:
+    """The hard cases: each must end in a measured result or a named error."""
+    from ..bench.stability import run_stability, table
+    from ..bench.stability_cases import CASES, case_names
+
+    names = names_arg(args.cases, "--cases", case_names())
+    doc = finite_json(run_stability(CASES, names, log=log))
+    emit(args, doc, lambda: table(doc))
+    if doc["failures"]:
+        log(
+            f"sim-tactile: error: bench stability: {doc['failures']} case(s) crashed or gave a "
+            f"wrong number: {', '.join(doc['failed'])}"
+        )
+        return 1
+    return 0
+
+
+def add_parsers(sub) -> None:
+    bn = sub.add_parser(
+        "bench",
+        help="benchmarks: speed against error, stability",
+        description="benchmarks: speed against error of the fidelity levels, stability",
+    )
+    bn.add_argument("--json", dest="bench_json", action="store_true", help=argparse.SUPPRESS)
+    bn.set_defaults(func=cmd_bench)
+    bsub = bn.add_subparsers(dest="bench_command")
+    se = add_command(
+        bsub,
+        "speed-error",
+        cmd_bench_speed_error,
+        "real-time factor against error (vs the finest level and the closed forms) of every "
+        "fidelity level, time step and node pitch on each task's scene; table and Pareto figure",
+    )
+    se.add_argument(
+        "--quick", action="store_true", help="three scenes, fewer settings, short slides (~1 min)"
+    )
+    se.add_argument("--out", required=True, help="output directory")
+    se.add_argument(
+        "--scenes",
+        default=None,
+        help="comma-separated scenes: each task's (finger7, multilayer3, roughness8, "
+        "textures20, textures20-icub) and hertz (default: all but those a task leaves out; "
+        "--quick: finger7, textures20, hertz)",
+    )
+    se.add_argument(
+        "--levels", default=None, help="comma-separated levels to sweep: L0, L1, L2 (default: all)"
+    )
+    se.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        help="slide duration [s] (default: cross the texture; --quick: until the probe taxel "
+        "has crossed a few features)",
+    )
+    st = add_command(
+        bsub,
+        "stability",
+        cmd_bench_stability,
+        "hard cases (fast slides, high forces, coarse steps, extreme neuron inputs, dead taxels, "
+        "empty spike trains): each must end in a measured result or a named error",
+    )
+    st.add_argument("--cases", default=None, help="comma-separated case names (default: all)")

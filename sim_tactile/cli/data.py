@@ -1,0 +1,88 @@
+"""``sim-tactile generate`` (a data set into a store) and ``export`` (a store as files)."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..slides.run import BACKENDS
+from ._common import add_command, emit, log
+
+
+def cmd_generate(args: argparse.Namespace) -> int:
+    """Simulate a task's (or a configuration file's) slides into a Zarr store."""
+    from ..generate import generate
+
+    res = generate(
+        args.task,
+        args.out,
+        workers=args.workers,
+        backend=args.backend,
+        address=args.address,
+        quick=args.quick,
+        resume=args.resume,
+        seed=args.seed,
+        data=args.data,
+        progress=not args.json,
+        log=log,
+    )
+    emit(
+        args,
+        res,
+        lambda: (
+            f"{res['out']}: {res['trials']} slides ({res['written']} simulated now, "
+            f"{res['reused']} kept, {res['regenerated']} corrupt ones redone) in "
+            f"{res['wall_s']:.1f} s; store overhead "
+            + (f"{100 * res['store_overhead']:.2f}%" if res["store_overhead"] else "-")
+        ),
+    )
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    """Write a data set's arrays as plain .npy files and its metadata as JSON."""
+    from ..datasets import export
+
+    res = export(args.store, args.out, part=args.part)
+    emit(args, res, lambda: f"{res['slides']} slides -> {res['out']}/")
+    return 0
+
+
+def add_parsers(sub) -> None:
+    gn = add_command(
+        sub,
+        "generate",
+        cmd_generate,
+        "simulate every slide of a task or of a configuration file into a Zarr store, in "
+        "parallel (local processes or Ray), resumably",
+    )
+    gn.add_argument(
+        "task",
+        help="a task id (a suite such as textures20-v1 gets one group per part; a *-real task "
+        "copies its recordings, with --data) or a configuration file (.toml / .json: plates, "
+        "sensor, protocol, randomise, finger, slides_per_plate, seed)",
+    )
+    gn.add_argument("--out", required=True, help="the store, a folder (e.g. set.zarr)")
+    gn.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="worker processes (default: every core), or the CPUs of a local Ray instance",
+    )
+    gn.add_argument("--backend", default="local", choices=BACKENDS)
+    gn.add_argument(
+        "--address", default=None, help="Ray cluster address (HOST:PORT or auto; --backend ray)"
+    )
+    gn.add_argument("--quick", action="store_true", help="the task's quick slides")
+    gn.add_argument(
+        "--resume", action="store_true", help="continue an interrupted store of this configuration"
+    )
+    gn.add_argument(
+        "--seed", type=int, default=None, help="data set seed (default: 0, or the file's seed)"
+    )
+    gn.add_argument("--data", default=None, help="folder of the real data set (*-real tasks)")
+    ex = add_command(
+        sub, "export", cmd_export, "write a data set as plain numpy files (.npy + JSON)"
+    )
+    ex.add_argument("store", help="a store written by generate")
+    ex.add_argument("--out", required=True, help="output folder (new or empty)")
+    ex.add_argument("--part", default=None, help="one part of a suite's store (default: all)")

@@ -1,0 +1,59 @@
+"""``sim-tactile plates list`` and ``plates build``."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..errors import ConfigError
+from ..tables import text_table
+from ._common import add_command, emit, log
+
+
+def cmd_plates_list(args: argparse.Namespace) -> int:
+    from ..plates import get_plate, preset_names
+
+    plates = [get_plate(name) for name in preset_names()]
+    rows = [
+        {"name": p.name, "family": p.family, "params": p.params(), "hash": p.hash} for p in plates
+    ]
+    table = [[r["name"], r["family"], r["hash"]] for r in rows]
+    emit(args, rows, lambda: "\n".join(text_table(["name", "family", "hash"], table)))
+    return 0
+
+
+def _build_table(results) -> str:
+    rows = []
+    for r in results:
+        geoms = ",".join(f"{k}:{v}" for k, v in sorted(r.geoms.items()))
+        cached = "yes" if all(r.cached.values()) else "no"
+        where = f"{r.files['stl'].parent}/{r.plate.slug}.*"
+        rows.append([r.plate.name, geoms, cached, f"{r.wall_s:.2f}", where])
+    return "\n".join(text_table(["plate", "geoms", "cached", "wall_s", "files"], rows, right=(3,)))
+
+
+def cmd_plates_build(args: argparse.Namespace) -> int:
+    from ..plates import build, preset_names
+
+    if args.all == bool(args.name):
+        raise ConfigError("plates build: give a plate NAME or --all")
+    names = preset_names() if args.all else [args.name]
+    results = []
+    for n in names:
+        r = build(n, args.out)
+        log(f"built {n} in {r.wall_s:.2f} s ({'cache hit' if all(r.cached.values()) else 'built'})")
+        results.append(r)
+    payload = [r.to_json() for r in results] if args.all else results[0].to_json()
+    emit(args, payload, lambda: _build_table(results))
+    return 0
+
+
+def add_parsers(sub) -> None:
+    plates = sub.add_parser("plates", help="list and build the textured plates")
+    psub = plates.add_subparsers(dest="plates_command", required=True)
+    add_command(psub, "list", cmd_plates_list, "list the preset plates")
+    b = add_command(
+        psub, "build", cmd_plates_build, "build a plate's STL, STEP, MJCF and preview PNG"
+    )
+    b.add_argument("name", nargs="?", help="preset name, e.g. finger7/ridges-4")
+    b.add_argument("--all", action="store_true", help="build every preset")
+    b.add_argument("--out", required=True, help="output directory")

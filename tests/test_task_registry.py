@@ -1,0 +1,72 @@
+"""The task registry: released ids keep their meaning (their whole description is pinned),
+aliases, removal, and every simulated task's slides are deterministic."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from sim_tactile.errors import ConfigError, UnknownNameError
+from sim_tactile.slides import SlideSet
+from sim_tactile.tasks import TaskSpec, get_task, register, task_ids
+from sim_tactile.tasks.registry import alias, unregister
+
+DESCRIPTIONS = Path(__file__).parent / "data" / "task_descriptions.json"
+#: Length of each task's determinism slide [s]: the pad reaches the texture's first features.
+DETERMINISM_WINDOW_S = 0.3
+
+
+def test_every_released_task_keeps_its_description():
+    """Each task's whole definition (data, protocol, settings, runs, paper cells) as it was
+    released; a difference is a new task version, not an edit (``python
+    benchmarks/task_descriptions.py`` only when a task is added)."""
+    released = json.loads(DESCRIPTIONS.read_text())
+    now = {t: get_task(t).describe() for t in task_ids()}
+    assert sorted(now) == sorted(released), "a task was added or removed"
+    for t in released:
+        assert now[t] == released[t], f"task {t} changed meaning: release a new version"
+
+
+def test_aliases_resolve_and_removal_is_explicit():
+    base = get_task("finger7-v1")
+    spec = replace(base, id="registry-probe-v1", bench=None)
+    register(spec)
+    try:
+        alias("registry-probe", spec.id)
+        assert get_task("registry-probe") is spec and "registry-probe" not in task_ids()
+        with pytest.raises(ConfigError, match="already registered"):
+            alias("registry-probe", "finger7-v1")
+    finally:
+        unregister(spec.id)
+    with pytest.raises(UnknownNameError):
+        get_task("registry-probe")
+    with pytest.raises(UnknownNameError, match="not registered"):
+        unregister(spec.id)
+
+
+def test_a_task_has_data_or_parts():
+    kw = {"title": "t", "classifiers": ("svm",)}
+    with pytest.raises(ConfigError, match="get_data .* or parts"):
+        register(TaskSpec(id="neither-v1", get_data=None, **kw))
+    with pytest.raises(ConfigError, match="get_data .* or parts"):
+        register(
+            TaskSpec(id="both-v1", get_data=get_task("finger7-v1").get_data, parts=("a",), **kw)
+        )
+
+
+SIMULATED = [t for t in task_ids() if isinstance(get_task(t).get_data, SlideSet)]
+
+
+@pytest.mark.parametrize("task_id", SIMULATED)
+def test_every_simulated_task_is_deterministic(task_id, cache):
+    """One short slide of each task, simulated twice from the same seed: the same bits."""
+    job = get_task(task_id).get_data.jobs(seed=0, quick=True)[-1]
+    job = replace(job, protocol=replace(job.protocol, duration_s=DETERMINISM_WINDOW_S))
+    a = job.simulate(cache).recording
+    b = job.simulate(cache).recording
+    assert a.data.tobytes() == b.data.tobytes()
+    assert a.meta["normal_force_n"] == b.meta["normal_force_n"]
+    assert a.data.any()
