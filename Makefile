@@ -8,7 +8,7 @@ TORCH_PIN := torch==2.13.0
 STAMP_RUN := $(VENV)/.installed-run
 STAMP_TEST := $(VENV)/.installed-test
 
-.PHONY: demo test lint format bench clean
+.PHONY: demo test check lint format bench clean
 
 $(BIN)/python:
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "make: $(PYTHON) not found; set PYTHON=..." >&2; exit 1; }
@@ -28,10 +28,19 @@ $(STAMP_TEST): pyproject.toml | $(BIN)/python
 demo: $(STAMP_RUN)
 	$(BIN)/sim-tactile run finger7-v1 --quick --out demo-out
 
-test: $(STAMP_TEST)
+# the whole suite, on both cores (the tests are deterministic under pytest-xdist)
+test: lint $(STAMP_TEST)
+	$(BIN)/python -m pytest -q -n 2
+
+# the fast lane (under two minutes): everything but the tests marked slow
+check: lint $(STAMP_TEST)
+	$(BIN)/python -m pytest -q -n 2 -m "not slow"
+
+# style, and the one-way flow of the imports (import-linter's contracts in pyproject.toml)
+lint: $(STAMP_TEST)
 	$(BIN)/ruff check sim_tactile tests benchmarks docs
 	$(BIN)/ruff format --check sim_tactile tests benchmarks docs
-	$(BIN)/python -m pytest -q
+	$(BIN)/lint-imports
 
 format: $(STAMP_TEST)
 	$(BIN)/ruff format sim_tactile tests benchmarks docs

@@ -20,6 +20,7 @@ def test_plates_list_json_is_the_python_api(cli):
     assert text[0].split() == ["name", "family", "hash"] and len(text) == len(rows) + 1
 
 
+@pytest.mark.slow
 def test_plates_build_json_writes_the_four_files(cli, tmp_path):
     out = cli(["plates", "build", "multilayer3/grating-9", "--out", tmp_path, "--json"])
     doc = json.loads(out.stdout)

@@ -54,6 +54,7 @@ def test_simulate_json_and_npz(cli, tmp_path):
         assert open(f, "rb").read(4) == b"\x89PNG"
 
 
+@pytest.mark.slow
 def test_press_json(cli):
     res = cli(
         [

@@ -107,6 +107,7 @@ def test_one_and_two_workers_write_the_same_data_set(tiny, tmp_path):
     assert res["config_hash"] == datasets.open(ref).config_hash
 
 
+@pytest.mark.slow
 def test_ray_backend_writes_the_same_data_set(tiny, tmp_path, cli_env):
     pytest.importorskip("ray", reason="the ray extra is not installed")
     cfg, ref = tiny
@@ -168,6 +169,7 @@ def _interrupt_on(seed: int):
     return fn
 
 
+@pytest.mark.slow
 def test_interrupted_and_killed_runs_resume_to_the_same_data_set(tmp_path, cli_env):
     cfg = _write(tmp_path / "twelve.json", {**TINY, "slides_per_plate": 6})
     ref = tmp_path / "ref.zarr"
@@ -211,6 +213,7 @@ def _die_on_last(job):
     return _slide(job)
 
 
+@pytest.mark.slow
 def test_a_killed_worker_stops_the_run_and_resume_completes_it(tiny, tmp_path):
     cfg, ref = tiny
     out = tmp_path / "w.zarr"
@@ -444,6 +447,7 @@ def _fake_slide(job):
     return SlideOutcome(Recording(x, times, taxels), (), 0.0, False)
 
 
+@pytest.mark.slow
 def test_a_suite_gets_one_group_per_part(tmp_path):
     out = tmp_path / "t20.zarr"
     res = _quiet("textures20-v1", out, quick=True, workers=1, _worker=_fake_slide)

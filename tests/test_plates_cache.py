@@ -35,6 +35,7 @@ def _build_in_subprocess(name: str, root, kinds: str) -> dict:
     return json.loads(out.stdout)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["multilayer3/grating-9", "roughness8/ra-6.3"])
 def test_same_parameters_give_identical_bytes_across_processes(name, tmp_path):
     kinds = "stl,mjcf,heightmap"

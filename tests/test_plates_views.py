@@ -59,6 +59,12 @@ EXPECTED_PEAK_MM = {
 }
 FEATURED = list(EXPECTED_FEATURES)
 ROUGH = [n for n in preset_names() if n not in EXPECTED_FEATURES]
+#: The plates the fast lane (``make check``) compares; the others run in ``make test``.
+FAST = ("finger7/ridges-4", "multilayer3/grating-9", "roughness8/ra-50")
+
+
+def _lanes(names: list[str]) -> list:
+    return [n if n in FAST else pytest.param(n, marks=pytest.mark.slow) for n in names]
 
 
 def _expected_peak(name: str) -> float:
@@ -75,7 +81,7 @@ def test_every_preset_is_covered():
     assert len(ROUGH) == 10
 
 
-@pytest.mark.parametrize("name", FEATURED)
+@pytest.mark.parametrize("name", _lanes(FEATURED))
 def test_three_views_agree_on_featured_plates(name, cache):
     r = compare_views(get_plate(name), cache=cache)
     expected = EXPECTED_FEATURES[name]
@@ -87,7 +93,7 @@ def test_three_views_agree_on_featured_plates(name, cache):
         assert diff <= VIEW_TOL_M, pair
 
 
-@pytest.mark.parametrize("name", ROUGH)
+@pytest.mark.parametrize("name", _lanes(ROUGH))
 def test_three_views_agree_on_roughness(name, cache):
     plate = get_plate(name)
     r = compare_views(plate, cache=cache)

@@ -110,6 +110,7 @@ def test_pvdf_film_across_the_slide_peaks_at_speed_over_period(speed, cache):
     assert f == pytest.approx(harmonic * f0, rel=PEAK_RTOL)
 
 
+@pytest.mark.slow
 def test_pvdf_rms_rises_monotonically_with_ra(cache):
     rms = []
     for ra in ("0.4", "0.8", "1.6", "3.2", "6.3", "12.5", "25", "50"):
@@ -155,6 +156,7 @@ def _real_biotac(dataset_dir, n: int = 20) -> np.ndarray:
     return np.array([np.genfromtxt(f, delimiter=",", skip_header=1)[100:500, 26:45] for f in files])
 
 
+@pytest.mark.slow
 def test_simulated_biotac_and_icub_look_like_the_real_data(cache, dataset_dir):
     """Same order of magnitude, noise level and rate as the real recordings."""
     real_b = _real_biotac(dataset_dir)

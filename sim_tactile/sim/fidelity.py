@@ -105,33 +105,12 @@ def choose_fidelity(
         return fidelity
     protocol = protocol.at_rate(layout.rate_hz)
     v.one_of("fidelity", fidelity, FIDELITIES)
-    warnings: list[str] = []
     scale = feature_scale_m(plate)
     taxel = float(layout.sizes.min())
     taxel_x, taxel_y = (float(layout.sizes[:, k].min()) for k in (0, 1))
     need = min([taxel / 2] + ([scale / 2.5] if scale else []))
     auto_pitch = min(PITCH_MAX_M, max(PITCH_MIN_M, need))
-    if scale is not None and auto_pitch > scale / 2:
-        warnings.append(
-            f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
-            f"({auto_pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes"
-        )
-    if isinstance(plate.texture, Roughness):
-        warnings.append(
-            f"micro-roughness (Ra {plate.texture.ra_m * 1e6:.3g} um) is below the node grid: the finger simulation sees "
-            "it only as far as its MuJoCo height field resolves it"
-        )
-    period = _texture_period(plate)
-    if period is not None and layout.min_pitch_m > period / 2 and layout.n > 1:
-        warnings.append(
-            f"taxel pitch {layout.min_pitch_m * 1e3:.3g} mm is coarser than half the texture "
-            f"period ({period * 1e3:.3g} mm): the taxel array aliases the texture"
-        )
-    if period is not None and taxel > period:
-        warnings.append(
-            f"taxels ({taxel * 1e3:.3g} mm) are larger than the texture period "
-            f"({period * 1e3:.3g} mm): each taxel averages over several features"
-        )
+    warnings = _texture_warnings(plate, layout, scale, auto_pitch)
     speed = max(protocol.speed_m_s, 1e-6)
     dt_need = DT_MAX_S if scale is None else min(DT_MAX_S, scale / (speed * STEPS_PER_FEATURE))
     level = "L1" if fidelity == "auto" else fidelity
@@ -193,6 +172,34 @@ def choose_fidelity(
         tuple(warnings),
         None if aspect == 1.0 else float(pitch_y),
     )
+
+
+def _texture_warnings(plate: Plate, layout, scale: float | None, pitch: float) -> list[str]:
+    """What the node grid (``pitch``) and the taxels cannot resolve of the texture."""
+    warnings = []
+    taxel = float(layout.sizes.min())
+    if scale is not None and pitch > scale / 2:
+        warnings.append(
+            f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
+            f"({pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes"
+        )
+    if isinstance(plate.texture, Roughness):
+        warnings.append(
+            f"micro-roughness (Ra {plate.texture.ra_m * 1e6:.3g} um) is below the node grid: the finger simulation sees "
+            "it only as far as its MuJoCo height field resolves it"
+        )
+    period = _texture_period(plate)
+    if period is not None and layout.min_pitch_m > period / 2 and layout.n > 1:
+        warnings.append(
+            f"taxel pitch {layout.min_pitch_m * 1e3:.3g} mm is coarser than half the texture "
+            f"period ({period * 1e3:.3g} mm): the taxel array aliases the texture"
+        )
+    if period is not None and taxel > period:
+        warnings.append(
+            f"taxels ({taxel * 1e3:.3g} mm) are larger than the texture period "
+            f"({period * 1e3:.3g} mm): each taxel averages over several features"
+        )
+    return warnings
 
 
 def steps_per_sample(rate_hz: float, dt_s: float) -> int:

@@ -150,7 +150,9 @@ class TaskSpec:
             full=asdict(self.full),
             quick=asdict(self.quick),
             paper={k: c.to_json() for k, c in self.paper.items()},
-            runs=[{**asdict(r), "paper": r.paper.to_json() if r.paper else None} for r in self.runs],
+            runs=[
+                {**asdict(r), "paper": r.paper.to_json() if r.paper else None} for r in self.runs
+            ],
             bench=None if self.bench is None else asdict(self.bench),
             aliases=sorted(a for a, t in _ALIASES.items() if t == self.id),
         )
