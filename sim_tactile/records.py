@@ -112,7 +112,8 @@ class TactileDataset:
     """A labelled set of equally long recordings: the input of every classifier and protocol.
 
     Real data (the loaders in :mod:`sim_tactile.datasets`) and simulated slides
-    (:meth:`from_recordings`) take this same form, so nothing downstream can tell them apart.
+    (:meth:`from_recordings`, what a task's slide set returns) take this same form, so nothing
+    downstream can tell them apart.
 
     data: ``(samples, time, channels)`` float32, sensor output (``units``).
     labels: ``(samples,)`` int64 class indices ``0 .. len(class_names) - 1``.

@@ -1,4 +1,4 @@
-"""The contract's bench commands: stability (every hard case ends in a measured result or a
+"""The bench commands: stability (every hard case ends in a measured result or a
 named error, and the checker can fail) and speed-error (a tiny sweep)."""
 
 from __future__ import annotations

@@ -94,7 +94,7 @@ def test_papers_one_ms_euler_is_available_and_less_accurate():
     current, rate = CASES["strong"]
     ref = ode_spike_times(current, rate, "FS")
     euler = izhikevich_spike_times(current, rate, "FS", 1e-3, scheme="euler")
-    # PHYSICS.md: forward Euler at 1 ms loses a large share of the fast-spiking spikes
+    # docs/physics.md: forward Euler at 1 ms loses a large share of the fast-spiking spikes
     assert euler.size < 0.9 * ref.size
 
 

@@ -15,7 +15,7 @@ from sim_tactile.plates.probe import ColliderProbe
 MM = 1e-3
 DROP_RADIUS_M = 1.5 * MM
 DT_S = 0.5e-3
-#: Stiff contact that held at dt = 0.5 ms (PHYSICS.md, "Plates").
+#: Stiff contact that held at dt = 0.5 ms (docs/physics.md, "Plates as MuJoCo geometry").
 SOLREF = (0.002, 1.0)
 SOLIMP = (0.95, 0.99, 0.0001, 0.5, 2.0)
 #: Under that contact (the ball's, by priority) a ball sinks about g * tc^2 = 40 um; allow 60 um.

@@ -48,7 +48,7 @@ def test_finger7_dimensions_match_the_paper():
     p = get_plate("finger7/ridges-4")
     assert (p.length_m, p.width_m, p.area_length_m, p.area_width_m) == (0.108, 0.036, 0.036, 0.036)
     xs = [f.x for f in features(p)]
-    # 4 ridges evenly spread over 36 mm: pitch 9 mm (PHYSICS.md: pulses 150 ms apart at 60 mm/s)
+    # 4 ridges evenly spread over 36 mm: pitch 9 mm (docs/physics.md: pulses 150 ms apart at 60 mm/s)
     assert np.allclose(np.diff(xs), 9 * MM)
     assert math.isclose(height_at(p, xs[0], 0.0), 2.5 * MM)
 

@@ -11,7 +11,7 @@ from sim_tactile.plates.verify import compare_views
 MM = 1e-3
 #: The issue's tolerance between collision geometry and CAD, away from walls [m].
 VIEW_TOL_M = 0.01 * MM
-#: Roughness must hit its target Ra within 5% (the issue's tolerance).
+#: Roughness must hit its target Ra within 5% (the plates' stated accuracy, README).
 RA_RTOL = 0.05
 
 # Expected counts and peaks, written out from the papers and the preset table (not derived

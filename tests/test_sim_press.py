@@ -1,5 +1,5 @@
 """Hertz: a spherical pad (R = 8 mm, E = 0.3 MPa, incompressible) pressed with 1 N on a flat
-plate, read by a dense grid (the issue's check), and the cheap level's known error."""
+plate, read by a dense grid (Hertz's closed form), and the cheap level's known error."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ SPHERE = Finger(
 @pytest.fixture(scope="module")
 def hertz_ref():
     ref = hertz(R, SPHERE.e_star_pa, F)
-    # the paper's numbers (PHYSICS.md): a = 2.47 mm, p0 = 78.5 kPa
+    # Hertz's numbers for this sphere (docs/physics.md): a = 2.47 mm, p0 = 78.5 kPa
     assert ref["contact_radius_m"] == pytest.approx(2.47e-3, rel=2e-3)
     assert ref["peak_pressure_pa"] == pytest.approx(78.5e3, rel=2e-3)
     return ref
@@ -37,7 +37,7 @@ def test_coupled_skin_reproduces_hertz(hertz_ref, cache):
 
 
 def test_uncoupled_winkler_misses_hertz_as_documented(hertz_ref, cache):
-    """L0 has no elastic coupling: PHYSICS.md measured its peak 30% off; it must stay far off
+    """L0 has no elastic coupling: docs/physics.md measured its peak 30% off; it must stay far off
     (if it ever matched, the coupling test above would prove nothing)."""
     r = press(SPHERE, F, readout_pitch_m=0.25e-3, fidelity="L0", cache=cache)
     assert r.total_force_n == pytest.approx(F, rel=FORCE_RTOL)

@@ -1,4 +1,4 @@
-"""The press-and-slide protocol on the contract's scenes: the grating law, a flat plate,
+"""The press-and-slide protocol on the papers' scenes: the grating law, a flat plate,
 determinism, recordings, bad input."""
 
 from __future__ import annotations
@@ -17,10 +17,10 @@ MM = 1e-3
 RIDGE_PITCH_M = 9 * MM  # finger7/ridges-4: 36 mm / 4
 TAXEL_PITCH_M = 2.5 * MM  # grid3x3
 RIDGE_SPAN_HALF_M = 13.5 * MM + 1.25 * MM  # outer ridge centres +-13.5 mm, 2.5 mm wide
-#: The issue's tolerances: pulse period within 2%, column delay within 15%.
+#: The grating law's tolerances: pulse period within 2%, column delay within 15%.
 PERIOD_RTOL = 0.02
 DELAY_RTOL = 0.15
-#: The flat plate's steady load may vary by less than 0.1% (the issue).
+#: The flat plate's steady load may vary by less than 0.1%.
 FLAT_RTOL = 1e-3
 #: Under the held force a flat plate loads the taxels alike at every step: float32 round-off.
 HELD_FLAT_RTOL = 1e-6

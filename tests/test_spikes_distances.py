@@ -12,7 +12,7 @@ from sim_tactile.errors import ConfigError
 from sim_tactile.spikes import _reference as R
 from sim_tactile.spikes import distances as D
 
-# Agreement with PySpike and Elephant demanded by issue 5.
+# Agreement with the reference libraries PySpike and Elephant.
 LIB_TOL = 1e-9
 # numba kernel vs plain-Python reference: same formulas in a different order; rounding only.
 REF_TOL = 1e-12

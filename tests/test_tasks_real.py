@@ -1,4 +1,4 @@
-"""The task registry, the report and the contract's ``run`` command: on a small stand-in of
+"""The task registry, the report and the ``run`` command: on a small stand-in of
 the iCub data set (written here, so it always runs) and on the real data when present."""
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import StoreError
 from ..records import TactileDataset
 from .reader import SlideStore, open_store, parts_of
-from .store import PARAM_NAMES, SlideWriter, StoreSpec, _zarr, create_store, slide_digest
+from .store import PARAM_NAMES, SlideWriter, StoreSpec, create_store, slide_digest, zarr_module
 
 
 def spec_from_tactile(ds: TactileDataset, name: str, config: dict | None = None) -> StoreSpec:
@@ -59,7 +59,7 @@ def from_tactile(ds: TactileDataset, path: str | Path, *, name: str = "dataset")
         raise StoreError(f"{str(path)!r} exists; give a new path")
     spec = spec_from_tactile(ds, name)
     create_store(path, {"": spec}, {})
-    root = _zarr().open_group(str(path), mode="r+")
+    root = zarr_module().open_group(str(path), mode="r+")
     w = SlideWriter(root)
     for i in range(ds.n_samples):
         w.write(i, ds.data[i])

@@ -52,7 +52,7 @@ PARAM_NAMES = ("speed_m_s", "force_n", "offset_y_m")
 _INDEX_CHUNK = 65536
 
 
-def _zarr():
+def zarr_module():
     try:
         import zarr
     except ImportError as exc:  # pragma: no cover - zarr is a runtime dependency
@@ -81,7 +81,7 @@ def versions() -> dict:
         "sim_tactile": __version__,
         "python": platform.python_version(),
         "numpy": np.__version__,
-        "zarr": _zarr().__version__,
+        "zarr": zarr_module().__version__,
         "numcodecs": numcodecs.__version__,
     }
     mj = sys.modules.get("mujoco")
@@ -173,7 +173,7 @@ def create_store(path: str | Path, specs: dict[str, StoreSpec], root_attrs: dict
     """Create the store at ``path`` (which must not exist) with a group per spec (key ``""``:
     the root itself). Built under a temporary name and renamed: a store either exists whole
     or not at all."""
-    zarr = _zarr()
+    zarr = zarr_module()
     path = Path(path)
     tmp = path.with_name(f".{path.name}.creating")
     shutil.rmtree(tmp, ignore_errors=True)
@@ -243,7 +243,7 @@ def check_slide(data, lengths, i: int, expected: int) -> str | None:
 def open_root(path: str | Path, mode: str = "r"):
     """The store's root group at ``path``, checked to be a sim_tactile data set of this
     format version."""
-    zarr = _zarr()
+    zarr = zarr_module()
     path = Path(path)
     if not (path / "zarr.json").is_file():
         raise StoreError(f"{str(path)!r} is not a Zarr store (no zarr.json)")

@@ -9,7 +9,7 @@ Schemes (``scheme=``):
   ODE solution for both presets up to ~1 kHz (docs/spikes.md).
 - ``"euler"``: forward Euler, spike recorded at the end of the step that reached ``v_peak``;
   with ``dt_s = 1e-3`` this is the papers' 1 ms scheme (loses up to half of the fast-spiking
-  spikes, PHYSICS.md), kept for faithful reproduction.
+  spikes, docs/physics.md), kept for faithful reproduction.
 - ``"izhikevich2003"``: the original code's two 0.5-step updates of ``v`` followed by ``u``.
 """
 
@@ -153,7 +153,7 @@ def izhikevich_spike_times(
     *,
     scheme: str = "rk4",
 ) -> np.ndarray:
-    """Spike times [s] of one Izhikevich neuron driven by a sampled input (the contract's call).
+    """Spike times [s] of one Izhikevich neuron driven by a sampled input (a released call of the package's Python API).
 
     ``current`` is a 1-D input ``I`` in model units sampled at ``rate_hz`` and zero-order held;
     the neuron starts at rest (``v = -65``, ``u = b v``). ``preset`` is RS (= SA) or FS (= RA),

@@ -120,7 +120,7 @@ def stable_current_limit(p: IzhikevichParams, dt_ms: float, scheme: str) -> floa
     """Most negative constant input for which the rest state is stable under the scheme.
 
     The linearised step map at the stable (lower) fixed point must have spectral radius <= 1;
-    below this input the discrete neuron oscillates and can fire spuriously (PHYSICS.md:
+    below this input the discrete neuron oscillates and can fire spuriously (docs/physics.md:
     forward Euler at 1 ms spikes for I <= -70). Returned in the model's current units.
     """
     one_of("scheme", scheme, SCHEMES)

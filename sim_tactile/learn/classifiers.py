@@ -1,4 +1,4 @@
-"""The registry of classifier names (the contract's ``run --classifiers``) -> estimators.
+"""The registry of classifier names (``sim-tactile run --classifiers``) -> estimators.
 
 Every registered classifier is built for a task's data by :func:`make_classifier` and takes
 the task's recordings, arrays ``(samples, time, channels)``, so that the protocols treat all

@@ -18,7 +18,7 @@ from .geometry import Feature
 from .spec import Plate, Roughness
 
 M_TO_MM = 1000.0
-#: STL tessellation: linear tolerance [mm] and angular tolerance [rad]. PHYSICS.md: the
+#: STL tessellation: linear tolerance [mm] and angular tolerance [rad]. docs/physics.md: the
 #: angular one controls curved features; 0.15 rad gives a sag of R (1 - cos 0.075) = 5.6 um
 #: on a 2 mm hemisphere, the linear one caps it at 5 um.
 STL_TOLERANCE_MM = 0.005

@@ -1,6 +1,6 @@
 """MuJoCo collision geometry of a plate, built with ``mujoco.MjSpec``.
 
-PHYSICS.md: a mesh collides as its convex hull, so a whole textured plate as one mesh is a
+docs/physics.md: a mesh collides as its convex hull, so a whole textured plate as one mesh is a
 box to the solver. Here every feature is its own geom: a primitive where one is exact (box
 ridges and bumps, cylinders, spherical caps as spheres half buried in the base) and a convex
 mesh otherwise (drafted ridges: a trapezoidal prism, checked convex). A random roughness is
@@ -121,7 +121,7 @@ def hfield_profile(px: np.ndarray, pz: np.ndarray, max_error_m: float = HFIELD_M
 
     Models only what the scene needs: a fine roughness (Ra 0.4 um has peaks of 2 um) is
     nearly flat to the collider, and every extra cell costs contacts; MuJoCo keeps at most 50
-    per height-field pair, filled in row order (PHYSICS.md), so a contact patch spanning
+    per height-field pair, filled in row order (docs/physics.md), so a contact patch spanning
     hundreds of 6 um cells would be truncated to one side of it.
     """
     n = len(px)

@@ -1,4 +1,4 @@
-"""The preset plates, by the contract's names. Every dimension a paper leaves open is chosen
+"""The preset plates, by their released names (``sim-tactile plates list``). Every dimension a paper leaves open is chosen
 here, in one place, and listed in the README's plate table.
 
 Choices where the papers are silent (all plates: base 108 x 36 x 5 mm, textured area

@@ -1,6 +1,6 @@
 """What MuJoCo's collider sees: surface heights probed with a small sphere.
 
-PHYSICS.md: ``mj_ray`` and rendering see a mesh's triangles while collision sees its convex
+docs/physics.md: ``mj_ray`` and rendering see a mesh's triangles while collision sees its convex
 hull, so collision geometry must be validated with ``mj_geomDistance``. A probe sphere of
 radius ``r`` above (x, y) is lowered by the signed distance to the nearest plate geom until
 it touches ("sphere tracing": a step never passes through a surface, because the distance is

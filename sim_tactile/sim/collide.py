@@ -230,7 +230,7 @@ class PrimitiveCollider:
         b = self._bone
         b[0] = self.bone0[0] + qpos[self.jx]
         b[2] = self.bone0[2] + qpos[self.jz]
-        return _depths(b, *self.arrays, pen)
+        return depths_kernel(b, *self.arrays, pen)
 
     def warnings(self) -> list[str]:
         return []
@@ -268,7 +268,7 @@ class PrimitiveCollider:
         """Fill ``pen`` (N,) with each node's deepest penetration [m] for the bone at world
         position ``bone_pos`` (3,); ``-inf`` where no plate geom is within the node's margin.
         Returns whether any node is within it."""
-        return _depths(bone_pos, *self.arrays, pen)
+        return depths_kernel(bone_pos, *self.arrays, pen)
 
 
 def _half_extents(kind: np.ndarray, mat: np.ndarray, size: np.ndarray) -> np.ndarray:
@@ -283,7 +283,7 @@ def _half_extents(kind: np.ndarray, mat: np.ndarray, size: np.ndarray) -> np.nda
 
 
 @numba.njit(cache=True)
-def _depths(
+def depths_kernel(
     bone, local, radius, margin, kind, pos, mat, size, origin, cell, shape, start, items, pen
 ):
     n = local.shape[0]

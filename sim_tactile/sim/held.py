@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import PhysicsError
 from . import contact
-from .collide import PrimitiveCollider, _depths
+from .collide import PrimitiveCollider, depths_kernel
 from .contact.kernels import NO_K, force_loop, force_same_set
 from .skin import CoupledSkin, SkinModel
 
@@ -161,7 +161,7 @@ class CompiledHeldStep:
 
     def depths(self, bone: np.ndarray) -> bool:
         """The reduced depth map at the bone's world position into ``pen``."""
-        near = _depths(bone, *self.probe.arrays, self._small)
+        near = depths_kernel(bone, *self.probe.arrays, self._small)
         np.take(self._small, self.group, out=self.pen)
         return near
 
@@ -251,7 +251,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
         bone[0] = bone0[0] + qpos[jx]
         bone[1] = bone0[1]
         bone[2] = bone0[2] + qpos[jz]
-        near = _depths(bone, *probe, small)
+        near = depths_kernel(bone, *probe, small)
         for i in range(n):
             pen[i] = small[group[i]]
         if not near:  # nothing within the margin: sink by most of it and look again

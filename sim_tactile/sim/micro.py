@@ -1,6 +1,6 @@
 """Micro-roughness: the plate's roughness profile acting through the contact patch.
 
-Ra of 0.4-50 um is far below any skin node or MuJoCo contact resolution (PHYSICS.md), so the
+Ra of 0.4-50 um is far below any skin node or MuJoCo contact resolution (docs/physics.md), so the
 finger simulation sees a roughness plate as nearly flat; this model adds the load that the
 roughness profile z(x) puts on each taxel while it slides over it in contact.
 

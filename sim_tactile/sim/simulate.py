@@ -208,6 +208,7 @@ def _simulate(
         "plate_params": plate.params(),
         "layout": layout.name,
         "sensor": sensor.name,
+        "channel_names": list(layout.names),
         "finger": finger.to_json(),
         "protocol": asdict(proto),
         "protocol_nominal": asdict(nominal),

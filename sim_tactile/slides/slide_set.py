@@ -183,16 +183,9 @@ class SlideSet:
         jobs = self.jobs(req.seed, req.quick)
         recs, stats = run_slides(jobs, log=req.log)
         plates = self.plates_for(req.quick)
-        n = self.slides_for(req.quick)
-        first = recs[0]
-        layout = self.sensor_def().layout
-        return TactileDataset(
-            np.stack([r.data for r in recs]),
-            np.repeat(np.arange(len(plates)), n),
-            first.rate_hz,
-            tuple(layout.names),
+        return TactileDataset.from_recordings(
+            recs,
+            np.repeat(np.arange(len(plates)), self.slides_for(req.quick)),
             tuple(class_name(p) for p in plates),
-            first.taxels,
-            first.units,
-            {**self.dataset_meta(req.quick), **stats},
+            meta={**self.dataset_meta(req.quick), **stats},
         )

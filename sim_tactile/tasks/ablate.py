@@ -46,7 +46,7 @@ from ..encoders.scaling import RangeScaler
 from ..errors import ConfigError
 from ..tables import markdown_table
 from .registry import Run, TaskSpec, get_task
-from .runner import _stderr, evaluate_task, load_task, task_runs
+from .runner import evaluate_task, load_task, stderr_log, task_runs
 
 ENCODER_PARAMS = ("gain", "max_rate_hz", "preset", "a", "b", "c", "d", "K")
 CLASSIFIER_PARAMS = ("q", "tau", "k", "C")
@@ -207,7 +207,7 @@ def ablate(
     """Sweep the grid ``sets`` (name -> values) over the task's data (or the data set in
     ``store``); returns ``{task, rows: [{params, classifier, label, accuracy_mean,
     accuracy_std}], figures}``."""
-    log = log or _stderr
+    log = log or stderr_log
     spec = get_task(task_id)
     if spec.parts:
         raise ConfigError(

@@ -34,7 +34,7 @@ from .registry import DataRequest, Run, TaskSpec, get_task
 from .report import Report, ResultRow, compare, write_figures
 
 
-def _stderr(msg: str) -> None:
+def stderr_log(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
@@ -208,7 +208,7 @@ def run_task(
         store: read the data from this store (``sim-tactile generate``) instead.
     """
     t_start = time.perf_counter()
-    log = log or _stderr
+    log = log or stderr_log
     spec = get_task(task_id)
     seed = integer("seed", seed, 0, None)
     if repeats is not None:
