@@ -28,7 +28,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from sim_tactile.tasks.sim_tasks import FINGER7_PLATES
+from sim_tactile.tasks.defs.finger7 import FINGER7_PLATES
 
 RANDOMISE = {"speed_jitter": 0.05, "force_jitter": 0.10, "offset_jitter_m": 0.5e-3}
 
