@@ -92,21 +92,6 @@ def _run_context(ctx: LearnContext, run: Run, cols, ds) -> LearnContext:
     )
 
 
-def _run_context(ctx: LearnContext, run: Run, cols, ds) -> LearnContext:
-    params = {k: dict(v) for k, v in ctx.params.items()}
-    run_params = dict(run.params)
-    features = run_params.pop("features", ctx.spike_features)
-    if run_params:
-        params[run.classifier] = {**params.get(run.classifier, {}), **run_params}
-    return replace(
-        ctx,
-        spike_features=tuple([features] if isinstance(features, str) else features),
-        n_channels=ds.n_channels if cols is None else len(cols),
-        grid_shape=ctx.grid_shape if cols is None else None,
-        params=params,
-    )
-
-
 def task_data(spec: TaskSpec, req: DataRequest) -> TactileDataset:
     """The task's data set: ``spec.get_data(req)``, or, with ``req.store``, the store's data
     set after checking that it was generated for this task with the same quick flag and seed

@@ -54,8 +54,7 @@ class ActiveSet:
             MAX_ITER,
             p,
         )
-        self.M, self.S, self.updates = M, S, updates
-        self.rebuilds += rebuilds
+        self._take(M, S, updates, rebuilds)
         if status:
             return p, self._in.copy()
         raise PhysicsError(
@@ -104,8 +103,7 @@ class ActiveSet:
             p,
             False,  # the same-set case was tried above
         )
-        self.M, self.S, self.updates = M, S, updates
-        self.rebuilds += rebuilds
+        self._take(M, S, updates, rebuilds)
         if status == 1:
             return p, dz
         if status == 2:
@@ -126,9 +124,12 @@ class ActiveSet:
         """Take the state a compiled step computed on this problem: the inverse ``M`` on the
         set ``S`` (in M's order), the update count since the last rebuild, the rebuilds it
         made, and ``rowsum = M 1``."""
+        self._take(M, S, updates, rebuilds)
+        self._rowsum, self._rowsum_of = rowsum, M
+
+    def _take(self, M, S, updates: int, rebuilds: int) -> None:
         self.M, self.S, self.updates = M, S, updates
         self.rebuilds += rebuilds
-        self._rowsum, self._rowsum_of = rowsum, M
 
     def stiffness_per_area(self) -> float:
         """d(total pressure integral)/d(uniform indentation) on the current set [Pa/m]:
