@@ -268,8 +268,10 @@ def generate(
     fn = _worker or SlideWorker(str(default_root()), write=False)
     # the workers start before this process opens the store (and its I/O threads): fork
     # copies the parent as it is
-    runner = make_backend(
-        fn, kind=backend, workers=workers if simulated else 1, address=address, log=log
+    runner = (  # recorded data needs no workers: it is copied in this process
+        make_backend(fn, kind=backend, workers=workers, address=address, log=log)
+        if simulated
+        else make_backend(fn, workers=1)
     )
     try:
         root = _open_or_create(out, plans, root_attrs, resume)
