@@ -81,6 +81,10 @@ class ResultRow:
     def over_time(self) -> dict:
         return self.extra.get("over_time") or {}
 
+    def over_time_curve(self) -> dict[float, list[float]]:
+        """Accuracy over time as ``{time [s]: the repeats' accuracies}``."""
+        return {float(t): v["accuracies"] for t, v in self.over_time.items()}
+
     def to_json(self) -> dict:
         d = {k: getattr(self, k) for k in _ROW_KEYS}
         if self.part is not None:
@@ -279,16 +283,21 @@ def plot_confusions(results: dict[str, EvalResult], class_names: Sequence[str], 
 
 
 def plot_over_time(
-    results: dict[str, EvalResult], papers: dict[str, PaperCell | None], title: str, out: Path
+    curves: dict[str, dict[float, Sequence[float]]],
+    papers: dict[str, PaperCell | None],
+    title: str,
+    out: Path,
 ):
+    """Accuracy over time: ``curves`` maps a run to its accuracies at each time [s] (one per
+    repeat), drawn as mean and SD; the paper's cell of a run as a cross at the end."""
     fig = _figure(figsize=(6.5, 4.2), layout="constrained")
     ax = fig.subplots()
-    for name, r in results.items():
-        if not r.over_time:
+    for name, curve in curves.items():
+        if not curve:
             continue
-        ts = sorted(r.over_time)
-        m = np.array([np.mean(r.over_time[t]) for t in ts])
-        s = np.array([np.std(r.over_time[t]) for t in ts])
+        ts = sorted(curve)
+        m = np.array([np.mean(curve[t]) for t in ts])
+        s = np.array([np.std(curve[t]) for t in ts])
         line = ax.plot(ts, m, marker="o", label=name)[0]
         ax.fill_between(ts, m - s, m + s, color=line.get_color(), alpha=0.15)
         cell = papers.get(name)
@@ -418,7 +427,8 @@ def write_figures(
     files.append(str(f))
     if any(results[r.name].over_time for r in runs):
         f = out / "accuracy_over_time.png"
-        plot_over_time(results, {r.name: r.paper for r in runs}, spec.id, f)
+        curves = {name: r.over_time for name, r in results.items()}
+        plot_over_time(curves, {r.name: r.paper for r in runs}, spec.id, f)
         files.append(str(f))
     f = out / "streams_per_class.png"
     plot_streams(ds, f)
