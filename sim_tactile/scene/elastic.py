@@ -3,9 +3,10 @@
 - :func:`compliance_matrix`: surface deflection at node i per unit pressure on the square
   patch of node j (Love 1929; Johnson, *Contact Mechanics*, eq. 3.25). ``u = C @ p``.
 - :func:`subsurface_weights`: the share of a node's load that reaches a taxel of given size
-  at depth d under the surface (Boussinesq's vertical stress integrated over the taxel's
-  rectangle; Holl / Newmark's corner formula). At depth 0 it is the overlap of the node's
-  patch with the taxel.
+  at depth d under the surface: Boussinesq's vertical stress of the node's load, spread
+  uniformly over the node's patch, integrated over the taxel's rectangle (Holl's corner
+  formula over the taxel, Gauss-Legendre over the patch). At depth 0 it is the overlap of
+  the node's patch with the taxel.
 
 This is the skin's elastic coupling: a load on one patch deflects its neighbours (``C`` is
 dense), and a taxel under the surface feels loads spread from around it.
@@ -56,6 +57,32 @@ def _corner(X: np.ndarray, Y: np.ndarray, z: float) -> np.ndarray:
     return np.nan_to_num(t) / (2 * np.pi)
 
 
+#: Gauss-Legendre points per node-patch axis: enough that they lie at most a quarter of the
+#: taxel's depth apart, where the integrand (the taxel's stress seen from a load point) bends
+#: over a width of about the depth; capped so a very shallow taxel under coarse nodes stays
+#: cheap (then the points are ``patch / PATCH_POINTS_MAX`` apart).
+PATCH_POINTS_PER_DEPTH = 4.0
+PATCH_POINTS_MAX = 48
+
+
+def _patch_points(half: float, depth: float) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre offsets [m] and weights (summing to 1) over [-half, half]."""
+    n = int(min(PATCH_POINTS_MAX, max(1, np.ceil(2 * half * PATCH_POINTS_PER_DEPTH / depth))))
+    t, w = np.polynomial.legendre.leggauss(n)
+    return t * half, w / 2
+
+
+def _taxel_stress(X: np.ndarray, Y: np.ndarray, sx: float, sy: float, d: float) -> np.ndarray:
+    """Vertical stress of a unit point load at (X, Y) from a taxel's centre, integrated over
+    the taxel's 2 sx x 2 sy rectangle at depth d (four corners of Holl's formula)."""
+    return (
+        _corner(sx - X, sy - Y, d)
+        + _corner(sx + X, sy + Y, d)
+        + _corner(sx - X, sy + Y, d)
+        + _corner(sx + X, sy - Y, d)
+    )
+
+
 def subsurface_weights(
     node_xy: np.ndarray,
     pitch_m: float,
@@ -68,9 +95,11 @@ def subsurface_weights(
 
     Taxel m is a rectangle of size ``taxel_size[m]`` (sx, sy) centred at ``taxel_xy[m]`` at
     depth ``depth_m[m]`` >= 0 under the surface; its reading is the vertical stress integrated
-    over its area. By reciprocity this equals the stress a taxel-shaped load would put at the
-    node, so a point load at the node is spread with Boussinesq's kernel. Node loads act as
-    point loads at depth > 0 and as uniform patches (exact overlap) at depth 0.
+    over its area. A node's load is a uniform pressure over its patch (``pitch_m`` by
+    ``pitch_y_m``), as the skin solves it: at depth 0 the weight is the patch's overlap with
+    the taxel, below it Boussinesq's stress of that pressure integrated over the taxel, the
+    patch by Gauss-Legendre quadrature. A uniform pressure then reads pressure x area at any
+    depth; point loads at the node centres would not when the patch is wide against the depth.
     """
     M, N = len(taxel_xy), len(node_xy)
     W = np.zeros((M, N))
@@ -84,11 +113,19 @@ def subsurface_weights(
             ox = np.clip(np.minimum(X + hx, sx) - np.maximum(X - hx, -sx), 0, None)
             oy = np.clip(np.minimum(Y + hy, sy) - np.maximum(Y - hy, -sy), 0, None)
             W[m] = ox * oy / (4 * hx * hy)
-        else:
-            W[m] = (
-                _corner(sx - X, sy - Y, d)
-                + _corner(sx + X, sy + Y, d)
-                + _corner(sx - X, sy + Y, d)
-                + _corner(sx + X, sy - Y, d)
-            )
+            continue
+        tx, wx = _patch_points(hx, d)
+        ty, wy = _patch_points(hy, d)
+        # only nodes whose patch lies within reach: beyond 30 depths of the taxel the stress
+        # has fallen below 1e-9 of the load
+        reach = 30 * d
+        near = (np.abs(X) <= sx + hx + reach) & (np.abs(Y) <= sy + hy + reach)
+        Xn, Yn = X[near], Y[near]
+        acc = np.zeros(Xn.size)
+        for ox, wxi in zip(tx, wx, strict=True):
+            acc += wxi * (
+                wy[None, :]
+                * _taxel_stress((Xn + ox)[:, None], Yn[:, None] + ty[None, :], sx, sy, d)
+            ).sum(axis=1)
+        W[m, near] = acc
     return W
