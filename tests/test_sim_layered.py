@@ -1,0 +1,216 @@
+"""The layered skin's Fourier-domain solution against its limits, a closed form and a
+plane-strain finite-element model (scikit-fem, a test extra)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import special
+
+from sim_tactile.errors import ConfigError
+from sim_tactile.scene.layered import Layer, Stack, layer_response
+
+#: identities that hold to rounding
+EXACT_RTOL = 1e-10
+#: scikit-fem, P2 triangles 1/16 of the thickness, against the spectral solution: at most
+#: 0.11% apart over these cases (the stress at depth, whose FEM value is a projection of a
+#: piecewise-linear field), and closer when the mesh is refined to 1/32 (0.03%)
+FEM_RTOL = 2e-3
+
+E, H = 0.3e6, 4e-3
+K = np.logspace(0, 5.5, 23)  # wave numbers [1/m]: wavelengths from 6 m to 20 um
+
+
+@pytest.mark.parametrize("nu", [0.3, 0.49, 0.5])
+def test_a_layer_on_a_half_space_of_the_same_material_is_the_half_space(nu):
+    """Deflection 2 / (E* k) and Boussinesq's stress (1 + kz) exp(-kz), at any depth."""
+    st = Stack((Layer(H, E, nu),), "halfspace", E, nu)
+    depths = np.array([0.0, 0.5e-3, 2e-3, 6e-3])
+    w, s = layer_response(st, K, depths)
+    np.testing.assert_allclose(w * K * E / (1 - nu**2) / 2, 1.0, rtol=EXACT_RTOL)
+    kz = K[:, None] * depths[None, :]
+    np.testing.assert_allclose(s, (1 + kz) * np.exp(-kz), rtol=EXACT_RTOL, atol=1e-300)
+
+
+@pytest.mark.parametrize("nu", [0.0, 0.3, 0.45, 0.5])
+def test_a_layer_bonded_to_a_rigid_base_has_the_closed_form(nu):
+    """w = 2 / (E* k) K(kh), K(t) = (2c sinh 2t - 4t) / (2c cosh 2t + 1 + c^2 + 4t^2),
+    c = 3 - 4 nu: the bonded layer's closed form, derived independently of the mode basis
+    used here."""
+    st = Stack((Layer(H, E, nu),))
+    w, _ = layer_response(st, K)
+    t, c = K * H, 3 - 4 * nu
+    closed = np.ones_like(t)  # K -> 1 where sinh and cosh overflow
+    ok = t < 300
+    t = t[ok]
+    closed_ok = (2 * c * np.sinh(2 * t) - 4 * t) / (2 * c * np.cosh(2 * t) + 1 + c**2 + 4 * t**2)
+    closed[ok] = closed_ok
+    np.testing.assert_allclose(w * K * E / (1 - nu**2) / 2, closed, rtol=1e-9)
+
+
+def test_a_thin_compressible_layer_deflects_as_its_oedometric_modulus():
+    nu = 0.3
+    M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+    w, _ = layer_response(Stack((Layer(H, E, nu),)), np.array([1e-2 / H]))
+    assert w[0] == pytest.approx(H / M, rel=1e-4)
+
+
+def test_equal_sublayers_are_one_layer_and_a_stiff_backing_is_rigid():
+    one = Stack((Layer(H, E, 0.45),))
+    two = Stack((Layer(H / 4, E, 0.45), Layer(3 * H / 4, E, 0.45)))
+    d = np.array([0.3e-3, 1e-3, 3.5e-3])
+    w1, s1 = layer_response(one, K, d)
+    w2, s2 = layer_response(two, K, d)
+    np.testing.assert_allclose(w2, w1, rtol=EXACT_RTOL)
+    np.testing.assert_allclose(s2, s1, rtol=1e-9, atol=1e-12)
+    # a backing 1e6 times stiffer: rigid, at wavelengths up to 6 cm (at longer ones any
+    # half-space backing takes over: its deflection grows as 1 / k, the layer's stays h / M)
+    stiff = Stack((Layer(H, E, 0.45),), "halfspace", 1e6 * E, 0.3)
+    k = K[K >= 100]
+    w1, s1 = layer_response(one, k, d)
+    w3, s3 = layer_response(stiff, k, d)
+    np.testing.assert_allclose(w3, w1, rtol=1e-4)
+    np.testing.assert_allclose(s3, s1, rtol=1e-4, atol=1e-9)
+
+
+def test_uniform_pressure_reaches_every_depth_whole():
+    """At long wavelengths the vertical stress is the pressure at any depth (equilibrium)."""
+    st = Stack((Layer(1e-3, 2 * E, 0.5), Layer(H, E, 0.45)), "halfspace", 5 * E, 0.3)
+    _, s = layer_response(st, np.array([1e-3]), np.array([0.2e-3, 2e-3, 8e-3]))
+    np.testing.assert_allclose(s, 1.0, atol=1e-5)
+
+
+def test_bad_stacks_name_the_parameter():
+    with pytest.raises(ConfigError, match="layer.poisson"):
+        Layer(H, E, 0.6)
+    with pytest.raises(ConfigError, match="stack.backing_young_pa"):
+        Stack((Layer(H, E),), "halfspace")
+    with pytest.raises(ConfigError, match="rigid backing"):
+        layer_response(Stack((Layer(H, E),)), K, np.array([H]))
+
+
+# --- plane strain against scikit-fem -------------------------------------------------------
+
+
+def _gauss_panels(f, lo: float, hi: float, n_panels: int) -> float:
+    """Composite 8-point Gauss-Legendre of a vectorised ``f`` over [lo, hi]."""
+    t, w = np.polynomial.legendre.leggauss(8)
+    e = np.linspace(lo, hi, n_panels + 1)
+    half, mid = (e[1:] - e[:-1]) / 2, (e[1:] + e[:-1]) / 2
+    k = (mid[:, None] + half[:, None] * t[None, :]).ravel()
+    return float(np.sum((half[:, None] * w[None, :]).ravel() * f(k)))
+
+
+def _strip_reference(stack: Stack, a: float, x: float, depth: float | None = None) -> float:
+    """Unit pressure on |x| < a, plane strain: (1/pi) int_0^inf F(k) 2 sin(ka)/k cos(kx) dk,
+    F the deflection (depth None) or the compressive vertical stress at ``depth``.
+
+    Gauss panels a fraction of a radian of the integrand's phase wide, up to k1 = 40 / (top
+    layer's thickness); beyond it the deflection is the top layer's half-space, 2 / (E* k),
+    whose tail integrates in closed form (sine and cosine integrals), and the stress is
+    integrated on until exp(-k depth) < 1e-17."""
+
+    def f(k):
+        w, s = layer_response(stack, k, None if depth is None else [depth])
+        F = w if depth is None else s[:, 0]
+        return F * 2 * np.sin(k * a) / k * np.cos(k * x) / np.pi
+
+    k1 = 40 / stack.layers[0].thickness_m
+    span = a + abs(x) + stack.thickness_m
+    total = _gauss_panels(f, 0.0, k1, int(k1 * span / 0.5) + 10)
+    if depth is None:
+        # (1/pi) (2/E*) int_k1^inf sin(ck)/k^2 dk per c = a +- x, and that integral is
+        # sin(c k1)/k1 - c Ci(|c| k1)
+        for c in (a + x, a - x):
+            if c != 0:
+                total += (
+                    2
+                    / (np.pi * stack.top_e_star_pa)
+                    * (np.sin(c * k1) / k1 - c * special.sici(abs(c) * k1)[1])
+                )
+        return total
+    k2 = 40 / depth
+    if k2 > k1:
+        total += _gauss_panels(f, k1, k2, int((k2 - k1) * span / 0.5) + 10)
+    return total
+
+
+def _strip_fem(layers, a, depth, n_per_h=16, far=12.0):
+    """scikit-fem, plane strain: pressure 1 on |x| < a over ``layers`` ((thickness, E, nu)
+    from the top) bonded to a rigid base, by symmetry on 0 < x < a + far H. Returns the
+    deflection at x = 0 and x = a + H / 2 and the compressive vertical stress at (0, depth)."""
+    skfem = pytest.importorskip("skfem")
+    from skfem.helpers import sym_grad
+    from skfem.models.elasticity import lame_parameters, linear_elasticity
+
+    H_ = sum(t for t, _, _ in layers)
+    L = a + far * H_
+    xs = np.unique(np.r_[np.linspace(0, L, round(L / H_ * n_per_h) + 1), a])
+    tops = np.cumsum([0.0] + [t for t, _, _ in layers])  # depths of the interfaces
+    ys = np.unique(
+        np.concatenate(
+            [
+                np.linspace(H_ - tops[j + 1], H_ - tops[j], max(2, round(n_per_h * t / H_)) + 1)
+                for j, (t, _, _) in enumerate(layers)
+            ]
+        )
+    )
+    tol = 1e-9 * H_
+    m = skfem.MeshTri.init_tensor(xs, ys).with_boundaries(
+        {
+            "bottom": lambda x: x[1] < tol,
+            "left": lambda x: x[0] < tol,
+            "right": lambda x: x[0] > L - tol,
+        }
+    )
+    e = skfem.ElementVector(skfem.ElementTriP2())
+    ib = skfem.Basis(m, e)
+    depth_of = H_ - m.p[1, m.t].mean(axis=0)  # each element's depth
+    K_ = None
+    lame = np.zeros((2, m.t.shape[1]))
+    for j, (_, young, nu) in enumerate(layers):
+        ids = np.flatnonzero((depth_of > tops[j]) & (depth_of < tops[j + 1]))
+        lam, mu = lame_parameters(young, nu)
+        lame[:, ids] = [[lam], [mu]]
+        part = skfem.asm(linear_elasticity(lam, mu), skfem.Basis(m, e, elements=ids))
+        K_ = part if K_ is None else K_ + part
+    loaded = m.facets_satisfying(lambda x: (x[1] > H_ - tol) & (x[0] < a + tol))
+
+    @skfem.LinearForm
+    def load(v, w):
+        return -1.0 * v[1]
+
+    f = skfem.asm(load, skfem.FacetBasis(m, e, facets=loaded))
+    D = np.concatenate(
+        [
+            ib.get_dofs("bottom").all(),
+            ib.get_dofs("left").all("u^1"),
+            ib.get_dofs("right").all("u^1"),
+        ]
+    )
+    u = skfem.solve(*skfem.condense(K_, f, D=D))
+    xo = a + H_ / 2  # outside the load: at its edge the pressure steps, a weak point for P2
+    uy = ib.probes(np.array([[0.0, xo], [H_, H_]])) @ u  # (ux(0), ux(xo), uy(0), uy(xo))
+    eps = sym_grad(ib.interpolate(u))
+    lam_q, mu_q = lame[0][:, None], lame[1][:, None]
+    syy = lam_q * (eps[0, 0] + eps[1, 1]) + 2 * mu_q * eps[1, 1]
+    sb = ib.with_element(skfem.ElementTriP1())
+    s = sb.probes(np.array([[0.0], [H_ - depth]])) @ sb.project(syy)
+    return -uy[2], -uy[3], -float(s[0])
+
+
+@pytest.mark.parametrize(
+    ("layers", "a", "depth"),
+    [
+        (((H, E, 0.3),), H, 0.5e-3),  # a strip as wide as the layer is thick
+        (((H, E, 0.45),), H / 2, 2e-3),
+        (((H, E, 0.49),), 2 * H, 0.5e-3),  # nearly incompressible silicone, a wide pad
+        (((1e-3, 2 * E, 0.45), (3e-3, E / 2, 0.3)), H, 2e-3),  # two bonded layers
+    ],
+)
+def test_strip_load_on_a_layer_matches_plane_strain_fem(layers, a, depth):
+    st = Stack(tuple(Layer(t, young, nu) for t, young, nu in layers))
+    w0, wo, s = _strip_fem(layers, a, depth)
+    assert _strip_reference(st, a, 0.0) == pytest.approx(w0, rel=FEM_RTOL)
+    assert _strip_reference(st, a, a + st.thickness_m / 2) == pytest.approx(wo, rel=FEM_RTOL)
+    assert _strip_reference(st, a, 0.0, depth) == pytest.approx(s, rel=FEM_RTOL)
