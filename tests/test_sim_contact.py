@@ -121,3 +121,48 @@ def test_active_set_is_deterministic():
         outs.append([solver.solve(pen + s)[0] for s in np.linspace(-5e-5, 3e-4, 9)])
     for a, b in zip(*outs, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+# --- a skin that bulges: the layered compliance has negative entries --------------------------
+
+
+def _layered_problem():
+    """A 1 mm incompressible layer bonded to the bone: a load lifts the surface around it
+    toward the plate (C has negative entries), so nodes that do not overlap the plate can be
+    pushed into contact. A 1 mm wide ridge pressed 40 um deep, the rest of the plate 1 um below the
+    pad."""
+    from sim_tactile.scene.layered import layered_compliance_matrix
+    from sim_tactile.sensors.stack import Layer, Stack
+
+    xs = np.arange(-12, 13) * 0.25e-3
+    X, Y = np.meshgrid(xs, xs[::3])
+    xy = np.column_stack([X.ravel(), Y.ravel()])
+    C = layered_compliance_matrix(xy, 0.25e-3, Stack((Layer(1e-3, 0.3e6, 0.5),)), pitch_y_m=0.75e-3)
+    pen = np.where(np.abs(xy[:, 0]) <= 0.5e-3, 40e-6, -1e-6)
+    return C, pen
+
+
+def test_a_bulging_skin_brings_nodes_below_the_plate_into_contact():
+    from sim_tactile.sim.contact import ActiveSet
+
+    C, pen = _layered_problem()
+    assert (C < 0).any()
+    ref = _reference(C, pen)
+    assert (ref[pen < 0] > 0).any(), "the case must have nodes pushed into contact by the bulge"
+    s = ActiveSet(C, np.linalg.inv(C))
+    p, _ = s.solve(pen)
+    np.testing.assert_allclose(p, ref, atol=SOLVER_RTOL * ref.max())
+    assert (C @ p >= pen - 1e-12).all()
+
+
+def test_a_bulging_skin_holds_its_force():
+    """Held at a total pressure: the shift and pressures satisfy the contact conditions at
+    every node, the bulged ones included, and sum to the total."""
+    from sim_tactile.sim.contact import ActiveSet
+
+    C, pen = _layered_problem()
+    total = 2 * _reference(C, pen).sum()
+    p, dz = ActiveSet(C, np.linalg.inv(C)).solve_force(pen, total)
+    assert p.sum() == pytest.approx(total, rel=1e-9)
+    ref = _reference(C, pen + dz)
+    np.testing.assert_allclose(p, ref, atol=SOLVER_RTOL * ref.max())

@@ -25,76 +25,19 @@ modulus; and a plane-strain finite-element model (scikit-fem) of a strip load on
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Literal
-
 import numpy as np
 
-from .. import _validate as v
 from ..errors import ConfigError
+from ..sensors.stack import Layer, Stack
 
-Backing = Literal["rigid", "halfspace"]
-BACKINGS = ("rigid", "halfspace")
-
-
-@dataclass(frozen=True)
-class Layer:
-    """One bonded layer: thickness [m], Young's modulus [Pa], Poisson's ratio (0.5:
-    incompressible)."""
-
-    thickness_m: float
-    young_pa: float
-    poisson: float = 0.5
-
-    def __post_init__(self) -> None:
-        v.in_range("layer.thickness_m", self.thickness_m, 1e-6, 1.0, unit="m")
-        v.in_range("layer.young_pa", self.young_pa, 1e3, 1e12, unit="Pa")
-        v.in_range("layer.poisson", self.poisson, 0.0, 0.5, unit="")
-
-
-@dataclass(frozen=True)
-class Stack:
-    """Layers from the surface down, on a backing: ``rigid`` (bonded to an undeformable base)
-    or ``halfspace`` (of ``backing_young_pa`` and ``backing_poisson``)."""
-
-    layers: tuple[Layer, ...]
-    backing: Backing = "rigid"
-    backing_young_pa: float | None = None
-    backing_poisson: float = 0.5
-
-    def __post_init__(self) -> None:
-        if not self.layers:
-            raise ConfigError("stack.layers is empty; valid: at least one layer")
-        v.one_of("stack.backing", self.backing, BACKINGS)
-        if self.backing == "halfspace":
-            if self.backing_young_pa is None:
-                raise ConfigError(
-                    "stack.backing_young_pa is None with backing 'halfspace'; valid: a modulus "
-                    "in [1e3, 1e12] Pa"
-                )
-            v.in_range("stack.backing_young_pa", self.backing_young_pa, 1e3, 1e12, unit="Pa")
-            v.in_range("stack.backing_poisson", self.backing_poisson, 0.0, 0.5, unit="")
-
-    @property
-    def thickness_m(self) -> float:
-        return float(sum(layer.thickness_m for layer in self.layers))
-
-    @property
-    def top_e_star_pa(self) -> float:
-        """Plane-strain modulus of the top layer: the stack's response at short wavelengths."""
-        top = self.layers[0]
-        return top.young_pa / (1 - top.poisson**2)
-
-    def to_json(self) -> dict:
-        return {
-            "layers": [
-                {"thickness_m": la.thickness_m, "young_pa": la.young_pa, "poisson": la.poisson}
-                for la in self.layers
-            ],
-            "backing": self.backing,
-            "backing_young_pa": self.backing_young_pa,
-            "backing_poisson": self.backing_poisson,
-        }
+__all__ = [
+    "Layer",
+    "Stack",
+    "layer_response",
+    "layered_compliance_matrix",
+    "layered_subsurface_weights",
+    "surface_remainder",
+]
 
 
 def _modes(
@@ -201,3 +144,209 @@ def layer_response(
         Mj = _modes(k, k * (d - tops[j]), k * (d - tops[j + 1]), *mats[j])
         s[:, i] = -np.einsum("kj,kj->k", Mj[:, 2, :], coef[:, 4 * j : 4 * j + 4])
     return w, s
+
+
+# --- real space: the node grid's compliance and the taxels' weights --------------------------
+#
+# The stack's response to a point load is the half-space's of its top layer (closed forms in
+# :mod:`~sim_tactile.scene.elastic`) plus a remainder whose Fourier transform falls off
+# exponentially (the top layer's half-space dominates at wavelengths short against it), so
+# the remainder is smooth on the scale of the layers: it is tabulated over the distance r
+# by a Hankel transform and integrated over the node patches and taxels by Gauss-Legendre.
+
+#: Gauss points per Hankel panel, and the panel width in radians of k r at the table's end.
+_HANKEL_POINTS = 8
+_HANKEL_PHASE = 1.0
+#: the table reaches REACH_LAYERS total thicknesses; beyond it the remainder takes its
+#: asymptote (exponentially close on a rigid backing, to about (H / r)^2 on a half-space)
+REACH_LAYERS = 60.0
+#: table spacing: this fraction of the smoothing length (the top layer's thickness, or the
+#: distance from a taxel to the top layer's bottom and back)
+_TABLE_STEP = 1 / 24
+#: Gauss points per patch or taxel axis: one per this fraction of the smoothing length
+_POINTS_PER_LENGTH = 3.0
+_POINTS_MAX = 12
+
+
+class _Radial:
+    """A remainder tabulated over r in [0, r_end] (cubic spline), ``tail / r`` beyond."""
+
+    def __init__(self, r: np.ndarray, values: np.ndarray, tail: float) -> None:
+        from scipy.interpolate import CubicSpline
+
+        self.r_end, self.tail = float(r[-1]), float(tail)
+        self.spline = CubicSpline(r, values)
+
+    def __call__(self, r: np.ndarray) -> np.ndarray:
+        out = np.empty_like(r)
+        inside = r <= self.r_end
+        out[inside] = self.spline(r[inside])
+        out[~inside] = self.tail / r[~inside]
+        return out
+
+
+def _hankel_table(stack: Stack, f, r_end: float, length: float, tail: float) -> _Radial:
+    """(1/2pi) int_0^inf f(k) k J0(k r) dk on r in [0, r_end], f vectorised and decaying
+    exponentially beyond k ~ 1 / length."""
+    from scipy.special import j0
+
+    # the last k where f still matters: 40 smoothing lengths (exp(-40) ~ 4e-18)
+    k_end = 40.0 / length
+    width = min(_HANKEL_PHASE / r_end, 0.2 / stack.thickness_m, k_end / 50)
+    n = int(np.ceil(k_end / width))
+    t, w = np.polynomial.legendre.leggauss(_HANKEL_POINTS)
+    edges = np.linspace(0.0, k_end, n + 1)
+    half, mid = (edges[1:] - edges[:-1]) / 2, (edges[1:] + edges[:-1]) / 2
+    k = (mid[:, None] + half[:, None] * t[None, :]).ravel()
+    wk = (half[:, None] * w[None, :]).ravel() * f(k) * k / (2 * np.pi)
+    r = np.linspace(0.0, r_end, int(np.ceil(r_end / (length * _TABLE_STEP))) + 1)
+    vals = np.empty_like(r)
+    for i in range(0, r.size, 256):  # in blocks: (256 x nk) at a time
+        vals[i : i + 256] = j0(np.outer(r[i : i + 256], k)) @ wk
+    return _Radial(r, vals, tail)
+
+
+def _top_length(stack: Stack) -> float:
+    return stack.layers[0].thickness_m
+
+
+def surface_remainder(stack: Stack, r_max_m: float) -> _Radial:
+    """Surface deflection [m/N] of a unit point load on ``stack`` minus that of the top
+    layer's half-space, ``1 / (pi E* r)``, over r [m]."""
+    e_top = stack.top_e_star_pa
+    if stack.backing == "rigid":
+        tail = -1 / (np.pi * e_top)
+    else:
+        e_b = stack.backing_young_pa / (1 - stack.backing_poisson**2)
+        tail = (1 / e_b - 1 / e_top) / np.pi
+    r_end = min(r_max_m, REACH_LAYERS * stack.thickness_m)
+
+    def f(k):
+        return layer_response(stack, k)[0] - 2 / (e_top * k)
+
+    return _hankel_table(stack, f, max(r_end, 1e-6), _top_length(stack), tail)
+
+
+def _gauss(half: float, length: float) -> tuple[np.ndarray, np.ndarray]:
+    n = int(min(_POINTS_MAX, max(1, np.ceil(2 * half * _POINTS_PER_LENGTH / length))))
+    t, w = np.polynomial.legendre.leggauss(n)
+    return t * half, w / 2
+
+
+def layered_compliance_matrix(
+    xy: np.ndarray, pitch_m: float, stack: Stack, pitch_y_m: float | None = None
+) -> np.ndarray:
+    """(N, N) surface compliance [m/Pa] of the node patches centred at ``xy`` on ``stack``:
+    the top layer's half-space (Love's closed form) plus the stack's remainder, integrated
+    over each patch."""
+    from .elastic import compliance_matrix
+
+    hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
+    r_max = float(np.hypot(np.ptp(xy[:, 0]) + 2 * hx, np.ptp(xy[:, 1]) + 2 * hy))
+    rem = surface_remainder(stack, r_max)
+    length = _top_length(stack)
+    tx, wx = _gauss(hx, length)
+    ty, wy = _gauss(hy, length)
+    area = 4 * hx * hy
+
+    def patch_mean(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
+        acc = np.zeros(np.broadcast(dx, dy).shape)
+        for ox, wxi in zip(tx, wx, strict=True):
+            for oy, wyi in zip(ty, wy, strict=True):
+                acc += wxi * wyi * rem(np.hypot(dx - ox, dy - oy))
+        return acc
+
+    C = compliance_matrix(xy, pitch_m, stack.top_e_star_pa, pitch_y_m=pitch_y_m)
+    # the node grid is a lattice: the remainder depends on the offset in pitches only, and
+    # (the Gauss points being symmetric) on its magnitude along each axis
+    ix = np.rint((xy[:, 0] - xy[:, 0].min()) / (2 * hx)).astype(np.int64)
+    iy = np.rint((xy[:, 1] - xy[:, 1].min()) / (2 * hy)).astype(np.int64)
+    lattice = np.allclose(xy[:, 0] - xy[:, 0].min(), ix * 2 * hx, atol=1e-9 * hx) and np.allclose(
+        xy[:, 1] - xy[:, 1].min(), iy * 2 * hy, atol=1e-9 * hy
+    )
+    if lattice:
+        gx, gy = np.meshgrid(np.arange(ix.max() + 1), np.arange(iy.max() + 1), indexing="ij")
+        table = patch_mean(gx * 2 * hx, gy * 2 * hy)
+        C += area * table[np.abs(ix[:, None] - ix[None, :]), np.abs(iy[:, None] - iy[None, :])]
+    else:
+        d = xy[:, None, :] - xy[None, :, :]
+        C += area * patch_mean(d[..., 0], d[..., 1])
+    return 0.5 * (C + C.T)  # symmetric by reciprocity; the quadrature is symmetric to rounding
+
+
+#: the FFT grid of the taxel weights: its spacing resolves the remainder's transform out to
+#: exp(-FFT_DECAY) of its peak, and it reaches FFT_MARGIN smoothing lengths beyond the
+#: farthest node-taxel offset (the remainder falls off as r^-5 there)
+FFT_DECAY = 36.0
+FFT_MARGIN = 12.0
+_FFT_MAX_SIDE = 4096
+
+
+def _stress_remainder_hat(stack: Stack, depth_m: float) -> tuple[callable, float]:
+    """The transform of the stress remainder at ``depth_m`` as a function of |k| (tabulated
+    on a radial grid), and its smoothing length [m]."""
+    h1 = _top_length(stack)
+    length = 2 * h1 - depth_m if depth_m < h1 else depth_m
+    k = np.r_[np.geomspace(1e-4, 1.0, 200)[:-1], np.linspace(1.0, 1.2 * FFT_DECAY, 2000)] / length
+    rem = layer_response(stack, k, np.array([depth_m]))[1][:, 0] - (1 + k * depth_m) * np.exp(
+        -k * depth_m
+    )
+
+    def f(q: np.ndarray) -> np.ndarray:
+        return np.interp(q, k, rem, left=0.0, right=0.0)
+
+    return f, length
+
+
+def layered_subsurface_weights(
+    node_xy: np.ndarray,
+    pitch_m: float,
+    taxel_xy: np.ndarray,
+    taxel_size: np.ndarray,
+    depth_m: np.ndarray,
+    stack: Stack,
+    pitch_y_m: float | None = None,
+) -> np.ndarray:
+    """(M, N) weights W, taxel loads [N] = W @ node loads [N], on ``stack``: Boussinesq's
+    weights of the top layer (:func:`~sim_tactile.scene.elastic.subsurface_weights`) plus the
+    stack's remainder of the vertical stress averaged over each node's patch and integrated
+    over each taxel. The remainder's transform times the taxel's and the patch's box
+    transforms is brought back to real space by one FFT per taxel size and depth, and read
+    at each node-taxel offset by cubic interpolation."""
+    from scipy.fft import ifft2, next_fast_len
+    from scipy.ndimage import map_coordinates
+
+    from .elastic import subsurface_weights
+
+    W = subsurface_weights(node_xy, pitch_m, taxel_xy, taxel_size, depth_m, pitch_y_m=pitch_y_m)
+    hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
+    groups = {}
+    for m in np.flatnonzero(np.asarray(depth_m) > 0):
+        groups.setdefault((float(depth_m[m]), *map(float, taxel_size[m])), []).append(m)
+    for (d, tx, ty), ms in groups.items():
+        f, length = _stress_remainder_hat(stack, d)
+        dx = taxel_xy[ms, None, 0] - node_xy[None, :, 0]
+        dy = taxel_xy[ms, None, 1] - node_xy[None, :, 1]
+        step = np.pi * length / FFT_DECAY
+        reach_x = np.abs(dx).max() + FFT_MARGIN * length
+        reach_y = np.abs(dy).max() + FFT_MARGIN * length
+        nx = next_fast_len(int(np.ceil(2 * reach_x / step)))
+        ny = next_fast_len(int(np.ceil(2 * reach_y / step)))
+        if max(nx, ny) > _FFT_MAX_SIDE:  # a coarser grid, still resolving the smoothing length
+            nx, ny = min(nx, _FFT_MAX_SIDE), min(ny, _FFT_MAX_SIDE)
+        sx_, sy_ = 2 * reach_x / nx, 2 * reach_y / ny
+        kx = 2 * np.pi * np.fft.fftfreq(nx, sx_)
+        ky = 2 * np.pi * np.fft.fftfreq(ny, sy_)
+        KX, KY = np.meshgrid(kx, ky, indexing="ij")
+        boxes = (
+            np.sinc(KX * tx / (2 * np.pi))
+            * np.sinc(KY * ty / (2 * np.pi))
+            * np.sinc(KX * hx / np.pi)
+            * np.sinc(KY * hy / np.pi)
+        )
+        F = np.real(ifft2(f(np.hypot(KX, KY)) * boxes)) * (tx * ty) / (sx_ * sy_)
+        F = np.fft.fftshift(F)
+        # offset (x, y) sits at index (x / sx_ + nx // 2, y / sy_ + ny // 2) of the shifted grid
+        coords = np.array([dx.ravel() / sx_ + nx // 2, dy.ravel() / sy_ + ny // 2])
+        W[ms] += map_coordinates(F, coords, order=3, mode="grid-wrap").reshape(dx.shape)
+    return W

@@ -27,6 +27,7 @@ from ..plates import build as build_plate
 from ..sensors.layouts import Layout
 from ..sensors.pad import Finger
 from .elastic import subsurface_weights
+from .layered import layered_subsurface_weights
 from .nodes import SkinGrid
 
 _T = mujoco.mjtGeom
@@ -58,6 +59,15 @@ class Scene:
     @property
     def n_nodes(self) -> int:
         return self.grid.n
+
+
+def taxel_weights(grid: SkinGrid, layout: Layout, finger: Finger) -> np.ndarray:
+    """(M, N): the share of each node's load that each taxel reads, in the finger's skin
+    (a half-space, or its stack of layers)."""
+    args = (grid.xy, grid.pitch_m, layout.positions[:, :2], layout.sizes, layout.depth_m)
+    if finger.stack is not None:
+        return layered_subsurface_weights(*args, finger.stack, pitch_y_m=grid.pitch_y_m)
+    return subsurface_weights(*args, pitch_y_m=grid.pitch_y_m)
 
 
 def build_scene(
@@ -133,14 +143,7 @@ def build_scene(
     node_of_geom = np.full(m_col.ngeom, -1, dtype=np.int64)
     g0 = mujoco.mj_name2id(m_col, mujoco.mjtObj.mjOBJ_GEOM, "node0")
     node_of_geom[g0 : g0 + grid.n] = np.arange(grid.n)
-    W = subsurface_weights(
-        grid.xy,
-        grid.pitch_m,
-        layout.positions[:, :2],
-        layout.sizes,
-        layout.depth_m,
-        pitch_y_m=grid.pitch_y_m,
-    )
+    W = taxel_weights(grid, layout, finger)
     jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]
     jz = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "press_z")]
     # the offset across the slide, set in both compiled models (as the slide's own offset)

@@ -10,18 +10,22 @@ frame (x along the slide, y across, z out of the skin, i.e. up from the plate). 
 
 The skin is an elastic half-space of Young's modulus ``young_pa`` and Poisson ratio
 ``poisson`` (0.5: incompressible silicone), ``thickness_m`` thick over the bone: pressing
-deeper than that bottoms out and stops the run.
+deeper than that bottoms out and stops the run. With a ``stack``
+(:class:`~sim_tactile.sensors.stack.Stack`) the skin is that stack of bonded layers on its
+backing instead (:meth:`Finger.layered` sets the top layer's modulus and the stack's
+thickness to match).
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Literal
 
 import numpy as np
 
 from .. import _validate as v
 from ..errors import ConfigError
+from .stack import Stack
 
 PadShape = Literal["flat", "sphere", "ellipsoid"]
 PAD_SHAPES = ("flat", "sphere", "ellipsoid")
@@ -41,6 +45,8 @@ class Finger:
     poisson: float = 0.5
     bone_mass_kg: float = 0.1
     friction: float = 0.8
+    #: the skin's layers on their backing; None: a half-space of ``young_pa``, ``poisson``
+    stack: Stack | None = None
 
     def __post_init__(self) -> None:
         v.one_of("finger.shape", self.shape, PAD_SHAPES)
@@ -52,20 +58,45 @@ class Finger:
         v.in_range("finger.radius_m", self.radius_m, 1e-3, 0.1, unit="m")
         for i, r in enumerate(self.radii_m):
             v.in_range(f"finger.radii_m[{i}]", r, 1e-3, 0.1, unit="m")
-        v.in_range("finger.thickness_m", self.thickness_m, 0.2e-3, 0.05, unit="m")
+        v.in_range("finger.thickness_m", self.thickness_m, 10e-6, 0.05, unit="m")
         v.in_range("finger.young_pa", self.young_pa, 1e3, 1e9, unit="Pa")
         v.in_range("finger.poisson", self.poisson, 0.0, 0.5, unit="")
         v.in_range("finger.bone_mass_kg", self.bone_mass_kg, 1e-3, 10.0, unit="kg")
         v.in_range("finger.friction", self.friction, 0.0, 3.0, unit="")
+        if self.stack is not None:
+            top = self.stack.layers[0]
+            if (
+                abs(self.stack.thickness_m - self.thickness_m) > 1e-12
+                or top.young_pa != self.young_pa
+                or top.poisson != self.poisson
+            ):
+                raise ConfigError(
+                    f"finger.stack (thickness {self.stack.thickness_m:g} m, top layer E "
+                    f"{top.young_pa:g} Pa, nu {top.poisson:g}) disagrees with finger.thickness_m "
+                    f"= {self.thickness_m:g} m, young_pa = {self.young_pa:g} Pa, poisson = "
+                    f"{self.poisson:g}; valid: equal (Finger.layered sets them)"
+                )
         if self.shape == "sphere" and max(self.size_m) > 2 * self.radius_m:
             raise ConfigError(
                 f"finger.size_m = {self.size_m} is wider than the sphere (radius_m = "
                 f"{self.radius_m:g} m); valid: size_m <= 2 * radius_m"
             )
 
+    def layered(self, stack: Stack) -> Finger:
+        """This finger with ``stack`` as its skin: the thickness and the (top layer's)
+        modulus and Poisson ratio follow the stack."""
+        top = stack.layers[0]
+        return replace(
+            self,
+            stack=stack,
+            thickness_m=stack.thickness_m,
+            young_pa=top.young_pa,
+            poisson=top.poisson,
+        )
+
     @property
     def e_star_pa(self) -> float:
-        """Plane-strain modulus E / (1 - nu^2) [Pa]."""
+        """Plane-strain modulus E / (1 - nu^2) [Pa] (of the top layer, with a stack)."""
         return self.young_pa / (1.0 - self.poisson**2)
 
     @property
@@ -99,4 +130,9 @@ class Finger:
         return rz * (1 - np.sqrt(np.maximum(1 - (x / rx) ** 2 - (y / ry) ** 2, 0.0)))
 
     def to_json(self) -> dict:
-        return asdict(self)
+        d = asdict(self)
+        if self.stack is None:
+            del d["stack"]  # a half-space skin keeps the definition (and hashes) it had
+        else:
+            d["stack"] = self.stack.to_json()
+        return d

@@ -175,7 +175,7 @@ class CompiledHeldStep:
             (self.bone0, qpos, self.jx, jz),
             self.probe.arrays,
             self._reduced,
-            (self.winkler_k, C, K),
+            (self.winkler_k, C, K, s.floor),
             (M, S, in_set, rowsum, s.updates, s.refresh),
             self._limits,
             total,
@@ -227,8 +227,8 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     - ``probe``: the collider's arrays (:attr:`PrimitiveCollider.arrays`);
     - ``reduced``: ``(small, group, mult)``: the probes' depths, each node's probe, the nodes
       each reduced node stands for;
-    - ``skin``: ``(winkler_k, C, K)``: the Winkler stiffness (> 0 for L0), else the reduced
-      compliance and its inverse;
+    - ``skin``: ``(winkler_k, C, K, floor)``: the Winkler stiffness (> 0 for L0), else the
+      reduced compliance, its inverse and the depth above which a node can touch;
     - ``state``: ``(M, S, in_set, rowsum, updates, refresh)``: the contact set's state;
     - ``limits``: ``(tol_rel, max_iter, n_collisions, qs_margin)``;
     - ``out``: ``(pen, f, W, area, taxel_out)``: the depths and pressures it writes, and the
@@ -239,7 +239,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     within the margin (from the contact solve)."""
     bone0, qpos, jx, jz = pose
     small, group, mult = reduced
-    winkler_k, C, K = skin
+    winkler_k, C, K, floor = skin
     M, S, in_set, rowsum, updates, refresh = state
     tol_rel, max_iter, n_collisions, qs_margin = limits
     pen, f, W, area, taxel_out = out
@@ -263,10 +263,10 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
             if dz != dz:
                 return 3, 0.0, 0.0, M, S, updates, rebuilds, rowsum
         elif S.size:  # the common case: the set holds at the shift it implies
-            dz = force_same_set(M, S, pen, C, in_set, tol_rel, total, f, rowsum)
+            dz = force_same_set(M, S, pen, C, in_set, tol_rel, total, f, rowsum, floor)
         if dz != dz:
             st, dz, M, S, updates, rb = force_loop(
-                M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, f, False
+                M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, f, False, floor
             )
             rebuilds += rb
             rowsum = M @ np.ones(S.size)  # M 1 for the new M (BLAS, as _force_loop forms it)

@@ -14,9 +14,11 @@ of its nodes (m, ``-inf`` for nodes out of reach):
   between nodes, ``k = E* / thickness``;
 - :class:`CoupledSkin` (L1, L2): an elastic skin whose nodes are coupled by a dense
   compliance ``C`` (a load on one node deflects its neighbours), solved exactly as a linear
-  complementarity problem (:class:`~sim_tactile.sim.contact.ActiveSet`). Today ``C`` is the
-  elastic half-space's (:func:`~sim_tactile.scene.elastic.compliance_matrix`); any symmetric
-  positive definite compliance of the node grid takes the same path.
+  complementarity problem (:class:`~sim_tactile.sim.contact.ActiveSet`). ``C`` is the
+  elastic half-space's (:func:`~sim_tactile.scene.elastic.compliance_matrix`), or, when the
+  finger has a ``stack``, that of its bonded layers on their backing
+  (:func:`~sim_tactile.scene.layered.layered_compliance_matrix`); any symmetric positive
+  definite compliance of the node grid takes the same path.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene.elastic import compliance_matrix
+from ..scene.layered import layered_compliance_matrix
 from ..scene.nodes import SkinGrid
 from ..sensors.pad import Finger
 from . import contact
@@ -70,6 +73,18 @@ class CoupledSkin:
         K = np.linalg.inv(C) if inverse else None
         return cls(C, K, f"elastic half-space, E* {finger.e_star_pa:.4g} Pa")
 
+    @classmethod
+    def layered(cls, grid: SkinGrid, finger: Finger, *, inverse: bool = True) -> CoupledSkin:
+        """The finger's stack of bonded layers on its backing, on ``grid``'s nodes."""
+        st = finger.stack
+        C = layered_compliance_matrix(grid.xy, grid.pitch_m, st, pitch_y_m=grid.pitch_y_m)
+        K = np.linalg.inv(C) if inverse else None
+        layers = " / ".join(
+            f"{la.thickness_m * 1e3:g} mm E {la.young_pa:.3g} Pa nu {la.poisson:g}"
+            for la in st.layers
+        )
+        return cls(C, K, f"layered skin: {layers} on a {st.backing} backing")
+
     def solve(self, pen_m: np.ndarray) -> np.ndarray:
         p, _ = self.solver.solve(pen_m)
         return p
@@ -92,8 +107,10 @@ def make_skin(
     level: str, grid: SkinGrid, finger: Finger, *, winkler_k_pa_per_m: float, inverse: bool = True
 ) -> SkinModel:
     """The skin model of a fidelity level: L0 the Winkler bed, L1 and L2 the coupled
-    half-space. ``inverse``: also invert the compliance (cheap large contact sets; skip it
+    half-space (or the finger's layered stack). ``inverse``: also invert the compliance (cheap large contact sets; skip it
     for one static solve on a fine grid)."""
     if level == "L0":
         return WinklerSkin(winkler_k_pa_per_m)
+    if finger.stack is not None:
+        return CoupledSkin.layered(grid, finger, inverse=inverse)
     return CoupledSkin.half_space(grid, finger, inverse=inverse)

@@ -9,6 +9,12 @@ from .kernels import NO_K, force_loop, force_same_set, kkt_same_set, solve_loop
 from .reference import MAX_ITER, TOL_REL
 
 
+def skin_floor(C: np.ndarray) -> float:
+    """The depth above which a node can touch, for compliance ``C``: 0 when every entry is
+    >= 0 (a load only pushes the skin away from the plate), else -inf."""
+    return 0.0 if bool((C >= 0).all()) else -np.inf
+
+
 class ActiveSet:
     """The half-space contact problem of one compliance ``C``, solved step after step with the
     inverse of ``C`` on the contact set kept up to date.
@@ -26,6 +32,9 @@ class ActiveSet:
 
     def __init__(self, C: np.ndarray, K: np.ndarray | None = None, refresh: int = 100):
         self.C, self.K, self.refresh = C, K, refresh
+        #: the depth above which a node can touch: 0 when no load lifts any node toward the
+        #: plate (C >= 0, the half-space), else -inf (a layered skin bulges around a load)
+        self.floor = skin_floor(C)
         self.S = np.zeros(0, dtype=np.int64)  # contact set, in the order of M's rows
         self.M = np.zeros((0, 0))
         self.updates = 0
@@ -38,7 +47,9 @@ class ActiveSet:
         """Pressures [Pa] for node penetrations ``pen_m``, warm-started from the last set.
         Returns ``(p, active)`` as :func:`halfspace` does."""
         p = np.empty_like(pen_m)
-        if self.S.size and kkt_same_set(self.M, self.S, pen_m, self.C, self._in, TOL_REL, p):
+        if self.S.size and kkt_same_set(
+            self.M, self.S, pen_m, self.C, self._in, TOL_REL, p, self.floor
+        ):
             return p, self._in.copy()  # the common case: the set holds, one product
         K = self.K if self.K is not None else NO_K
         status, M, S, updates, rebuilds = solve_loop(
@@ -53,6 +64,7 @@ class ActiveSet:
             self.refresh,
             MAX_ITER,
             p,
+            self.floor,
         )
         self._take(M, S, updates, rebuilds)
         if status:
@@ -84,7 +96,7 @@ class ActiveSet:
             pen_m = np.ascontiguousarray(pen_m, dtype=np.float64)
         if self.S.size:  # the common case, without the loop's call and return costs
             M, S, in_set, C, rowsum = self.same_set_state()
-            dz = force_same_set(M, S, pen_m, C, in_set, TOL_REL, total_pa, p, rowsum)
+            dz = force_same_set(M, S, pen_m, C, in_set, TOL_REL, total_pa, p, rowsum, self.floor)
             if dz == dz:
                 return p, dz
         K = self.K if self.K is not None else NO_K
@@ -102,6 +114,7 @@ class ActiveSet:
             max_iter,
             p,
             False,  # the same-set case was tried above
+            self.floor,
         )
         self._take(M, S, updates, rebuilds)
         if status == 1:

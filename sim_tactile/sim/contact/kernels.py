@@ -9,10 +9,11 @@ import numpy as np
 
 
 @numba.njit(cache=True)
-def kkt_same_set(M, S, pen, C, in_set, tol_rel, p) -> bool:
+def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
     """Whether the contact set S still solves the problem for ``pen``; if so, write the
     pressures to ``p``. Checks the three conditions :meth:`ActiveSet.solve` would: every node
-    of S touches and carries compression, and no other touching node is left inside the plate."""
+    of S can touch and carries compression, and no other node that can touch is left inside
+    the plate. ``floor``: the depth above which a node can touch (:attr:`ActiveSet.floor`)."""
     n = pen.shape[0]
     m = S.shape[0]
     big = 0.0
@@ -20,7 +21,7 @@ def kkt_same_set(M, S, pen, C, in_set, tol_rel, p) -> bool:
         if pen[j] > big:
             big = pen[j]
     for k in range(m):
-        if pen[S[k]] <= 0.0:
+        if pen[S[k]] <= floor:
             return False
     tol = tol_rel * big
     pen_S = np.empty(m)
@@ -31,7 +32,7 @@ def kkt_same_set(M, S, pen, C, in_set, tol_rel, p) -> bool:
         if pS[i] < 0.0:
             return False
     for j in range(n):
-        if pen[j] > 0.0 and not in_set[j]:
+        if pen[j] > floor and not in_set[j]:
             u = 0.0
             for k in range(m):
                 u += C[j, S[k]] * pS[k]
@@ -79,17 +80,21 @@ def inverse_subset(C, K, S):
 
 
 @numba.njit(cache=True)
-def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p):
+def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor=0.0):
     """The active-set iteration of :meth:`ActiveSet.solve` from the current set: nodes that
-    stop touching or carry tension leave, touching nodes left inside the plate join; the
-    inverse ``M`` follows by block updates, rebuilt every ``refresh`` updates. Returns
-    ``(converged, M, S, updates, rebuilds)`` and writes the pressures to ``p``."""
+    can no longer touch or carry tension leave, nodes left inside the plate join; the
+    inverse ``M`` follows by block updates, rebuilt every ``refresh`` updates. A node can
+    touch when its depth exceeds ``floor``: 0 where no load lifts the skin toward the plate
+    (the half-space), -inf where one can (a layered skin), though the set starts from the
+    nodes that overlap the plate. Returns ``(converged, M, S, updates, rebuilds)`` and writes
+    the pressures to ``p``."""
     n = pen.shape[0]
     rebuilds = 0
     for j in range(n):
         p[j] = 0.0
-    touching = pen > 0.0
-    if not touching.any():
+    touching = pen > floor
+    overlap = pen > 0.0
+    if not overlap.any():
         if S.size:
             M = np.zeros((0, 0))
             S = S[:0]
@@ -99,7 +104,7 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p):
         return True, M, S, updates, rebuilds
     big = 0.0
     for j in range(n):
-        if touching[j] and pen[j] > big:
+        if overlap[j] and pen[j] > big:
             big = pen[j]
     tol = tol_rel * big
     for it in range(max_iter + 2):
@@ -107,7 +112,7 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p):
             drop = np.empty(S.size, np.bool_)
             for k in range(S.size):
                 drop[k] = not touching[S[k]]
-        elif S.size == 0:  # start from every touching node
+        elif S.size == 0:  # start from every node that overlaps the plate
             drop = np.zeros(0, np.bool_)
         else:
             pS = M @ np.ascontiguousarray(pen[S])
@@ -132,7 +137,7 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p):
         if it == 0:
             continue
         if S.size == 0:
-            A = np.flatnonzero(touching)
+            A = np.flatnonzero(overlap)
         else:
             rest = np.flatnonzero(touching & ~in_set)
             m = S.size
@@ -169,7 +174,7 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p):
 
 @numba.njit(cache=True)
 def force_loop(
-    M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p, try_same=True
+    M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p, try_same=True, floor=0.0
 ):
     """:meth:`ActiveSet.solve_force` in one call. Returns ``(status, dz, M, S, updates,
     rebuilds)``: status 1 converged (pressures in ``p``), 0 not converged, 2 no node within
@@ -177,7 +182,7 @@ def force_loop(
     n = pen.shape[0]
     rebuilds = 0
     if try_same and S.size:  # the common case: the set holds at the shift it implies
-        d = force_same_set(M, S, pen, C, in_set, tol_rel, total, p, M @ np.ones(S.size))
+        d = force_same_set(M, S, pen, C, in_set, tol_rel, total, p, M @ np.ones(S.size), floor)
         if d == d:
             return 1, d, M, S, updates, rebuilds
     top = -np.inf
@@ -188,6 +193,12 @@ def force_loop(
         return 2, 0.0, M, S, updates, rebuilds
     dz = 0.0
     shifted = np.empty(n)
+    # the total is continuous and increasing in dz (on each contact set its slope is
+    # 1' inv(C_SS) 1 > 0); where C is not of the half-space's kind (a layered skin, whose
+    # surface lifts around a load) it need not be convex, and the Newton shift can jump
+    # between two sets: a bracket [lo, hi] of shifts below and above the target catches that
+    # and bisects
+    lo, hi = -np.inf, np.inf
     for _ in range(max_iter):
         finite = S.size > 0
         for k in range(S.size):
@@ -197,12 +208,14 @@ def force_loop(
             kk = (M @ np.ones(S.size)).sum()  # BLAS: a plain sum over M is sequential
             if kk > 0:
                 dz = (total - (M @ np.ascontiguousarray(pen[S])).sum()) / kk
+        if not (lo < dz < hi) and np.isfinite(lo) and np.isfinite(hi):
+            dz = 0.5 * (lo + hi)
         for sink in range(2):
             for j in range(n):
                 shifted[j] = pen[j] + dz
-            if not (S.size and kkt_same_set(M, S, shifted, C, in_set, tol_rel, p)):
+            if not (S.size and kkt_same_set(M, S, shifted, C, in_set, tol_rel, p, floor)):
                 ok, M, S, updates, rb = solve_loop(
-                    M, S, in_set, C, K, shifted, tol_rel, updates, refresh, max_iter, p
+                    M, S, in_set, C, K, shifted, tol_rel, updates, refresh, max_iter, p, floor
                 )
                 rebuilds += rb
                 if not ok:
@@ -210,6 +223,11 @@ def force_loop(
             got = p.sum()
             if abs(got - total) <= 1e-9 * total:
                 return 1, dz, M, S, updates, rebuilds
+            if S.size:
+                if got < total:
+                    lo = max(lo, dz)
+                else:
+                    hi = min(hi, dz)
             if S.size or sink:
                 break
             # nothing touches at this shift: sink to the first touch and solve there
@@ -219,7 +237,7 @@ def force_loop(
 
 
 @numba.njit(cache=True)
-def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b) -> float:
+def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b, floor=0.0) -> float:
     """:meth:`ActiveSet.solve_force` on the set S alone: the shift ``dz`` at which the set's
     pressures sum to ``total``, and the pressures (into ``p``) if S still solves the contact
     problem at ``pen + dz`` (the checks of :func:`kkt_same_set`); NaN if it does not. ``b``:
@@ -245,7 +263,7 @@ def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b) -> float:
         if pen[j] + dz > big:
             big = pen[j] + dz
     for k in range(m):
-        if pen[S[k]] + dz <= 0.0:
+        if pen[S[k]] + dz <= floor:
             return np.nan
     pS = np.empty(m)
     for i in range(m):
@@ -254,7 +272,7 @@ def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b) -> float:
             return np.nan
     tol = tol_rel * big
     for j in range(n):
-        if pen[j] + dz > 0.0 and not in_set[j]:
+        if pen[j] + dz > floor and not in_set[j]:
             u = 0.0
             for k in range(m):
                 u += C[j, S[k]] * pS[k]
