@@ -112,3 +112,42 @@ def test_simulate_force_control_flag(cli, tmp_path):
         forces[fc] = np.asarray(meta["normal_force_n"])
     np.testing.assert_allclose(forces["quasi-static"], 1.0, rtol=1e-9)
     assert np.ptp(forces["dynamic"]) > 1e-3  # the damped bone's force moves
+
+
+def test_press_a_layered_skin_and_read_the_stress_at_depth(cli):
+    layers = '[{"thickness_m": 0.001, "young_pa": 6e5, "poisson": 0.45}, {"thickness_m": 0.003, "young_pa": 3e5}]'
+    common = ["press", "--force", "1", "--pitch", "0.0005", "--json"]
+    layered = json.loads(
+        cli([*common, "--layers", layers, "--backing", "rigid", "--depth", "0.001"]).stdout
+    )
+    assert layered["skin"]["backing"] == "rigid" and len(layered["skin"]["layers"]) == 2
+    assert layered["depth_m"] == 0.001 and "pressure_pa" not in layered
+    stress = np.array(layered["stress_pa"])
+    # the stress at depth carries the load: its integral over the plane is the force. The grid
+    # covers the pad only, and around the contact the bonded layers are in slight tension
+    # (the integral over the grid is 1.027 here, 0.995 on the half-space)
+    assert stress.sum() * 0.0005**2 == pytest.approx(1.0, rel=0.05)
+    assert layered["total_force_n"] == pytest.approx(1.0, rel=1e-9)
+    # a layer on a rigid base is stiffer than the half-space: smaller approach and contact
+    half = json.loads(cli(common).stdout)
+    assert layered["approach_m"] < half["approach_m"]
+    assert layered["contact_area_m2"] < half["contact_area_m2"]
+
+
+@pytest.mark.parametrize(
+    ("args", "names"),
+    [
+        (["--layers", '[{"thick": 1}]', "--backing", "rigid"], "--layers[0]"),
+        (["--layers", "[1,", "--backing", "rigid"], "--layers"),
+        (["--backing", "halfspace", "--backing-young", "1"], "stack.backing_young_pa"),
+        (["--depth", "0.01"], "depth_m"),
+        (
+            ["--layers", '[{"thickness_m": 0.001, "young_pa": 3e5, "poisson": 0.7}]'],
+            "layer.poisson",
+        ),
+    ],
+)
+def test_press_bad_skin_is_one_line_naming_the_parameter(cli, args, names):
+    res = cli(["press", *args, "--json"], check=False)
+    assert res.returncode == 2 and res.stdout == ""
+    assert len(res.stderr.strip().splitlines()) == 1 and names in res.stderr

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
 from ..errors import ConfigError
@@ -63,29 +64,80 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _press_stack(args: argparse.Namespace):
+    """The skin stack of ``press``'s options, or None for the half-space skin."""
+    import json
+
+    from ..sensors.stack import Layer, Stack
+
+    if args.layers is None and args.backing == "none":
+        return None
+    if args.layers is not None:
+        try:
+            rows = json.loads(args.layers)
+        except json.JSONDecodeError as e:
+            raise ConfigError(
+                f"--layers is not JSON ({e}); valid: a list of objects with "
+                "thickness_m, young_pa and poisson, from the surface down"
+            ) from e
+        if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) for r in rows):
+            raise ConfigError(
+                f"--layers = {args.layers!r}; valid: a non-empty JSON list of objects with "
+                "thickness_m, young_pa and poisson, from the surface down"
+            )
+        allowed = {"thickness_m", "young_pa", "poisson"}
+        for i, r in enumerate(rows):
+            if set(r) - allowed or "thickness_m" not in r or "young_pa" not in r:
+                raise ConfigError(
+                    f"--layers[{i}] has keys {sorted(r)}; valid: thickness_m and young_pa "
+                    "(required), poisson (default 0.5)"
+                )
+        layers = tuple(Layer(**r) for r in rows)
+    else:
+        layers = (Layer(args.thickness, args.young, args.poisson),)
+    backing = "rigid" if args.backing == "none" else args.backing
+    if backing == "halfspace":
+        return Stack(layers, "halfspace", args.backing_young, args.backing_poisson)
+    return Stack(layers, backing)
+
+
 def cmd_press(args: argparse.Namespace) -> int:
     from ..sensors import Finger
     from ..sim.press import hertz, press, sphere_pad_size_m
 
     r = args.radius
-    kw = {"young_pa": args.young, "poisson": args.poisson, "thickness_m": args.thickness}
+    stack = _press_stack(args)
+    top = stack.layers[0] if stack else None
+    young = top.young_pa if top else args.young
+    poisson = top.poisson if top else args.poisson
+    kw = {"young_pa": young, "poisson": poisson}
     if args.finger == "sphere":
-        size = sphere_pad_size_m(r, args.force, args.young / (1 - args.poisson**2))
+        size = sphere_pad_size_m(r, args.force, young / (1 - poisson**2))
         finger = Finger(shape="sphere", radius_m=r, size_m=(size, size), **kw)
     else:
         finger = Finger(shape="flat", size_m=(args.size, args.size), **kw)
+    finger = finger.layered(stack) if stack else replace(finger, thickness_m=args.thickness)
     res = press(
-        finger, args.force, readout_pitch_m=args.pitch, plate=args.plate, fidelity=args.fidelity
+        finger,
+        args.force,
+        readout_pitch_m=args.pitch,
+        plate=args.plate,
+        fidelity=args.fidelity,
+        depth_m=args.depth,
     )
     payload = res.to_json()
+    payload["skin"] = stack.to_json() if stack else {"half_space": kw}
     if args.finger == "sphere":
         payload["hertz"] = hertz(r, finger.e_star_pa, args.force)
+    where = "pressure" if args.depth == 0 else f"stress at {args.depth * 1e3:g} mm"
     emit(
         args,
         payload,
         lambda: (
             f"total force {res.total_force_n:.4g} N, contact radius "
-            f"{res.contact_radius_m * 1e3:.4g} mm, peak {res.peak_pressure_pa / 1e3:.4g} kPa"
+            f"{res.contact_radius_m * 1e3:.4g} mm (area {res.contact_area_m2 * 1e6:.4g} mm^2), "
+            f"peak pressure {res.peak_pressure_pa / 1e3:.4g} kPa, approach "
+            f"{res.approach_m * 1e3:.4g} mm, largest {where} {res.pressure_pa.max() / 1e3:.4g} kPa"
         ),
     )
     return 0
@@ -132,7 +184,39 @@ def add_parsers(sub) -> None:
     pr.add_argument("--size", type=float, default=12e-3, help="flat pad side [m]")
     pr.add_argument("--young", type=float, default=0.3e6, help="Young's modulus [Pa]")
     pr.add_argument("--poisson", type=float, default=0.5)
-    pr.add_argument("--thickness", type=float, default=5e-3, help="skin thickness [m]")
+    pr.add_argument(
+        "--thickness",
+        type=float,
+        default=5e-3,
+        help="skin thickness [m]: how deep the half-space skin may be pressed, or the layer's "
+        "thickness on a --backing",
+    )
+    pr.add_argument(
+        "--backing",
+        default="none",
+        choices=["none", "rigid", "halfspace"],
+        help="none: the skin is a half-space (default); rigid or halfspace: the skin is a layer "
+        "(or --layers) bonded to that backing",
+    )
+    pr.add_argument(
+        "--layers",
+        default=None,
+        help='the skin\'s layers from the surface down, as JSON: [{"thickness_m": 0.001, '
+        '"young_pa": 3e5, "poisson": 0.5}, ...] (overrides --thickness, --young, --poisson)',
+    )
+    pr.add_argument(
+        "--backing-young",
+        type=float,
+        default=3e6,
+        help="Young's modulus of a halfspace backing [Pa]",
+    )
+    pr.add_argument("--backing-poisson", type=float, default=0.5)
+    pr.add_argument(
+        "--depth",
+        type=float,
+        default=0.0,
+        help="read the vertical stress this far under the surface [m] (default 0: the pressure)",
+    )
     pr.add_argument("--force", type=float, default=1.0, help="normal force [N]")
     pr.add_argument(
         "--pitch", type=float, default=0.25e-3, help="taxel pitch of the dense grid [m]"

@@ -129,16 +129,19 @@ def grid_layout(
 
 
 def dense_layout(
-    pitch_m: float, extent_m: tuple[float, float], *, rate_hz: float = 100.0
+    pitch_m: float, extent_m: tuple[float, float], *, rate_hz: float = 100.0, depth_m: float = 0.0
 ) -> Layout:
-    """A dense grid of contiguous surface taxels of side ``pitch_m`` covering +-extent."""
+    """A dense grid of contiguous taxels of side ``pitch_m`` covering +-extent, at the
+    surface or ``depth_m`` under it."""
     nx = 2 * int(np.floor(extent_m[0] / pitch_m)) + 1
     ny = 2 * int(np.floor(extent_m[1] / pitch_m)) + 1
     if nx * ny > 40_000:
         raise ConfigError(
             f"a dense grid of pitch {pitch_m:g} m has {nx * ny} taxels; valid: at most 40000"
         )
-    return grid_layout(f"dense-{pitch_m * 1e3:g}mm", nx, ny, pitch_m, pitch_m, rate_hz=rate_hz)
+    return grid_layout(
+        f"dense-{pitch_m * 1e3:g}mm", nx, ny, pitch_m, pitch_m, rate_hz=rate_hz, depth_m=depth_m
+    )
 
 
 def multilayer_layout() -> Layout:

@@ -3,8 +3,9 @@
 The pad is held at the force by the same held step as a slide under quasi-static force
 control (:class:`~.held.HeldStep`: the collider's depth map, the skin's force-holding solve,
 a new query wherever the pad moved beyond the collider's margin), on the scene a slide would
-build, and a dense grid of surface taxels reads the pressure. With a spherical pad on a flat
-plate this is Hertz's problem, which the tests check.
+build, and a dense grid of taxels reads the pressure at the surface, or the vertical stress
+at a depth inside the skin. With a spherical pad on a flat plate this is Hertz's problem,
+which the tests check; the finger's skin may be a half-space or a stack of layers.
 """
 
 from __future__ import annotations
@@ -37,22 +38,29 @@ SPHERE_PAD_CONTACT_RADII = 3.0
 class PressResult:
     layout: Layout
     taxel_load_n: np.ndarray  # (M,)
-    pressure_pa: np.ndarray  # (M,) taxel load / taxel area
+    pressure_pa: np.ndarray  # (M,) taxel load / taxel area: the pressure, or the stress at depth
     total_force_n: float
     contact_radius_m: float  # sqrt(contact area / pi) from the skin nodes in contact
     peak_pressure_pa: float  # largest node pressure
     approach_m: float
+    contact_area_m2: float = 0.0
+    depth_m: float = 0.0  # of the dense grid under the surface
 
     def to_json(self) -> dict:
-        return {
+        out = {
             "taxels": self.layout.positions[:, :2].tolist(),
-            "pressure_pa": self.pressure_pa.tolist(),
+            "depth_m": self.depth_m,
+            "stress_pa": self.pressure_pa.tolist(),
             "total_force_n": self.total_force_n,
+            "contact_area_m2": self.contact_area_m2,
             "contact_radius_m": self.contact_radius_m,
             "peak_pressure_pa": self.peak_pressure_pa,
             "approach_m": self.approach_m,
             "n_taxels": self.layout.n,
         }
+        if self.depth_m == 0:
+            out["pressure_pa"] = out["stress_pa"]  # at the surface, the contact pressure
+        return out
 
 
 def hertz(radius_m: float, e_star_pa: float, force_n: float) -> dict:
@@ -81,22 +89,25 @@ def press(
     node_pitch_m: float | None = None,
     plate: Plate | str = "finger7/flat",
     fidelity: str = "L1",
+    depth_m: float = 0.0,
     cache=None,
 ) -> PressResult:
     """Press ``finger`` with ``force_n`` [N] on ``plate`` (at its centre) and read a dense grid
-    of surface taxels of side ``readout_pitch_m`` covering the pad. The skin's nodes are
-    ``node_pitch_m`` apart (default: the readout pitch, at most 0.2 mm); ``fidelity`` L1 is
-    the coupled skin, L0 the Winkler bed."""
+    of taxels of side ``readout_pitch_m`` covering the pad, at the surface or ``depth_m``
+    under it (then the vertical stress there). The skin's nodes are ``node_pitch_m`` apart
+    (default: the readout pitch, at most 0.2 mm); ``fidelity`` L1 is the coupled skin (a
+    half-space, or the finger's stack), L0 the Winkler bed."""
     from threadpoolctl import threadpool_limits
 
     v.in_range("force_n", force_n, 1e-4, 100.0, unit="N")
     v.in_range("readout_pitch_m", readout_pitch_m, 20e-6, 5e-3, unit="m")
     v.one_of("fidelity", fidelity, PRESS_LEVELS)
+    v.in_range("depth_m", depth_m, 0.0, finger.thickness_m, hi_open=True, unit="m")
     plate = get_plate(plate) if isinstance(plate, str) else plate
     grid = skin_grid(finger, node_pitch_m or min(readout_pitch_m, 0.2e-3))
     px, py = finger.patch_m
     half = readout_pitch_m / 2
-    layout = dense_layout(readout_pitch_m, (px / 2 - half, py / 2 - half))
+    layout = dense_layout(readout_pitch_m, (px / 2 - half, py / 2 - half), depth_m=depth_m)
     heights = height_at(plate, grid.xy[:, 0], grid.xy[:, 1]) - grid.z
     z0 = APPROACH_CLEARANCE_M + max(0.0, float(np.nanmax(heights)))
     margin = node_margin_m(plate)
@@ -135,4 +146,6 @@ def press(
         math.sqrt(n_contact * grid.area_m2 / math.pi),
         float(p.max()),
         float(-(z0 + qpos[scene.jz])),
+        n_contact * grid.area_m2,
+        float(depth_m),
     )
