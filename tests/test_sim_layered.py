@@ -342,3 +342,14 @@ def test_the_stress_under_a_gaussian_load_matches_hankels_integral(depth, stack)
     assert _richardson(reading) == pytest.approx(
         _gaussian_hankel(stack, sigma, depth), rel=GRID_RTOL
     )
+
+
+def test_a_grid_too_fine_for_the_taxel_weights_is_refused_with_the_reason():
+    """Shallow taxels under a very thin top layer over a wide pad would need an FFT grid
+    beyond its cap: refused, naming the depth and the layer, not read coarsely."""
+    st = Stack((Layer(20e-6, E, 0.45), Layer(2e-3, E, 0.45)))
+    xy = np.array([[-20e-3, -15e-3], [20e-3, 15e-3]])
+    with pytest.raises(ConfigError, match="0.01 mm deep under a 0.02 mm top layer"):
+        layered_subsurface_weights(
+            xy, 0.5e-3, np.zeros((1, 2)), np.full((1, 2), 1e-3), np.array([10e-6]), st
+        )

@@ -160,8 +160,7 @@ _HANKEL_PHASE = 1.0
 #: the table reaches REACH_LAYERS total thicknesses; beyond it the remainder takes its
 #: asymptote (exponentially close on a rigid backing, to about (H / r)^2 on a half-space)
 REACH_LAYERS = 60.0
-#: table spacing: this fraction of the smoothing length (the top layer's thickness, or the
-#: distance from a taxel to the top layer's bottom and back)
+#: table spacing: this fraction of the top layer's thickness
 _TABLE_STEP = 1 / 24
 #: Gauss points per patch or taxel axis: one per this fraction of the smoothing length
 _POINTS_PER_LENGTH = 3.0
@@ -332,8 +331,13 @@ def layered_subsurface_weights(
         reach_y = np.abs(dy).max() + FFT_MARGIN * length
         nx = next_fast_len(int(np.ceil(2 * reach_x / step)))
         ny = next_fast_len(int(np.ceil(2 * reach_y / step)))
-        if max(nx, ny) > _FFT_MAX_SIDE:  # a coarser grid, still resolving the smoothing length
-            nx, ny = min(nx, _FFT_MAX_SIDE), min(ny, _FFT_MAX_SIDE)
+        if max(nx, ny) > _FFT_MAX_SIDE:
+            raise ConfigError(
+                f"taxels {d * 1e3:g} mm deep under a {_top_length(stack) * 1e3:g} mm top layer "
+                f"need a {nx} x {ny} grid to read {2 * reach_x * 1e3:.3g} x "
+                f"{2 * reach_y * 1e3:.3g} mm of skin; valid: at most {_FFT_MAX_SIDE} a side "
+                "(a thicker top layer, deeper taxels, or a smaller pad)"
+            )
         sx_, sy_ = 2 * reach_x / nx, 2 * reach_y / ny
         kx = 2 * np.pi * np.fft.fftfreq(nx, sx_)
         ky = 2 * np.pi * np.fft.fftfreq(ny, sy_)
