@@ -15,6 +15,7 @@ from sim_tactile.scene.layered import (
     layer_response,
     layered_compliance_matrix,
     layered_subsurface_weights,
+    shear_subsurface_weights,
 )
 
 #: identities that hold to rounding
@@ -30,6 +31,8 @@ GRID_RTOL = 1e-3
 #: a uniform pressure read by buried taxels in a stack (the remainder's table is cut at 60
 #: stack thicknesses)
 UNIFORM_ATOL = 1e-3
+#: the shear weights' FFT against Cerruti's closed form integrated by dblquad (measured 3e-4)
+CERRUTI_RTOL = 1e-3
 
 E, H = 0.3e6, 4e-3
 K = np.logspace(0, 5.5, 23)  # wave numbers [1/m]: wavelengths from 6 m to 20 um
@@ -349,7 +352,42 @@ def test_a_grid_too_fine_for_the_taxel_weights_is_refused_with_the_reason():
     beyond its cap: refused, naming the depth and the layer, not read coarsely."""
     st = Stack((Layer(20e-6, E, 0.45), Layer(2e-3, E, 0.45)))
     xy = np.array([[-20e-3, -15e-3], [20e-3, 15e-3]])
-    with pytest.raises(ConfigError, match="0.01 mm deep under a 0.02 mm top layer"):
+    with pytest.raises(ConfigError, match="need a .* grid to read"):
         layered_subsurface_weights(
             xy, 0.5e-3, np.zeros((1, 2)), np.full((1, 2), 1e-3), np.array([10e-6]), st
         )
+
+
+# --- sliding friction: tangential tractions on the skin ---------------------------------------
+
+
+def test_a_shear_traction_on_a_half_space_has_cerruti_and_johnsons_closed_forms():
+    """Per wave number: the stress at depth is -k d exp(-k d) (Cerruti's, a quarter wave
+    out of phase), and the surface moves normally by (1 - 2 nu) / (2 (1 - nu)) of a pressure's
+    deflection (zero when incompressible)."""
+    d = np.array([0.5e-3, 2e-3])
+    for nu in (0.3, 0.5):
+        st = Stack((Layer(H, E, nu),), "halfspace", E, nu)
+        w, s = layer_response(st, K, d, load="shear")
+        kd = K[:, None] * d
+        np.testing.assert_allclose(s, -kd * np.exp(-kd), rtol=EXACT_RTOL, atol=1e-300)
+        ratio = -(1 - 2 * nu) / (2 * (1 - nu))
+        np.testing.assert_allclose(w * K * E / (1 - nu**2) / 2, ratio, atol=1e-12)
+
+
+@pytest.mark.parametrize("node", [(0.8e-3, 0.3e-3), (-1.5e-3, 0.2e-3), (2.5e-3, -1e-3)])
+def test_shear_weights_on_a_half_space_are_cerrutis_stress(node):
+    """A tangential point force Q along +x: the vertical stress at depth d is compressive
+    ahead of it, 3 Q x d^2 / (2 pi R^5) (Cerruti), integrated over the taxel by dblquad."""
+    d, sx, sy = 1e-3, 2e-3, 1.5e-3
+
+    def cerruti(yy, xx):
+        X, Y = xx - node[0], yy - node[1]
+        return 3 * X * d * d / (2 * np.pi * np.sqrt(X * X + Y * Y + d * d) ** 5)
+
+    want, _ = integrate.dblquad(cerruti, -sx / 2, sx / 2, -sy / 2, sy / 2, epsabs=1e-13)
+    st = Stack((Layer(H, E, 0.5),), "halfspace", E, 0.5)
+    got = shear_subsurface_weights(
+        np.array([node]), 1e-5, np.zeros((1, 2)), np.array([[sx, sy]]), np.array([d]), st
+    )
+    assert got[0, 0] == pytest.approx(want, rel=CERRUTI_RTOL)

@@ -223,3 +223,33 @@ def test_a_layer_on_its_bone_loads_the_pads_centre_not_its_rim(cache):
         assert centre_vs_corners == pytest.approx(
             FLAT_CENTRE_VS_CORNERS[name], abs=FLAT_CENTRE_ATOL
         ), name
+
+
+def test_sliding_tractions_load_each_taxel_from_its_nearer_rim_and_leave_the_force(cache):
+    """With the skin carrying the sliding friction (mu 0.5, against the +x slide) the
+    incompressible half-space's contact pressure is unchanged, and the buried taxels read
+    Cerruti's stress of the tractions: on a flat plate, where the flat pad's pressure
+    gathers at its rim, a taxel gains from the rim behind the tractions' direction (the
+    leading, +x rim) and loses the same from the other: the left and right columns move by
+    equal and opposite amounts of 2-4% (an independent estimate: 2-3% at the edges), the
+    middle column not at all."""
+    from dataclasses import replace
+
+    from sim_tactile.sensors import get_sensor
+
+    s0 = get_sensor("multilayer3x3x2")
+    s0 = replace(s0, finger=replace(s0.finger, friction=0.5))
+    s1 = replace(s0, finger=replace(s0.finger, skin_tractions=True))
+    proto = Protocol(duration_s=0.5)
+    r0, r1 = (
+        simulate("finger7/flat", s, protocol=proto, ideal=True, seed=1, cache=cache).recording
+        for s in (s0, s1)
+    )
+    np.testing.assert_allclose(r1.meta["normal_force_n"], r0.meta["normal_force_n"], rtol=1e-12)
+    m0, m1 = (r.data[20:].astype(float).mean(axis=0) for r in (r0, r1))
+    change = (m1 - m0) / m0
+    x = r0.taxels[:, 0]
+    ahead, behind, middle = x > 1e-3, x < -1e-3, np.abs(x) < 1e-9
+    assert np.all(change[ahead] > 0.015) and np.all(change[ahead] < 0.05)
+    np.testing.assert_allclose(change[behind], -change[ahead], atol=1e-3)
+    np.testing.assert_allclose(change[middle], 0.0, atol=1e-3)

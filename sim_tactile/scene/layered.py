@@ -36,6 +36,7 @@ __all__ = [
     "layer_response",
     "layered_compliance_matrix",
     "layered_subsurface_weights",
+    "shear_subsurface_weights",
     "surface_remainder",
 ]
 
@@ -76,15 +77,21 @@ def _shear_modulus(young: float, nu: float) -> float:
 
 
 def layer_response(
-    stack: Stack, k: np.ndarray, depths_m: np.ndarray | None = None
+    stack: Stack, k: np.ndarray, depths_m: np.ndarray | None = None, *, load: str = "normal"
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Response of ``stack`` to a unit normal pressure ``exp(i k x)`` at wave numbers ``k``
-    [1/m] (all > 0).
+    """Response of ``stack`` to a unit surface load ``exp(i k x)`` at wave numbers ``k``
+    [1/m] (all > 0): a normal pressure (``load="normal"``) or a shear traction along +x
+    (``load="shear"``).
 
     Returns ``w`` (nk,): the surface deflection into the skin [m/Pa], and ``s`` (nk, nd): the
-    compressive vertical stress at ``depths_m`` [Pa/Pa] (1 at the surface; a depth at or
-    below the backing's top is not allowed on a rigid backing).
+    compressive vertical stress at ``depths_m`` [Pa/Pa] (a depth at or below the backing's
+    top is not allowed on a rigid backing). Under a pressure both are in phase with it (``s``
+    is 1 at the surface). Under a shear traction both lag it by a quarter wave: the actual
+    responses are ``i w`` and ``i s`` (``s`` is 0 at the surface; on a half-space
+    ``s = -k d exp(-k d)``, Cerruti's stress, compressive ahead of the traction).
     """
+    if load not in ("normal", "shear"):
+        raise ConfigError(f"load = {load!r}; valid: 'normal', 'shear'")
     k = np.asarray(k, float)
     if np.any(k <= 0):
         raise ValueError("layer_response: wave numbers must be > 0")
@@ -112,10 +119,14 @@ def layer_response(
         Mj[:, 2:, :] *= scale[:, None, None]
         return Mj
 
-    # surface: S = -1 (a unit pressure), T = 0
+    # surface: S = -1, T = 0 (a unit pressure), or S = 0 and sigma_xz = -i: T = i (a unit
+    # traction along +x; the field of the real system T = 1 times i)
     top = state(0, 0.0)
     A[:, 0:2, 0:4] = top[:, 2:4, :]
-    b[:, 0] = -scale
+    if load == "normal":
+        b[:, 0] = -scale
+    else:
+        b[:, 1] = scale
     row = 2
     for j in range(n_lay - 1):
         z = tops[j + 1]
@@ -297,6 +308,51 @@ def _stress_remainder_hat(stack: Stack, depth_m: float) -> tuple[callable, float
     return f, length
 
 
+def _fft_taxel_weights(hat, length, node_xy, hx, hy, taxel_xy, tx, ty, ms) -> np.ndarray:
+    """(len(ms), N): taxel ms's reading of a unit load spread over each node's patch, for a
+    stress whose 2D transform at (kx, ky) is ``hat(KX, KY)`` and falls off as
+    exp(-|k| length); one FFT over every node-taxel offset, read by cubic interpolation."""
+    from scipy.fft import ifft2, next_fast_len
+    from scipy.ndimage import map_coordinates
+
+    dx = taxel_xy[ms, None, 0] - node_xy[None, :, 0]
+    dy = taxel_xy[ms, None, 1] - node_xy[None, :, 1]
+    step = np.pi * length / FFT_DECAY
+    reach_x = np.abs(dx).max() + FFT_MARGIN * length
+    reach_y = np.abs(dy).max() + FFT_MARGIN * length
+    nx = next_fast_len(int(np.ceil(2 * reach_x / step)))
+    ny = next_fast_len(int(np.ceil(2 * reach_y / step)))
+    if max(nx, ny) > _FFT_MAX_SIDE:
+        raise ConfigError(
+            f"taxels {length * 1e3:g} mm from where their stress settles need a {nx} x {ny} grid "
+            f"to read {2 * reach_x * 1e3:.3g} x {2 * reach_y * 1e3:.3g} mm of skin; valid: at "
+            f"most {_FFT_MAX_SIDE} a side (deeper taxels, a thicker top layer, or a smaller pad)"
+        )
+    sx_, sy_ = 2 * reach_x / nx, 2 * reach_y / ny
+    kx = 2 * np.pi * np.fft.fftfreq(nx, sx_)
+    ky = 2 * np.pi * np.fft.fftfreq(ny, sy_)
+    KX, KY = np.meshgrid(kx, ky, indexing="ij")
+    boxes = (
+        np.sinc(KX * tx / (2 * np.pi))
+        * np.sinc(KY * ty / (2 * np.pi))
+        * np.sinc(KX * hx / np.pi)
+        * np.sinc(KY * hy / np.pi)
+    )
+    F = np.real(ifft2(hat(KX, KY) * boxes)) * (tx * ty) / (sx_ * sy_)
+    F = np.fft.fftshift(F)
+    # offset (x, y) sits at index (x / sx_ + nx // 2, y / sy_ + ny // 2) of the shifted grid
+    coords = np.array([dx.ravel() / sx_ + nx // 2, dy.ravel() / sy_ + ny // 2])
+    return map_coordinates(F, coords, order=3, mode="grid-wrap").reshape(dx.shape)
+
+
+def _groups(taxel_size, depth_m):
+    """Buried taxels grouped by (depth, size x, size y)."""
+    groups = {}
+    for m in np.flatnonzero(np.asarray(depth_m) > 0):
+        groups.setdefault((float(depth_m[m]), *map(float, taxel_size[m])), []).append(m)
+    return groups
+
+
 def layered_subsurface_weights(
     node_xy: np.ndarray,
     pitch_m: float,
@@ -312,45 +368,41 @@ def layered_subsurface_weights(
     over each taxel. The remainder's transform times the taxel's and the patch's box
     transforms is brought back to real space by one FFT per taxel size and depth, and read
     at each node-taxel offset by cubic interpolation."""
-    from scipy.fft import ifft2, next_fast_len
-    from scipy.ndimage import map_coordinates
-
     from .elastic import subsurface_weights
 
     W = subsurface_weights(node_xy, pitch_m, taxel_xy, taxel_size, depth_m, pitch_y_m=pitch_y_m)
     hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
-    groups = {}
-    for m in np.flatnonzero(np.asarray(depth_m) > 0):
-        groups.setdefault((float(depth_m[m]), *map(float, taxel_size[m])), []).append(m)
-    for (d, tx, ty), ms in groups.items():
+    for (d, tx, ty), ms in _groups(taxel_size, depth_m).items():
         f, length = _stress_remainder_hat(stack, d)
-        dx = taxel_xy[ms, None, 0] - node_xy[None, :, 0]
-        dy = taxel_xy[ms, None, 1] - node_xy[None, :, 1]
-        step = np.pi * length / FFT_DECAY
-        reach_x = np.abs(dx).max() + FFT_MARGIN * length
-        reach_y = np.abs(dy).max() + FFT_MARGIN * length
-        nx = next_fast_len(int(np.ceil(2 * reach_x / step)))
-        ny = next_fast_len(int(np.ceil(2 * reach_y / step)))
-        if max(nx, ny) > _FFT_MAX_SIDE:
-            raise ConfigError(
-                f"taxels {d * 1e3:g} mm deep under a {_top_length(stack) * 1e3:g} mm top layer "
-                f"need a {nx} x {ny} grid to read {2 * reach_x * 1e3:.3g} x "
-                f"{2 * reach_y * 1e3:.3g} mm of skin; valid: at most {_FFT_MAX_SIDE} a side "
-                "(a thicker top layer, deeper taxels, or a smaller pad)"
-            )
-        sx_, sy_ = 2 * reach_x / nx, 2 * reach_y / ny
-        kx = 2 * np.pi * np.fft.fftfreq(nx, sx_)
-        ky = 2 * np.pi * np.fft.fftfreq(ny, sy_)
-        KX, KY = np.meshgrid(kx, ky, indexing="ij")
-        boxes = (
-            np.sinc(KX * tx / (2 * np.pi))
-            * np.sinc(KY * ty / (2 * np.pi))
-            * np.sinc(KX * hx / np.pi)
-            * np.sinc(KY * hy / np.pi)
+        W[ms] += _fft_taxel_weights(
+            lambda KX, KY, f=f: f(np.hypot(KX, KY)), length, node_xy, hx, hy, taxel_xy, tx, ty, ms
         )
-        F = np.real(ifft2(f(np.hypot(KX, KY)) * boxes)) * (tx * ty) / (sx_ * sy_)
-        F = np.fft.fftshift(F)
-        # offset (x, y) sits at index (x / sx_ + nx // 2, y / sy_ + ny // 2) of the shifted grid
-        coords = np.array([dx.ravel() / sx_ + nx // 2, dy.ravel() / sy_ + ny // 2])
-        W[ms] += map_coordinates(F, coords, order=3, mode="grid-wrap").reshape(dx.shape)
     return W
+
+
+def shear_subsurface_weights(
+    node_xy: np.ndarray,
+    pitch_m: float,
+    taxel_xy: np.ndarray,
+    taxel_size: np.ndarray,
+    depth_m: np.ndarray,
+    stack: Stack,
+    pitch_y_m: float | None = None,
+) -> np.ndarray:
+    """(M, N) weights Wq: the compressive vertical stress each taxel integrates when each
+    node carries a unit tangential force along +x, spread over its patch, on ``stack`` (a
+    half-space is a stack of one material on a half-space of the same). On a half-space it
+    is Cerruti's: compressive ahead of the force, tensile behind, zero at the surface."""
+    Wq = np.zeros((len(taxel_xy), len(node_xy)))
+    hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
+    for (d, tx, ty), ms in _groups(taxel_size, depth_m).items():
+        q = np.r_[np.geomspace(1e-4, 1.0, 200)[:-1], np.linspace(1.0, 1.2 * FFT_DECAY, 2000)] / d
+        s = layer_response(stack, q, np.array([d]), load="shear")[1][:, 0]
+
+        def hat(KX, KY, q=q, s=s):
+            K = np.hypot(KX, KY)
+            direction = np.divide(KX, K, out=np.zeros_like(K), where=K > 0)
+            return 1j * direction * np.interp(K, q, s, left=0.0, right=0.0)
+
+        Wq[ms] = _fft_taxel_weights(hat, d, node_xy, hx, hy, taxel_xy, tx, ty, ms)
+    return Wq

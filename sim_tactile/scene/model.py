@@ -27,7 +27,7 @@ from ..plates import build as build_plate
 from ..sensors.layouts import Layout
 from ..sensors.pad import Finger
 from .elastic import subsurface_weights
-from .layered import layered_subsurface_weights
+from .layered import Layer, Stack, layered_subsurface_weights, shear_subsurface_weights
 from .nodes import SkinGrid
 
 _T = mujoco.mjtGeom
@@ -66,8 +66,22 @@ def taxel_weights(grid: SkinGrid, layout: Layout, finger: Finger) -> np.ndarray:
     (a half-space, or its stack of layers)."""
     args = (grid.xy, grid.pitch_m, layout.positions[:, :2], layout.sizes, layout.depth_m)
     if finger.stack is not None:
-        return layered_subsurface_weights(*args, finger.stack, pitch_y_m=grid.pitch_y_m)
-    return subsurface_weights(*args, pitch_y_m=grid.pitch_y_m)
+        W = layered_subsurface_weights(*args, finger.stack, pitch_y_m=grid.pitch_y_m)
+    else:
+        W = subsurface_weights(*args, pitch_y_m=grid.pitch_y_m)
+    if finger.skin_tractions and finger.friction > 0:
+        # the pad slides along +x: the plate's friction on the skin points along -x, q = -mu p
+        # at every node (full sliding). Its stress at depth is compressive ahead of the
+        # traction, so the trailing side of the pad reads more. (On a layered or compressible
+        # skin the tractions also shift the contact pressure; that coupling is not modelled.)
+        stack = finger.stack or Stack(
+            (Layer(finger.thickness_m, finger.young_pa, finger.poisson),),
+            "halfspace",
+            finger.young_pa,
+            finger.poisson,
+        )
+        W = W - finger.friction * shear_subsurface_weights(*args, stack, pitch_y_m=grid.pitch_y_m)
+    return W
 
 
 def build_scene(

@@ -47,6 +47,10 @@ class Finger:
     friction: float = 0.8
     #: the skin's layers on their backing; None: a half-space of ``young_pa``, ``poisson``
     stack: Stack | None = None
+    #: the skin carries the sliding friction as tractions ``q = friction * p`` against the
+    #: slide, and buried taxels read their stress (Cerruti's on a half-space); False: the
+    #: skin is frictionless and the friction acts only as the bone's drag
+    skin_tractions: bool = False
 
     def __post_init__(self) -> None:
         v.one_of("finger.shape", self.shape, PAD_SHAPES)
@@ -135,4 +139,6 @@ class Finger:
             del d["stack"]  # a half-space skin keeps the definition (and hashes) it had
         else:
             d["stack"] = self.stack.to_json()
+        if not self.skin_tractions:
+            del d["skin_tractions"]  # likewise a frictionless skin
         return d
