@@ -151,3 +151,25 @@ def test_press_bad_skin_is_one_line_naming_the_parameter(cli, args, names):
     res = cli(["press", *args, "--json"], check=False)
     assert res.returncode == 2 and res.stdout == ""
     assert len(res.stderr.strip().splitlines()) == 1 and names in res.stderr
+
+
+@pytest.mark.slow
+def test_press_with_friction_loads_the_trailing_side_at_depth(cli):
+    """A flat pad at 1 N with mu 0.5, read 1 mm deep: the side the pad slides away from
+    reads more (the tractions' Cerruti stress), mirrored when the slide reverses; the force
+    and, on the incompressible half-space, the contact are unchanged."""
+    common = ["press", "--finger", "flat", "--force", "1", "--pitch", "0.001", "--depth", "0.001"]
+
+    def sides(extra):
+        doc = json.loads(cli([*common, *extra, "--json"]).stdout)
+        s, x = np.array(doc["stress_pa"]), np.array(doc["taxels"])[:, 0]
+        return doc, s[x > 2.5e-3].mean(), s[x < -2.5e-3].mean()
+
+    plain, ahead0, behind0 = sides([])
+    fwd, ahead, behind = sides(["--friction", "0.5", "--slide-dir", "x"])
+    back, ahead_r, behind_r = sides(["--friction", "0.5", "--slide-dir=-x"])
+    assert ahead0 == pytest.approx(behind0, rel=1e-9)
+    assert behind > behind0 * 1.05 and ahead < ahead0 * 0.95
+    assert ahead_r == pytest.approx(behind, rel=1e-9) and behind_r == pytest.approx(ahead, rel=1e-9)
+    assert fwd["approach_m"] == pytest.approx(plain["approach_m"], rel=1e-9)
+    assert fwd["contact_area_m2"] == plain["contact_area_m2"]

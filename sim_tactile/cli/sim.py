@@ -64,6 +64,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+#: press --slide-dir: the direction the pad would slide in, in its plane
+SLIDE_DIRS = {"x": (1.0, 0.0), "-x": (-1.0, 0.0), "y": (0.0, 1.0), "-y": (0.0, -1.0)}
+
+
 def _press_stack(args: argparse.Namespace):
     """The skin stack of ``press``'s options, or None for the half-space skin."""
     import json
@@ -117,6 +121,8 @@ def cmd_press(args: argparse.Namespace) -> int:
     else:
         finger = Finger(shape="flat", size_m=(args.size, args.size), **kw)
     finger = finger.layered(stack) if stack else replace(finger, thickness_m=args.thickness)
+    if args.friction is not None:
+        finger = replace(finger, friction=args.friction, skin_tractions=True)
     res = press(
         finger,
         args.force,
@@ -124,6 +130,7 @@ def cmd_press(args: argparse.Namespace) -> int:
         plate=args.plate,
         fidelity=args.fidelity,
         depth_m=args.depth,
+        slide_dir=SLIDE_DIRS[args.slide_dir],
     )
     payload = res.to_json()
     payload["skin"] = stack.to_json() if stack else {"half_space": kw}
@@ -211,6 +218,19 @@ def add_parsers(sub) -> None:
         help="Young's modulus of a halfspace backing [Pa]",
     )
     pr.add_argument("--backing-poisson", type=float, default=0.5)
+    pr.add_argument(
+        "--friction",
+        type=float,
+        default=None,
+        help="the skin carries sliding friction of this coefficient (q = mu p against "
+        "--slide-dir); buried taxels (--depth) read its stress",
+    )
+    pr.add_argument(
+        "--slide-dir",
+        default="x",
+        choices=list(SLIDE_DIRS),
+        help="the direction the pad slides in, for --friction (write --slide-dir=-x for -x)",
+    )
     pr.add_argument(
         "--depth",
         type=float,

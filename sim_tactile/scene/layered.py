@@ -388,11 +388,14 @@ def shear_subsurface_weights(
     depth_m: np.ndarray,
     stack: Stack,
     pitch_y_m: float | None = None,
+    direction: tuple[float, float] = (1.0, 0.0),
 ) -> np.ndarray:
     """(M, N) weights Wq: the compressive vertical stress each taxel integrates when each
-    node carries a unit tangential force along +x, spread over its patch, on ``stack`` (a
-    half-space is a stack of one material on a half-space of the same). On a half-space it
-    is Cerruti's: compressive ahead of the force, tensile behind, zero at the surface."""
+    node carries a unit tangential force along ``direction`` (a unit vector in the pad's
+    plane; default +x), spread over its patch, on ``stack`` (a half-space is a stack of one
+    material on a half-space of the same). On a half-space it is Cerruti's: compressive
+    ahead of the force, tensile behind, zero at the surface."""
+    cx, cy = direction
     Wq = np.zeros((len(taxel_xy), len(node_xy)))
     hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
     for (d, tx, ty), ms in _groups(taxel_size, depth_m).items():
@@ -401,8 +404,8 @@ def shear_subsurface_weights(
 
         def hat(KX, KY, q=q, s=s):
             K = np.hypot(KX, KY)
-            direction = np.divide(KX, K, out=np.zeros_like(K), where=K > 0)
-            return 1j * direction * np.interp(K, q, s, left=0.0, right=0.0)
+            along = np.divide(cx * KX + cy * KY, K, out=np.zeros_like(K), where=K > 0)
+            return 1j * along * np.interp(K, q, s, left=0.0, right=0.0)
 
         Wq[ms] = _fft_taxel_weights(hat, d, node_xy, hx, hy, taxel_xy, tx, ty, ms)
     return Wq

@@ -61,18 +61,22 @@ class Scene:
         return self.grid.n
 
 
-def taxel_weights(grid: SkinGrid, layout: Layout, finger: Finger) -> np.ndarray:
+def taxel_weights(
+    grid: SkinGrid, layout: Layout, finger: Finger, slide_dir: tuple[float, float] = (1.0, 0.0)
+) -> np.ndarray:
     """(M, N): the share of each node's load that each taxel reads, in the finger's skin
-    (a half-space, or its stack of layers)."""
+    (a half-space, or its stack of layers), with the stress of the skin's sliding tractions
+    when the finger has them (the pad sliding along ``slide_dir``, a unit vector; slides go
+    along +x)."""
     args = (grid.xy, grid.pitch_m, layout.positions[:, :2], layout.sizes, layout.depth_m)
     if finger.stack is not None:
         W = layered_subsurface_weights(*args, finger.stack, pitch_y_m=grid.pitch_y_m)
     else:
         W = subsurface_weights(*args, pitch_y_m=grid.pitch_y_m)
     if finger.skin_tractions and finger.friction > 0:
-        # the pad slides along +x: the plate's friction on the skin points along -x, q = -mu p
-        # at every node (full sliding). Its stress at depth is compressive ahead of the
-        # traction, so the trailing side of the pad reads more. (On a layered or compressible
+        # the plate's friction on the skin points against the slide, q = -mu p along
+        # slide_dir at every node (full sliding); its stress at depth is compressive ahead
+        # of the traction. (On a layered or compressible
         # skin the tractions also shift the contact pressure; that coupling is not modelled.)
         stack = finger.stack or Stack(
             (Layer(finger.thickness_m, finger.young_pa, finger.poisson),),
@@ -80,7 +84,8 @@ def taxel_weights(grid: SkinGrid, layout: Layout, finger: Finger) -> np.ndarray:
             finger.young_pa,
             finger.poisson,
         )
-        W = W - finger.friction * shear_subsurface_weights(*args, stack, pitch_y_m=grid.pitch_y_m)
+        Wq = shear_subsurface_weights(*args, stack, pitch_y_m=grid.pitch_y_m, direction=slide_dir)
+        W = W - finger.friction * Wq
     return W
 
 

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _validate as v
-from ..errors import PhysicsError
+from ..errors import ConfigError, PhysicsError
 from ..plates import Plate, get_plate, height_at
-from ..scene.model import build_scene
+from ..scene.model import build_scene, taxel_weights
 from ..scene.nodes import skin_grid
 from ..sensors.layouts import Layout, dense_layout
 from ..sensors.pad import Finger
@@ -90,13 +90,16 @@ def press(
     plate: Plate | str = "finger7/flat",
     fidelity: str = "L1",
     depth_m: float = 0.0,
+    slide_dir: tuple[float, float] = (1.0, 0.0),
     cache=None,
 ) -> PressResult:
     """Press ``finger`` with ``force_n`` [N] on ``plate`` (at its centre) and read a dense grid
     of taxels of side ``readout_pitch_m`` covering the pad, at the surface or ``depth_m``
     under it (then the vertical stress there). The skin's nodes are ``node_pitch_m`` apart
     (default: the readout pitch, at most 0.2 mm); ``fidelity`` L1 is the coupled skin (a
-    half-space, or the finger's stack), L0 the Winkler bed."""
+    half-space, or the finger's stack), L0 the Winkler bed. A finger with ``skin_tractions``
+    is read as if sliding along ``slide_dir`` (a unit vector in the pad's plane): its skin
+    carries the sliding friction against it, and buried taxels read that stress."""
     from threadpoolctl import threadpool_limits
 
     v.in_range("force_n", force_n, 1e-4, 100.0, unit="N")
@@ -125,7 +128,10 @@ def press(
     )
     k_w = finger.e_star_pa / finger.thickness_m
     skin = make_skin(fidelity, grid, finger, winkler_k_pa_per_m=k_w, inverse=False)
-    hold = HeldStep(make_collider(scene), skin, scene.W, grid.area_m2, margin)
+    if not np.isclose(math.hypot(*slide_dir), 1.0):
+        raise ConfigError(f"slide_dir = {slide_dir}; valid: a unit vector (x, y)")
+    W = taxel_weights(grid, layout, finger, slide_dir) if finger.skin_tractions else scene.W
+    hold = HeldStep(make_collider(scene), skin, W, grid.area_m2, margin)
     qpos = np.zeros(scene.m_col.nq)
     taxel = np.zeros(layout.n)
     with threadpool_limits(limits=1, user_api="blas"):
