@@ -71,17 +71,12 @@ FAR_PATCHES = 2.0
 FAR_POINTS = 3
 
 
-def _patch_points(
-    half: float, depth: float, cap: int | None = None
+def gauss_points(
+    half: float, length: float, per_length: float, cap: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre offsets [m] and weights (summing to 1) over [-half, half]."""
-    n = int(
-        min(
-            cap or PATCH_POINTS_MAX,
-            PATCH_POINTS_MAX,
-            max(1, np.ceil(2 * half * PATCH_POINTS_PER_DEPTH / depth)),
-        )
-    )
+    """Gauss-Legendre offsets [m] and weights (summing to 1) over [-half, half]: enough
+    points that ``per_length`` of them fall in each ``length``, at most ``cap``."""
+    n = int(min(cap, max(1, np.ceil(2 * half * per_length / length))))
     t, w = np.polynomial.legendre.leggauss(n)
     return t * half, w / 2
 
@@ -144,8 +139,9 @@ def subsurface_weights(
 
 def _patch_average(X, Y, hx, hy, sx, sy, d, cap) -> np.ndarray:
     """Mean over each node's patch (centres X, Y from the taxel) of the taxel's stress."""
-    tx, wx = _patch_points(hx, d, cap)
-    ty, wy = _patch_points(hy, d, cap)
+    cap = min(cap or PATCH_POINTS_MAX, PATCH_POINTS_MAX)
+    tx, wx = gauss_points(hx, d, PATCH_POINTS_PER_DEPTH, cap)
+    ty, wy = gauss_points(hy, d, PATCH_POINTS_PER_DEPTH, cap)
     acc = np.zeros(X.size)
     for ox, wxi in zip(tx, wx, strict=True):
         acc += wxi * (

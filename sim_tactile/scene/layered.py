@@ -237,26 +237,20 @@ def surface_remainder(stack: Stack, r_max_m: float) -> _Radial:
     return _hankel_table(stack, f, max(r_end, 1e-6), _top_length(stack), tail)
 
 
-def _gauss(half: float, length: float) -> tuple[np.ndarray, np.ndarray]:
-    n = int(min(_POINTS_MAX, max(1, np.ceil(2 * half * _POINTS_PER_LENGTH / length))))
-    t, w = np.polynomial.legendre.leggauss(n)
-    return t * half, w / 2
-
-
 def layered_compliance_matrix(
     xy: np.ndarray, pitch_m: float, stack: Stack, pitch_y_m: float | None = None
 ) -> np.ndarray:
     """(N, N) surface compliance [m/Pa] of the node patches centred at ``xy`` on ``stack``:
     the top layer's half-space (Love's closed form) plus the stack's remainder, integrated
     over each patch."""
-    from .elastic import compliance_matrix
+    from .elastic import compliance_matrix, gauss_points
 
     hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
     r_max = float(np.hypot(np.ptp(xy[:, 0]) + 2 * hx, np.ptp(xy[:, 1]) + 2 * hy))
     rem = surface_remainder(stack, r_max)
     length = _top_length(stack)
-    tx, wx = _gauss(hx, length)
-    ty, wy = _gauss(hy, length)
+    tx, wx = gauss_points(hx, length, _POINTS_PER_LENGTH, _POINTS_MAX)
+    ty, wy = gauss_points(hy, length, _POINTS_PER_LENGTH, _POINTS_MAX)
     area = 4 * hx * hy
 
     def patch_mean(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
@@ -292,20 +286,27 @@ FFT_MARGIN = 12.0
 _FFT_MAX_SIDE = 4096
 
 
-def _stress_remainder_hat(stack: Stack, depth_m: float) -> tuple[callable, float]:
-    """The transform of the stress remainder at ``depth_m`` as a function of |k| (tabulated
-    on a radial grid), and its smoothing length [m]."""
-    h1 = _top_length(stack)
-    length = 2 * h1 - depth_m if depth_m < h1 else depth_m
+def _radial_stress(stack: Stack, depth_m: float, length: float, load: str):
+    """The compressive stress transform at ``depth_m`` (:func:`layer_response`) as a function
+    of |k|, tabulated on a radial grid out past exp(-FFT_DECAY) of ``length``; under a
+    pressure less Boussinesq's (the remainder), under a shear traction whole."""
     k = np.r_[np.geomspace(1e-4, 1.0, 200)[:-1], np.linspace(1.0, 1.2 * FFT_DECAY, 2000)] / length
-    rem = layer_response(stack, k, np.array([depth_m]))[1][:, 0] - (1 + k * depth_m) * np.exp(
-        -k * depth_m
-    )
+    s = layer_response(stack, k, np.array([depth_m]), load=load)[1][:, 0]
+    if load == "normal":
+        s = s - (1 + k * depth_m) * np.exp(-k * depth_m)
 
     def f(q: np.ndarray) -> np.ndarray:
-        return np.interp(q, k, rem, left=0.0, right=0.0)
+        return np.interp(q, k, s, left=0.0, right=0.0)
 
-    return f, length
+    return f
+
+
+def _stress_remainder_hat(stack: Stack, depth_m: float) -> tuple[callable, float]:
+    """The transform of the stress remainder at ``depth_m`` as a function of |k|, and its
+    smoothing length [m]."""
+    h1 = _top_length(stack)
+    length = 2 * h1 - depth_m if depth_m < h1 else depth_m
+    return _radial_stress(stack, depth_m, length, "normal"), length
 
 
 def _fft_taxel_weights(hat, length, node_xy, hx, hy, taxel_xy, tx, ty, ms) -> np.ndarray:
@@ -399,13 +400,12 @@ def shear_subsurface_weights(
     Wq = np.zeros((len(taxel_xy), len(node_xy)))
     hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
     for (d, tx, ty), ms in _groups(taxel_size, depth_m).items():
-        q = np.r_[np.geomspace(1e-4, 1.0, 200)[:-1], np.linspace(1.0, 1.2 * FFT_DECAY, 2000)] / d
-        s = layer_response(stack, q, np.array([d]), load="shear")[1][:, 0]
+        f = _radial_stress(stack, d, d, "shear")
 
-        def hat(KX, KY, q=q, s=s):
+        def hat(KX, KY, f=f):
             K = np.hypot(KX, KY)
             along = np.divide(cx * KX + cy * KY, K, out=np.zeros_like(K), where=K > 0)
-            return 1j * along * np.interp(K, q, s, left=0.0, right=0.0)
+            return 1j * along * f(K)
 
         Wq[ms] = _fft_taxel_weights(hat, d, node_xy, hx, hy, taxel_xy, tx, ty, ms)
     return Wq

@@ -76,8 +76,8 @@ def taxel_weights(
     if finger.skin_tractions and finger.friction > 0:
         # the plate's friction on the skin points against the slide, q = -mu p along
         # slide_dir at every node (full sliding); its stress at depth is compressive ahead
-        # of the traction. (On a layered or compressible
-        # skin the tractions also shift the contact pressure; that coupling is not modelled.)
+        # of the traction. (On a layered or compressible skin the tractions also shift the
+        # contact pressure; that coupling is not modelled.)
         stack = finger.stack or Stack(
             (Layer(finger.thickness_m, finger.young_pa, finger.poisson),),
             "halfspace",
@@ -101,6 +101,7 @@ def build_scene(
     z_damping: float,
     y0_m: float = 0.0,
     node_margin_m: float = 0.0,
+    slide_dir: tuple[float, float] = (1.0, 0.0),
     cache=None,
 ) -> Scene:
     """Compose the plate's MJCF with the finger; x0, y0, z0 place the pad's lowest point.
@@ -162,7 +163,7 @@ def build_scene(
     node_of_geom = np.full(m_col.ngeom, -1, dtype=np.int64)
     g0 = mujoco.mj_name2id(m_col, mujoco.mjtObj.mjOBJ_GEOM, "node0")
     node_of_geom[g0 : g0 + grid.n] = np.arange(grid.n)
-    W = taxel_weights(grid, layout, finger)
+    W = taxel_weights(grid, layout, finger, slide_dir)
     jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]
     jz = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "press_z")]
     # the offset across the slide, set in both compiled models (as the slide's own offset)

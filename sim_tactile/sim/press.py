@@ -18,7 +18,7 @@ import numpy as np
 from .. import _validate as v
 from ..errors import ConfigError, PhysicsError
 from ..plates import Plate, get_plate, height_at
-from ..scene.model import build_scene, taxel_weights
+from ..scene.model import build_scene
 from ..scene.nodes import skin_grid
 from ..sensors.layouts import Layout, dense_layout
 from ..sensors.pad import Finger
@@ -106,6 +106,8 @@ def press(
     v.in_range("readout_pitch_m", readout_pitch_m, 20e-6, 5e-3, unit="m")
     v.one_of("fidelity", fidelity, PRESS_LEVELS)
     v.in_range("depth_m", depth_m, 0.0, finger.thickness_m, hi_open=True, unit="m")
+    if not np.isclose(math.hypot(*slide_dir), 1.0):
+        raise ConfigError(f"slide_dir = {slide_dir}; valid: a unit vector (x, y)")
     plate = get_plate(plate) if isinstance(plate, str) else plate
     grid = skin_grid(finger, node_pitch_m or min(readout_pitch_m, 0.2e-3))
     px, py = finger.patch_m
@@ -124,14 +126,12 @@ def press(
         z0_m=z0,
         z_damping=0.0,
         node_margin_m=margin,
+        slide_dir=slide_dir,
         cache=cache,
     )
     k_w = finger.e_star_pa / finger.thickness_m
     skin = make_skin(fidelity, grid, finger, winkler_k_pa_per_m=k_w, inverse=False)
-    if not np.isclose(math.hypot(*slide_dir), 1.0):
-        raise ConfigError(f"slide_dir = {slide_dir}; valid: a unit vector (x, y)")
-    W = taxel_weights(grid, layout, finger, slide_dir) if finger.skin_tractions else scene.W
-    hold = HeldStep(make_collider(scene), skin, W, grid.area_m2, margin)
+    hold = HeldStep(make_collider(scene), skin, scene.W, grid.area_m2, margin)
     qpos = np.zeros(scene.m_col.nq)
     taxel = np.zeros(layout.n)
     with threadpool_limits(limits=1, user_api="blas"):

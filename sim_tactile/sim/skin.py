@@ -107,8 +107,8 @@ def make_skin(
     level: str, grid: SkinGrid, finger: Finger, *, winkler_k_pa_per_m: float, inverse: bool = True
 ) -> SkinModel:
     """The skin model of a fidelity level: L0 the Winkler bed, L1 and L2 the coupled
-    half-space (or the finger's layered stack). ``inverse``: also invert the compliance (cheap large contact sets; skip it
-    for one static solve on a fine grid)."""
+    half-space (or the finger's layered stack). ``inverse``: also invert the compliance
+    (cheap large contact sets; skip it for one static solve on a fine grid)."""
     if level == "L0":
         return WinklerSkin(winkler_k_pa_per_m)
     if finger.stack is not None:
