@@ -15,6 +15,7 @@ from sim_tactile.scene.layered import (
     layer_response,
     layered_compliance_matrix,
     layered_subsurface_weights,
+    shear_normal_compliance,
     shear_subsurface_weights,
 )
 
@@ -24,6 +25,9 @@ EXACT_RTOL = 1e-10
 #: 0.11% apart over these cases (the stress at depth, whose FEM value is a projection of a
 #: piecewise-linear field), and closer when the mesh is refined to 1/32 (0.03%)
 FEM_RTOL = 2e-3
+#: the same under a shear strip, the stress at depth: 0.21% apart at 1/16 of the thickness,
+#: 0.05% at 1/32 (the FEM converging on the spectral value)
+FEM_SHEAR_STRESS_RTOL = 3e-3
 #: the node grid's layered kernels, extrapolated to zero pitch, against axisymmetric Hankel
 #: integrals: what is left is the tabulated remainder, its spline and its patch quadrature
 #: (measured: at most 3.3e-4)
@@ -31,6 +35,10 @@ GRID_RTOL = 1e-3
 #: a uniform pressure read by buried taxels in a stack (the remainder's table is cut at 60
 #: stack thicknesses)
 UNIFORM_ATOL = 1e-3
+#: friction's normal deflection on the node grid (0.25 x 2 mm) against the plane-strain
+#: strip integral: what is left is the collocation at the node centres and the Hankel table
+#: (measured 0.02% to 0.06%)
+STRIP_GRID_RTOL = 2e-3
 #: the shear weights' FFT against Cerruti's closed form integrated by dblquad (measured 3e-4)
 CERRUTI_RTOL = 1e-3
 
@@ -118,23 +126,39 @@ def _gauss_panels(f, lo: float, hi: float, n_panels: int) -> float:
     return float(np.sum((half[:, None] * w[None, :]).ravel() * f(k)))
 
 
-def _strip_reference(stack: Stack, a: float, x: float, depth: float | None = None) -> float:
+def _strip_reference(
+    stack: Stack, a: float, x: float, depth: float | None = None, load: str = "normal"
+) -> float:
     """Unit pressure on |x| < a, plane strain: (1/pi) int_0^inf F(k) 2 sin(ka)/k cos(kx) dk,
-    F the deflection (depth None) or the compressive vertical stress at ``depth``.
+    F the deflection (depth None) or the compressive vertical stress at ``depth``. A unit
+    traction along +x (``load="shear"``): the response ``i F`` turns cos(kx) into
+    -sin(kx), and the deflection's tail is ``c / k`` (zero for an incompressible top layer).
 
     Gauss panels a fraction of a radian of the integrand's phase wide, up to k1 = 40 / (top
     layer's thickness); beyond it the deflection is the top layer's half-space, 2 / (E* k),
     whose tail integrates in closed form (sine and cosine integrals), and the stress is
     integrated on until exp(-k depth) < 1e-17."""
 
+    shear = load == "shear"
+
     def f(k):
-        w, s = layer_response(stack, k, None if depth is None else [depth])
+        w, s = layer_response(stack, k, None if depth is None else [depth], load=load)
         F = w if depth is None else s[:, 0]
-        return F * 2 * np.sin(k * a) / k * np.cos(k * x) / np.pi
+        phase = -np.sin(k * x) if shear else np.cos(k * x)
+        return F * 2 * np.sin(k * a) / k * phase / np.pi
 
     k1 = 40 / stack.layers[0].thickness_m
     span = a + abs(x) + stack.thickness_m
     total = _gauss_panels(f, 0.0, k1, int(k1 * span / 0.5) + 10)
+    if depth is None and shear:
+        top = stack.layers[0]
+        c = -(1 - 2 * top.poisson) * (1 + top.poisson) / top.young_pa
+        # -(c / pi) int_k1^inf 2 sin(ka) sin(kx) / k^2 dk, 2 sin sin = cos(b-) - cos(b+), and
+        # int_k1^inf cos(bk) / k^2 dk = cos(b k1) / k1 - |b| (pi / 2 - Si(|b| k1))
+        def tail(b):
+            return np.cos(b * k1) / k1 - abs(b) * (np.pi / 2 - special.sici(abs(b) * k1)[0])
+
+        return total - c / np.pi * (tail(a - x) - tail(a + x))
     if depth is None:
         # (1/pi) (2/E*) int_k1^inf sin(ck)/k^2 dk per c = a +- x, and that integral is
         # sin(c k1)/k1 - c Ci(|c| k1)
@@ -152,10 +176,13 @@ def _strip_reference(stack: Stack, a: float, x: float, depth: float | None = Non
     return total
 
 
-def _strip_fem(layers, a, depth, n_per_h=16, far=12.0):
+def _strip_fem(layers, a, depth, n_per_h=16, far=12.0, load="normal"):
     """scikit-fem, plane strain: pressure 1 on |x| < a over ``layers`` ((thickness, E, nu)
     from the top) bonded to a rigid base, by symmetry on 0 < x < a + far H. Returns the
-    deflection at x = 0 and x = a + H / 2 and the compressive vertical stress at (0, depth)."""
+    deflection at x = 0 and x = a + H / 2 and the compressive vertical stress at (0, depth).
+    ``load="shear"``: a traction 1 along +x on |x| < a instead, by antisymmetry (no vertical
+    motion at x = 0); the deflection at x = a / 2 and a + H / 2 and the stress at
+    (a / 2, depth)."""
     skfem = pytest.importorskip("skfem")
     from skfem.helpers import sym_grad
     from skfem.models.elasticity import lame_parameters, linear_elasticity
@@ -193,26 +220,29 @@ def _strip_fem(layers, a, depth, n_per_h=16, far=12.0):
         K_ = part if K_ is None else K_ + part
     loaded = m.facets_satisfying(lambda x: (x[1] > H_ - tol) & (x[0] < a + tol))
 
-    @skfem.LinearForm
-    def load(v, w):
-        return -1.0 * v[1]
+    shear = load == "shear"
 
-    f = skfem.asm(load, skfem.FacetBasis(m, e, facets=loaded))
+    @skfem.LinearForm
+    def traction(v, w):
+        return 1.0 * v[0] if shear else -1.0 * v[1]
+
+    f = skfem.asm(traction, skfem.FacetBasis(m, e, facets=loaded))
     D = np.concatenate(
         [
             ib.get_dofs("bottom").all(),
-            ib.get_dofs("left").all("u^1"),
+            ib.get_dofs("left").all("u^2" if shear else "u^1"),
             ib.get_dofs("right").all("u^1"),
         ]
     )
     u = skfem.solve(*skfem.condense(K_, f, D=D))
     xo = a + H_ / 2  # outside the load: at its edge the pressure steps, a weak point for P2
-    uy = ib.probes(np.array([[0.0, xo], [H_, H_]])) @ u  # (ux(0), ux(xo), uy(0), uy(xo))
+    xi = a / 2 if shear else 0.0
+    uy = ib.probes(np.array([[xi, xo], [H_, H_]])) @ u  # (ux(xi), ux(xo), uy(xi), uy(xo))
     eps = sym_grad(ib.interpolate(u))
     lam_q, mu_q = lame[0][:, None], lame[1][:, None]
     syy = lam_q * (eps[0, 0] + eps[1, 1]) + 2 * mu_q * eps[1, 1]
     sb = ib.with_element(skfem.ElementTriP1())
-    s = sb.probes(np.array([[0.0], [H_ - depth]])) @ sb.project(syy)
+    s = sb.probes(np.array([[xi], [H_ - depth]])) @ sb.project(syy)
     return -uy[2], -uy[3], -float(s[0])
 
 
@@ -231,6 +261,30 @@ def test_strip_load_on_a_layer_matches_plane_strain_fem(layers, a, depth):
     assert _strip_reference(st, a, 0.0) == pytest.approx(w0, rel=FEM_RTOL)
     assert _strip_reference(st, a, a + st.thickness_m / 2) == pytest.approx(wo, rel=FEM_RTOL)
     assert _strip_reference(st, a, 0.0, depth) == pytest.approx(s, rel=FEM_RTOL)
+
+
+@pytest.mark.parametrize(
+    ("layers", "a", "depth"),
+    [
+        (((H, E, 0.49),), H, 1e-3),  # nearly incompressible silicone: the base makes it move
+        (((H, E, 0.3),), H / 2, 2e-3),
+        (((1e-3, 2 * E, 0.45), (3e-3, E / 2, 0.3)), H, 2e-3),
+    ],
+)
+def test_a_shear_strip_on_a_layer_matches_plane_strain_fem(layers, a, depth):
+    """A tangential traction on |x| < a: the surface's normal deflection (the coupling of
+    friction into the normal problem) and the stress at depth, against scikit-fem."""
+    st = Stack(tuple(Layer(t, young, nu) for t, young, nu in layers))
+    wi, wo, s = _strip_fem(layers, a, depth, load="shear")
+    ref = (
+        _strip_reference(st, a, a / 2, load="shear"),
+        _strip_reference(st, a, a + st.thickness_m / 2, load="shear"),
+        _strip_reference(st, a, a / 2, depth, load="shear"),
+    )
+    scale = max(abs(wi), abs(wo))
+    assert ref[0] == pytest.approx(wi, abs=FEM_RTOL * scale)
+    assert ref[1] == pytest.approx(wo, abs=FEM_RTOL * scale)
+    assert ref[2] == pytest.approx(s, rel=FEM_SHEAR_STRESS_RTOL)
 
 
 # --- real space: node compliance and taxel weights ----------------------------------------
@@ -391,3 +445,50 @@ def test_shear_weights_on_a_half_space_are_cerrutis_stress(node):
         np.array([node]), 1e-5, np.zeros((1, 2)), np.array([[sx, sy]]), np.array([d]), st
     )
     assert got[0, 0] == pytest.approx(want, rel=CERRUTI_RTOL)
+
+
+@pytest.mark.parametrize("node", [(0.8e-3, 0.3e-3), (-1.5e-3, 0.2e-3), (0.1e-3, -0.05e-3)])
+def test_friction_deflects_a_compressible_half_space_as_cerruti_and_not_an_incompressible_one(
+    node,
+):
+    """A tangential force Q along +x on a half-space moves the surface by
+    (1 - 2 nu)(1 + nu) Q x / (2 pi E r^2) into the body (Cerruti; the sign by reciprocity
+    with the inward pull of a normal load): the deflection at a node's centre per unit
+    traction over a patch, against dblquad. At nu = 0.5 it is zero."""
+    pitch, nu = 0.5e-3, 0.3
+    x0, y0 = node
+
+    def cerruti(yy, xx):  # the source point (xx, yy), the receiver at the node
+        X, Y = x0 - xx, y0 - yy
+        return (1 - 2 * nu) * (1 + nu) / (2 * np.pi * E) * X / (X * X + Y * Y)
+
+    want, _ = integrate.dblquad(
+        cerruti, -pitch / 2, pitch / 2, -pitch / 2, pitch / 2, epsabs=1e-20, epsrel=1e-9
+    )
+    xy = np.array([[0.0, 0.0], node])
+    st = Stack((Layer(H, E, nu),), "halfspace", E, nu)
+    D = shear_normal_compliance(xy, pitch, st)
+    assert D[1, 0] == pytest.approx(want, rel=1e-6)
+    # along y: the same field turned a quarter
+    Dy = shear_normal_compliance(xy[:, ::-1], pitch, st, direction=(0.0, 1.0))
+    assert Dy[1, 0] == pytest.approx(want, rel=1e-6)
+    inc = Stack((Layer(H, E, 0.5),), "halfspace", E, 0.5)
+    assert np.abs(shear_normal_compliance(xy, pitch, inc)).max() == 0.0
+
+
+@pytest.mark.parametrize(("nu", "x"), [(0.5, H / 2 + 2e-3), (0.5, 0.5e-3), (0.45, 3e-3)])
+def test_friction_on_a_layer_deflects_the_node_grid_as_the_plane_strain_strip(nu, x):
+    """A traction strip (|x| < 2 mm, 80 mm long) on a 4 mm layer bonded to a rigid base,
+    on 0.25 x 2 mm nodes: the deflection at a node on the strip's midline against the
+    plane-strain integral of the spectral solution (which the FEM test pins)."""
+    a, pitch = 2e-3, 0.25e-3
+    st = Stack((Layer(H, E, nu),))
+    xs = np.arange(-a + pitch / 2, a + 4e-3, pitch)
+    ys = (np.arange(-20, 20) + 0.5) * 2e-3
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    xy = np.column_stack([X.ravel(), Y.ravel()])
+    D = shear_normal_compliance(xy, pitch, st, pitch_y_m=2e-3)
+    q = (np.abs(xy[:, 0]) < a).astype(float)
+    i = int(np.argmin(np.abs(xy[:, 0] - x) + np.abs(xy[:, 1] - 1e-3)))
+    want = _strip_reference(st, a, float(xy[i, 0]), load="shear")
+    assert (D @ q)[i] == pytest.approx(want, rel=STRIP_GRID_RTOL)
