@@ -166,3 +166,48 @@ def test_a_bulging_skin_holds_its_force():
     assert p.sum() == pytest.approx(total, rel=1e-9)
     ref = _reference(C, pen + dz)
     np.testing.assert_allclose(p, ref, atol=SOLVER_RTOL * ref.max())
+
+
+# --- friction coupled into the normal problem: a compliance that is not symmetric ------------
+
+
+def test_friction_coupled_contact_solves_the_unsymmetric_problem():
+    """The layered problem with the tractions mu p of a slide along +x: the compliance
+    C - mu D is not symmetric, so the solver factorises each contact set anew (no K, no
+    block updates). Its answer is the fixed point of the symmetric problem with the
+    tractions' deflection moved to the right-hand side (each step solved by the NNLS
+    reference), and it satisfies the contact conditions at every node; the load moves to
+    the trailing (-x) side."""
+    from sim_tactile.scene.layered import shear_normal_compliance
+    from sim_tactile.sensors.stack import Layer, Stack
+    from sim_tactile.sim.contact import REFRESH, ActiveSet
+
+    C, pen = _layered_problem()
+    xs = np.arange(-12, 13) * 0.25e-3
+    X, Y = np.meshgrid(xs, xs[::3])
+    xy = np.column_stack([X.ravel(), Y.ravel()])
+    mu = 0.5
+    D = shear_normal_compliance(xy, 0.25e-3, Stack((Layer(1e-3, 0.3e6, 0.5),)), pitch_y_m=0.75e-3)
+    Ce = C - mu * D
+    assert np.abs(Ce - Ce.T).max() > 0.01 * np.abs(C).max()
+    p, _ = ActiveSet(Ce, None, refresh=0).solve(pen)
+    ref = _reference(C, pen)
+    for _ in range(200):  # C p = pen + mu D p on the contact set
+        nxt = _reference(C, pen + mu * D @ ref)
+        if np.abs(nxt - ref).max() <= 1e-13 * nxt.max():
+            break
+        ref = nxt
+    np.testing.assert_allclose(p, nxt, atol=SOLVER_RTOL * nxt.max())
+    u = Ce @ p
+    assert (p >= 0).all() and (u >= pen - 1e-12 * pen.max()).all()
+    assert u[p > 0] == pytest.approx(pen[p > 0], rel=1e-9)
+    frictionless = _reference(C, pen)
+    trailing, leading = xy[:, 0] < 0, xy[:, 0] > 0
+    assert p[trailing].sum() > 1.05 * p[leading].sum()
+    assert frictionless[trailing].sum() == pytest.approx(frictionless[leading].sum(), rel=1e-6)
+    # held at a force: the same answer as the displacement-controlled solve at its shift
+    held, dz = ActiveSet(Ce, None, refresh=0).solve_force(pen, 2 * p.sum())
+    assert held.sum() == pytest.approx(2 * p.sum(), rel=1e-9)
+    again, _ = ActiveSet(Ce, None, refresh=0).solve(pen + dz)
+    np.testing.assert_allclose(held, again, atol=SOLVER_RTOL * held.max())
+    assert REFRESH > 0  # the symmetric skins keep their block updates

@@ -153,6 +153,7 @@ def _strip_reference(
     if depth is None and shear:
         top = stack.layers[0]
         c = -(1 - 2 * top.poisson) * (1 + top.poisson) / top.young_pa
+
         # -(c / pi) int_k1^inf 2 sin(ka) sin(kx) / k^2 dk, 2 sin sin = cos(b-) - cos(b+), and
         # int_k1^inf cos(bk) / k^2 dk = cos(b k1) / k1 - |b| (pi / 2 - Si(|b| k1))
         def tail(b):

@@ -27,7 +27,7 @@ from ..plates import build as build_plate
 from ..sensors.layouts import Layout
 from ..sensors.pad import Finger
 from .elastic import subsurface_weights
-from .layered import Layer, Stack, layered_subsurface_weights, shear_subsurface_weights
+from .layered import Stack, layered_subsurface_weights, shear_subsurface_weights
 from .nodes import SkinGrid
 
 _T = mujoco.mjtGeom
@@ -76,13 +76,10 @@ def taxel_weights(
     if finger.skin_tractions and finger.friction > 0:
         # the plate's friction on the skin points against the slide, q = -mu p along
         # slide_dir at every node (full sliding); its stress at depth is compressive ahead
-        # of the traction. (On a layered or compressible skin the tractions also shift the
-        # contact pressure; that coupling is not modelled.)
-        stack = finger.stack or Stack(
-            (Layer(finger.thickness_m, finger.young_pa, finger.poisson),),
-            "halfspace",
-            finger.young_pa,
-            finger.poisson,
+        # of the traction (on a layered or compressible skin the tractions also shift the
+        # contact pressure: the skin model's coupled compliance, sim.skin)
+        stack = finger.stack or Stack.half_space(
+            finger.thickness_m, finger.young_pa, finger.poisson
         )
         Wq = shear_subsurface_weights(*args, stack, pitch_y_m=grid.pitch_y_m, direction=slide_dir)
         W = W - finger.friction * Wq

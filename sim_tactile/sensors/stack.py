@@ -55,6 +55,11 @@ class Stack:
             v.in_range("stack.backing_young_pa", self.backing_young_pa, 1e3, 1e12, unit="Pa")
             v.in_range("stack.backing_poisson", self.backing_poisson, 0.0, 0.5, unit="")
 
+    @classmethod
+    def half_space(cls, thickness_m: float, young_pa: float, poisson: float) -> Stack:
+        """An elastic half-space as a stack: a layer on a half-space of its own material."""
+        return cls((Layer(thickness_m, young_pa, poisson),), "halfspace", young_pa, poisson)
+
     @property
     def thickness_m(self) -> float:
         return float(sum(layer.thickness_m for layer in self.layers))

@@ -125,15 +125,22 @@ class CompiledHeldStep:
                 mult = np.where(pair != nodes, 2.0, 1.0)
                 if coupled:
                     Cf = 0.5 * (C[np.ix_(nodes, nodes)] + C[np.ix_(nodes, pair)])
-                    C = np.ascontiguousarray(0.5 * (Cf + Cf.T))
-                    K = np.ascontiguousarray(np.linalg.inv(C))
+                    if skin.symmetric:
+                        C = np.ascontiguousarray(0.5 * (Cf + Cf.T))
+                        K = np.ascontiguousarray(np.linalg.inv(C))
+                    else:  # friction coupled in: C is not symmetric, and has no K
+                        C = np.ascontiguousarray(Cf)
                 W = 0.5 * (W[:, nodes] + W[:, pair])
         self.nodes = nodes
         self.n_full = n
         self.n = nodes.size
         self.mult = mult
         # the Winkler bed keeps no contact set: an empty solver stands in for it
-        self.solver = contact.ActiveSet(C, K) if coupled else contact.ActiveSet(np.zeros((0, 0)))
+        self.solver = (
+            contact.ActiveSet(C, K, refresh=skin.refresh)
+            if coupled
+            else contact.ActiveSet(np.zeros((0, 0)))
+        )
         self.W = np.ascontiguousarray(W, dtype=np.float64)
         sub = collider.subset(nodes)
         if self.columns:  # one probe per distinct (x, z, radius, margin)

@@ -130,7 +130,9 @@ def press(
         cache=cache,
     )
     k_w = finger.e_star_pa / finger.thickness_m
-    skin = make_skin(fidelity, grid, finger, winkler_k_pa_per_m=k_w, inverse=False)
+    skin = make_skin(
+        fidelity, grid, finger, winkler_k_pa_per_m=k_w, inverse=False, slide_dir=slide_dir
+    )
     hold = HeldStep(make_collider(scene), skin, scene.W, grid.area_m2, margin)
     qpos = np.zeros(scene.m_col.nq)
     taxel = np.zeros(layout.n)

@@ -19,6 +19,12 @@ of its nodes (m, ``-inf`` for nodes out of reach):
   finger has a ``stack``, that of its bonded layers on their backing
   (:func:`~sim_tactile.scene.layered.layered_compliance_matrix`); any symmetric positive
   definite compliance of the node grid takes the same path.
+
+When the finger's skin carries its sliding friction (``Finger.skin_tractions``) and the skin
+is not an incompressible half-space, the tractions ``q = mu p`` against the slide deflect
+the surface normally too (:func:`~sim_tactile.scene.layered.shear_normal_compliance`): the
+normal problem's compliance becomes ``C - mu D``, no longer symmetric. Its contact set is
+then solved by factorising each set anew (no block updates, which assume symmetry).
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene.elastic import compliance_matrix
-from ..scene.layered import layered_compliance_matrix
+from ..scene.layered import Stack, layered_compliance_matrix, shear_normal_compliance
 from ..scene.nodes import SkinGrid
 from ..sensors.pad import Finger
 from . import contact
@@ -61,29 +67,72 @@ class CoupledSkin:
 
     coupled = True
 
-    def __init__(self, C: np.ndarray, K: np.ndarray | None = None, what: str = "") -> None:
+    def __init__(
+        self, C: np.ndarray, K: np.ndarray | None = None, what: str = "", *, symmetric: bool = True
+    ) -> None:
+        #: whether C is symmetric (reciprocity; no friction coupling): the contact solve then
+        #: updates its inverse by blocks, else it factorises each contact set anew
+        self.symmetric = symmetric
+        if not symmetric:
+            K = None
         self.C, self.K = C, K
-        self.solver = contact.ActiveSet(C, K)
+        self.refresh = contact.REFRESH if self.symmetric else 0
+        self.solver = contact.ActiveSet(C, K, refresh=self.refresh)
         self.what = what
 
     @classmethod
-    def half_space(cls, grid: SkinGrid, finger: Finger, *, inverse: bool = True) -> CoupledSkin:
-        """The elastic half-space of the finger's plane-strain modulus on ``grid``'s nodes."""
+    def half_space(
+        cls,
+        grid: SkinGrid,
+        finger: Finger,
+        *,
+        inverse: bool = True,
+        slide_dir: tuple[float, float] = (1.0, 0.0),
+    ) -> CoupledSkin:
+        """The elastic half-space of the finger's plane-strain modulus on ``grid``'s nodes
+        (with friction's coupling when the skin carries it and is compressible)."""
         C = compliance_matrix(grid.xy, grid.pitch_m, finger.e_star_pa, pitch_y_m=grid.pitch_y_m)
-        K = np.linalg.inv(C) if inverse else None
-        return cls(C, K, f"elastic half-space, E* {finger.e_star_pa:.4g} Pa")
+        what = f"elastic half-space, E* {finger.e_star_pa:.4g} Pa"
+        if finger.skin_tractions and finger.friction > 0 and finger.poisson < 0.5:
+            stack = Stack.half_space(finger.thickness_m, finger.young_pa, finger.poisson)
+            C, what = cls._with_friction(C, grid, finger, stack, slide_dir, what)
+            return cls(C, None, what, symmetric=False)
+        return cls(C, np.linalg.inv(C) if inverse else None, what)
 
     @classmethod
-    def layered(cls, grid: SkinGrid, finger: Finger, *, inverse: bool = True) -> CoupledSkin:
-        """The finger's stack of bonded layers on its backing, on ``grid``'s nodes."""
+    def layered(
+        cls,
+        grid: SkinGrid,
+        finger: Finger,
+        *,
+        inverse: bool = True,
+        slide_dir: tuple[float, float] = (1.0, 0.0),
+    ) -> CoupledSkin:
+        """The finger's stack of bonded layers on its backing, on ``grid``'s nodes (with
+        friction's coupling when the skin carries it)."""
         st = finger.stack
         C = layered_compliance_matrix(grid.xy, grid.pitch_m, st, pitch_y_m=grid.pitch_y_m)
-        K = np.linalg.inv(C) if inverse else None
         layers = " / ".join(
             f"{la.thickness_m * 1e3:g} mm E {la.young_pa:.3g} Pa nu {la.poisson:g}"
             for la in st.layers
         )
-        return cls(C, K, f"layered skin: {layers} on a {st.backing} backing")
+        what = f"layered skin: {layers} on a {st.backing} backing"
+        if finger.skin_tractions and finger.friction > 0:
+            C, what = cls._with_friction(C, grid, finger, st, slide_dir, what)
+            return cls(C, None, what, symmetric=False)
+        return cls(C, np.linalg.inv(C) if inverse else None, what)
+
+    @staticmethod
+    def _with_friction(C, grid, finger, stack, slide_dir, what):
+        """``C - mu D``: the tractions ``mu p`` against the slide (along ``-slide_dir``)
+        deflect the surface too."""
+        D = shear_normal_compliance(
+            grid.xy, grid.pitch_m, stack, pitch_y_m=grid.pitch_y_m, direction=slide_dir
+        )
+        return (
+            C - finger.friction * D,
+            f"{what}, coupled to sliding friction mu {finger.friction:g}",
+        )
 
     def solve(self, pen_m: np.ndarray) -> np.ndarray:
         p, _ = self.solver.solve(pen_m)
@@ -104,13 +153,20 @@ SkinModel = WinklerSkin | CoupledSkin
 
 
 def make_skin(
-    level: str, grid: SkinGrid, finger: Finger, *, winkler_k_pa_per_m: float, inverse: bool = True
+    level: str,
+    grid: SkinGrid,
+    finger: Finger,
+    *,
+    winkler_k_pa_per_m: float,
+    inverse: bool = True,
+    slide_dir: tuple[float, float] = (1.0, 0.0),
 ) -> SkinModel:
     """The skin model of a fidelity level: L0 the Winkler bed, L1 and L2 the coupled
     half-space (or the finger's layered stack). ``inverse``: also invert the compliance
-    (cheap large contact sets; skip it for one static solve on a fine grid)."""
+    (cheap large contact sets; skip it for one static solve on a fine grid). ``slide_dir``:
+    the direction the pad slides in, for a skin that carries its friction."""
     if level == "L0":
         return WinklerSkin(winkler_k_pa_per_m)
     if finger.stack is not None:
-        return CoupledSkin.layered(grid, finger, inverse=inverse)
-    return CoupledSkin.half_space(grid, finger, inverse=inverse)
+        return CoupledSkin.layered(grid, finger, inverse=inverse, slide_dir=slide_dir)
+    return CoupledSkin.half_space(grid, finger, inverse=inverse, slide_dir=slide_dir)

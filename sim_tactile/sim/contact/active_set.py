@@ -15,6 +15,10 @@ def skin_floor(C: np.ndarray) -> float:
     return 0.0 if bool((C >= 0).all()) else -np.inf
 
 
+#: block updates of a contact set's inverse before it is rebuilt from the compliance
+REFRESH = 100
+
+
 class ActiveSet:
     """The half-space contact problem of one compliance ``C``, solved step after step with the
     inverse of ``C`` on the contact set kept up to date.
@@ -28,9 +32,13 @@ class ActiveSet:
     after ``refresh`` updates (a block of nodes joining or leaving is one), which bounds
     round-off drift; the schedule is deterministic, so equal inputs give bit-identical
     outputs. Same answer as :func:`halfspace` (tested).
+
+    The block updates assume a symmetric ``C``. A compliance that is not (friction coupled
+    into the normal problem) takes ``refresh=0`` and no ``K``: each contact set is then
+    factorised anew.
     """
 
-    def __init__(self, C: np.ndarray, K: np.ndarray | None = None, refresh: int = 100):
+    def __init__(self, C: np.ndarray, K: np.ndarray | None = None, refresh: int = REFRESH):
         self.C, self.K, self.refresh = C, K, refresh
         #: the depth above which a node can touch: 0 when no load lifts any node toward the
         #: plate (C >= 0, the half-space), else -inf (a layered skin bulges around a load)
