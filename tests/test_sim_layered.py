@@ -8,6 +8,7 @@ import pytest
 from scipy import integrate, special
 
 from sim_tactile.errors import ConfigError
+from sim_tactile.sim.contact import ActiveSet
 from sim_tactile.scene.elastic import compliance_matrix, subsurface_weights
 from sim_tactile.scene.layered import (
     Layer,
@@ -493,3 +494,80 @@ def test_friction_on_a_layer_deflects_the_node_grid_as_the_plane_strain_strip(nu
     i = int(np.argmin(np.abs(xy[:, 0] - x) + np.abs(xy[:, 1] - 1e-3)))
     want = _strip_reference(st, a, float(xy[i, 0]), load="shear")
     assert (D @ q)[i] == pytest.approx(want, rel=STRIP_GRID_RTOL)
+
+
+#: friction coupled into the contact of a flat punch on a layer, the node grid (0.25 x 2 mm)
+#: against scikit-fem (P2, 1/16 of the thickness, graded at the punch's edges): the share of
+#: the load on the trailing half (measured 0.2 points apart) and friction's change of the
+#: punch's stiffness (0.3%)
+PUNCH_SHARE_ATOL = 5e-3
+PUNCH_STIFFNESS_RTOL = 5e-3
+
+
+def _punch_fem(h, nu, a, mu, n_per_h=16, far=10.0, delta=1e-5):
+    """scikit-fem, plane strain: a rigid flat punch on |x| < a pressed ``delta`` into a layer
+    of thickness h bonded to a rigid base, whose face slides along +x over the layer with
+    friction mu: the tangential traction on the layer is mu p along -x. The punch's whole
+    face is in contact (checked), so the problem is linear: on each contact node the normal
+    displacement is set, and the tangential force is mu times the normal reaction (the same
+    shape functions carry both). Returns the stiffness per unit length [Pa] and the shares
+    of the load on the trailing (x < 0) and leading halves."""
+    skfem = pytest.importorskip("skfem")
+    from scipy.sparse.linalg import spsolve
+    from skfem.models.elasticity import lame_parameters, linear_elasticity
+
+    L = a + far * h
+    base = np.linspace(-L, L, round(2 * L / h * n_per_h) + 1)
+    edges = [c + np.linspace(-h / 4, h / 4, 2 * n_per_h + 1) for c in (-a, a)]
+    xs = np.unique(np.round(np.concatenate([base, *edges, [-a, a, 0.0]]), 12))
+    tol = 1e-9 * h
+    m = skfem.MeshTri.init_tensor(xs, np.linspace(0, h, n_per_h + 1)).with_boundaries(
+        {"bottom": lambda x: x[1] < tol}
+    )
+    ib = skfem.Basis(m, skfem.ElementVector(skfem.ElementTriP2()))
+    K_ = skfem.asm(linear_elasticity(*lame_parameters(E, nu)), ib).tocsr()
+    face = ib.get_dofs(m.facets_satisfying(lambda x: (x[1] > h - tol) & (np.abs(x[0]) <= a + tol)))
+    xc, yc = face.all("u^1"), face.all("u^2")
+    A = K_.tolil()
+    for xi, yi in zip(xc, yc, strict=True):  # the x equation: K_x u = mu (K_y u), the friction
+        A[xi, :] = K_[xi, :] - mu * K_[yi, :]
+    A = A.tocsr()
+    u = np.zeros(K_.shape[0])
+    u[yc] = -delta
+    fixed = np.unique(np.concatenate([ib.get_dofs("bottom").all(), yc]))
+    free = np.setdiff1d(np.arange(u.size), fixed)
+    u[free] = spsolve(A[free][:, free].tocsc(), -A[free][:, fixed] @ u[fixed])
+    P = -(K_ @ u)[yc]  # the face's compressive nodal forces
+    assert P.min() > 0, "the punch's face must stay in contact"
+    x = ib.doflocs[0, yc]
+    return P.sum() / delta, P[x < 0].sum() / P.sum(), P[x > 0].sum() / P.sum()
+
+
+@pytest.mark.parametrize("nu", [0.49, 0.3])
+def test_friction_shifts_a_punch_on_a_layer_as_plane_strain_fem(nu):
+    """A flat pad 8 mm wide (80 mm long: plane strain at its middle) pressed on a 4 mm layer
+    bonded to a rigid base while it slides along +x with mu 0.5. On nearly incompressible
+    silicone the trailing half carries 58% of the load and the pad is 5% softer; at nu 0.3
+    friction moves almost nothing. The node grid's coupled solve (C - mu D, every node in
+    contact) against the FEM."""
+    a, pitch, mu = 4e-3, 0.25e-3, 0.5
+    st = Stack((Layer(H, E, nu),))
+    xs = np.arange(-a + pitch / 2, a, pitch)
+    ys = (np.arange(-20, 20) + 0.5) * 2e-3
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    xy = np.column_stack([X.ravel(), Y.ravel()])
+    C = layered_compliance_matrix(xy, pitch, st, pitch_y_m=2e-3)
+    D = shear_normal_compliance(xy, pitch, st, pitch_y_m=2e-3)
+    middle = np.abs(xy[:, 1]) < 1.5e-3
+    x = xy[middle, 0]
+    ours = []
+    for m in (0.0, mu):
+        p, _ = ActiveSet(C - m * D, None, refresh=0).solve(np.full(len(xy), 1e-5))
+        P = p[middle]
+        ours.append((P.sum(), P[x < 0].sum() / P.sum()))
+    k0, _, _ = _punch_fem(H, nu, a, 0.0)
+    k1, trailing, leading = _punch_fem(H, nu, a, mu)
+    assert ours[1][1] == pytest.approx(trailing / (trailing + leading), abs=PUNCH_SHARE_ATOL)
+    assert ours[1][0] / ours[0][0] == pytest.approx(k1 / k0, rel=PUNCH_STIFFNESS_RTOL)
+    if nu == 0.49:
+        assert trailing > 0.55 and k1 / k0 < 0.96
