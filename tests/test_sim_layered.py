@@ -8,7 +8,6 @@ import pytest
 from scipy import integrate, special
 
 from sim_tactile.errors import ConfigError
-from sim_tactile.sim.contact import ActiveSet
 from sim_tactile.scene.elastic import compliance_matrix, subsurface_weights
 from sim_tactile.scene.layered import (
     Layer,
@@ -19,6 +18,7 @@ from sim_tactile.scene.layered import (
     shear_normal_compliance,
     shear_subsurface_weights,
 )
+from sim_tactile.sim.contact import ActiveSet
 
 #: identities that hold to rounding
 EXACT_RTOL = 1e-10
