@@ -6,7 +6,8 @@ A flat pad (grid3x3's: 12 mm with 2 mm edge fillets, E = 0.3 MPa, nu = 0.5) is p
 1 N on a plate at several offsets along the slide. The project's half-space contact solve on
 its node grid (the active set of :class:`~sim_tactile.sim.contact.ActiveSet`, the depth of
 each node from the plate's height at its centre) is set against Tamaas's FFT boundary-element
-solve (Polonsky-Keer) of the same gap on a 0.0625 mm grid over a 64 mm periodic cell. Both
+solve (Polonsky-Keer) of the same gap on a 0.0625 mm grid over a 40 mm periodic cell
+(:mod:`sim_tactile.bench.physics`, which ``bench speed-error`` uses for every scene). Both
 read the grid3x3 taxels at the surface and at depths inside the skin (Boussinesq's stress
 of each node's or cell's patch, integrated over the taxel); errors are in % of the largest
 taxel load of the reference over the offsets, the worst over the offsets. The reference's
@@ -25,16 +26,11 @@ import sys
 
 import numpy as np
 
-from sim_tactile.plates import get_plate, height_at
-from sim_tactile.scene.elastic import compliance_matrix, subsurface_weights
-from sim_tactile.scene.nodes import skin_grid
+from sim_tactile.bench.physics import REF_SPACING_M, grid_press, tamaas_press, taxel_loads
+from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim.contact import ActiveSet
 
 FORCE_N = 1.0
-#: Tamaas's cell and grid: 64 mm (four pad widths: the periodic images' pull is a near
-#: uniform shift) at 0.0625 mm
-CELL_M, CELL_N = 64e-3, 1024
 DEPTHS_M = (0.0, 0.5e-3, 1e-3, 2e-3)
 SCENES = {
     # plate, pad offsets along the slide [m]: spread over a period, and not multiples of a
@@ -47,69 +43,22 @@ SCENES = {
 NODE_GRIDS = {"default 0.5 x 2 mm": (0.5e-3, 2e-3), "0.25 x 0.25 mm": (0.25e-3, None)}
 
 
-def _gap(plate, finger, x, y, offset):
-    """Height of the plate above the pad's undeformed surface at pad coordinates (x, y) [m]
-    (positive: they overlap at zero approach); -1 m outside the pad."""
-    z = height_at(plate, x + offset, y) - finger.surface(x, y)
-    px, py = finger.patch_m
-    inside = (np.abs(x) <= px / 2) & (np.abs(y) <= py / 2)
-    return np.where(inside & np.isfinite(z), z, -1.0)
-
-
-def tamaas_pressure(plate, finger, offset: float):
-    """(x, y, p) of Tamaas's solution on its grid: cell centres [m] and pressure [Pa]."""
-    import tamaas as tm
-
-    tm.set_log_level(tm.LogLevel.warning)
-    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [CELL_M, CELL_M], [CELL_N] * 2)
-    model.E, model.nu = finger.young_pa, finger.poisson
-    x = (np.arange(CELL_N) - CELL_N // 2) * CELL_M / CELL_N
-    X, Y = np.meshgrid(x, x, indexing="ij")
-    gap = _gap(plate, finger, X, Y, offset)
-    solver = tm.PolonskyKeerRey(
-        model, gap, 1e-12, tm.PolonskyKeerRey.pressure, tm.PolonskyKeerRey.pressure
-    )
-    solver.solve(FORCE_N / CELL_M**2)
-    p = np.asarray(model.traction).reshape(CELL_N, CELL_N)
-    return X.ravel(), Y.ravel(), p.ravel()
-
-
-def project_pressure(plate, finger, offset: float, pitch: float, pitch_y: float | None):
-    """(xy, p, pitch, pitch_y) of the project's half-space solve on its node grid."""
-    grid = skin_grid(finger, pitch, pitch_y)
-    C = compliance_matrix(grid.xy, grid.pitch_m, finger.e_star_pa, pitch_y_m=grid.pitch_y_m)
-    gap = _gap(plate, finger, grid.xy[:, 0], grid.xy[:, 1], offset)
-    pen = np.where(gap > -1.0, gap, -np.inf)
-    p, _ = ActiveSet(C, np.linalg.inv(C)).solve_force(pen, FORCE_N / grid.area_m2)
-    return grid.xy, p, grid.pitch_m, grid.pitch_y_m
-
-
-def taxel_loads(xy, p, pitch, pitch_y, layout, depth):
-    area = pitch * (pitch_y or pitch)
-    depths = np.full(layout.n, depth)
-    W = subsurface_weights(xy, pitch, layout.positions[:, :2], layout.sizes, depths, pitch_y)
-    return W @ (p * area)
-
-
 def compare(plate_name: str, offsets, grids=NODE_GRIDS) -> dict:
     plate = get_plate(plate_name)
     sensor = get_sensor("grid3x3")
     finger, layout = sensor.finger, sensor.layout
-    cell = CELL_M / CELL_N
     refs, ours = [], {g: [] for g in grids}
     for off in offsets:
-        X, Y, pt = tamaas_pressure(plate, finger, off)
-        near = pt > 0
-        fine = np.column_stack([X, Y])[near], pt[near]
+        xy, pt, cell, _ = fine = tamaas_press(plate, finger, FORCE_N, off, REF_SPACING_M)
         refs.append(
             {
-                "taxels": {d: taxel_loads(*fine, cell, None, layout, d) for d in DEPTHS_M},
-                "area": near.sum() * cell**2,
+                "taxels": {d: taxel_loads(*fine, layout, d) for d in DEPTHS_M},
+                "area": pt.size * cell**2,
                 "peak": pt.max(),
             }
         )
         for g, (px, py) in grids.items():
-            xy, p, qx, qy = project_pressure(plate, finger, off, px, py)
+            xy, p, qx, qy = grid_press(plate, finger, FORCE_N, off, "L1", px, py)
             ours[g].append(
                 {
                     "taxels": {d: taxel_loads(xy, p, qx, qy, layout, d) for d in DEPTHS_M},

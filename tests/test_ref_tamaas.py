@@ -16,12 +16,15 @@ pytest.importorskip("tamaas")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import ref_halfspace_tamaas as ref  # noqa: E402
 
+from sim_tactile.bench import physics  # noqa: E402
 from sim_tactile.plates import get_plate  # noqa: E402
 from sim_tactile.sensors import get_sensor  # noqa: E402
 from sim_tactile.sim.press import hertz  # noqa: E402
 
-#: Tamaas on Hertz's sphere (a 64 mm periodic cell at 0.0625 mm): its own discretisation
+#: Tamaas on Hertz's sphere (a 32 mm periodic cell at 0.0625 mm): its own discretisation
 HERTZ_RTOL = 5e-3
+#: that cell and its grid
+HERTZ_CELL_M, HERTZ_CELL_N = 32e-3, 512
 #: the project's half-space solve against Tamaas where a ridge lies under the taxel column
 #: (pad offset 2.25 mm on finger7/ridges-4), in % of the largest taxel load: at the default
 #: nodes and at 0.25 mm (measured: 1.7% and 1.1% at the surface)
@@ -36,7 +39,7 @@ def test_tamaas_reproduces_hertz():
     import tamaas as tm
 
     tm.set_log_level(tm.LogLevel.warning)
-    n, L, R, E = ref.CELL_N // 2, ref.CELL_M / 2, 8e-3, 0.3e6
+    n, L, R, E = HERTZ_CELL_N, HERTZ_CELL_M, 8e-3, 0.3e6
     model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [L, L], [n, n])
     model.E, model.nu = E, 0.5
     x = (np.arange(n) - n // 2) * L / n
@@ -63,15 +66,12 @@ def resolved_ridge():
     2.25 mm off centre on finger7/ridges-4), at the surface and 1 mm deep."""
     plate = get_plate("finger7/ridges-4")
     s = get_sensor("grid3x3")
-    X, Y, pt = ref.tamaas_pressure(plate, s.finger, 2.25e-3)
-    near = pt > 0
-    cell = ref.CELL_M / ref.CELL_N
-    fine = (np.column_stack([X, Y])[near], pt[near], cell, None, s.layout)
-    want = {d: ref.taxel_loads(*fine, d) for d in (0.0, 1e-3)}
+    fine = physics.tamaas_press(plate, s.finger, ref.FORCE_N, 2.25e-3, physics.REF_SPACING_M)
+    want = {d: physics.taxel_loads(*fine, s.layout, d) for d in (0.0, 1e-3)}
     got = {}
     for grid, (px, py) in ref.NODE_GRIDS.items():
-        xy, p, qx, qy = ref.project_pressure(plate, s.finger, 2.25e-3, px, py)
-        got[grid] = {d: ref.taxel_loads(xy, p, qx, qy, s.layout, d) for d in want}
+        xy, p, qx, qy = physics.grid_press(plate, s.finger, ref.FORCE_N, 2.25e-3, "L1", px, py)
+        got[grid] = {d: physics.taxel_loads(xy, p, qx, qy, s.layout, d) for d in want}
     return want, got
 
 

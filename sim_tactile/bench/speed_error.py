@@ -21,6 +21,11 @@ pitches. Each configuration is one row, all quantities SI:
   ``analytic.speed_error``, reported apart. Hertz press: ``max(|a / a_H - 1|,
   |p0 / p0_H - 1|)`` (contact radius, peak pressure). ``None`` where no closed form exists
   (random roughness) or the period cannot be measured (the row says why).
+- ``error_vs_physics``: the configuration's skin (its level and node grid) in static presses
+  at a few pad offsets, against an independent half-space solver (Tamaas, a test extra) of
+  the same presses, both read by the sensor's taxels: the relative norm over offsets x
+  taxels, and ``physics_max``, the largest taxel difference in units of the largest
+  reference load (:mod:`~sim_tactile.bench.physics`). None without Tamaas (the row says why).
 
 :func:`run_speed_error` writes the rows as JSON, a Markdown table and a Pareto figure (one
 panel per scene: cost against error, log axes, a marker series per level, the front drawn).
@@ -51,6 +56,7 @@ from ..sim.fidelity import choose_fidelity, steps_per_sample
 from ..sim.press import hertz, press
 from ..sim.protocol import Protocol
 from ..sim.simulate import simulate
+from . import physics
 from .closed_forms import feature_spacing_m, probe_taxel, pulse_period, quick_duration
 from .pareto import markdown, pct, plot_pareto
 from .scenes import PressScene, SlideScene, scenes
@@ -142,6 +148,7 @@ def _failure_row(base: dict, exc: BaseException) -> dict:
         "cost_s_per_s": None,
         "error_vs_reference": None,
         "error_vs_analytic": None,
+        "error_vs_physics": None,
     }
 
 
@@ -236,7 +243,47 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
             f"vs closed form {pct(row['error_vs_analytic'])}"
         )
         rows.append(row)
+    if sweep.physics:
+        _physics_errors(rows, plate, sensor, scene.force_n, sweep.physics_offsets, log)
     return rows
+
+
+def _physics_errors(rows, plate, sensor, force_n: float, n_offsets: int, log) -> None:
+    """Fill each ok row's error against physics (one static measure per level and grid)."""
+    missing = physics.tamaas_missing()
+    ok = [r for r in rows if r["outcome"] == "ok"]
+    for r in ok:
+        r["error_vs_physics"] = r["physics_max"] = None
+    if missing:
+        for r in ok:
+            r["physics_note"] = missing
+        return
+    t0 = time.perf_counter()
+    ref = physics.reference(plate, sensor, force_n, n_offsets)
+    info = {
+        "offsets_m": list(ref.offsets_m),
+        "spacing_m": ref.spacing_m,
+        "ref_change": ref.ref_change,
+        "wall_s": time.perf_counter() - t0,
+    }
+    log(
+        f"  physics: Tamaas at {ref.spacing_m * 1e3:g} mm, {len(ref.offsets_m)} offsets, "
+        f"{info['wall_s']:.1f} s (a grid twice as coarse moves it {pct(ref.ref_change)})"
+    )
+    done: dict[tuple, tuple[float, float]] = {}
+    for r in ok:
+        key = (r["fidelity"], r["pitch_m"], r["pitch_y_m"])
+        if key not in done:
+            loads = physics.configuration_loads(
+                ref, plate, sensor, force_n, r["fidelity"], r["pitch_m"], r["pitch_y_m"]
+            )
+            done[key] = ref.error(loads)
+            log(
+                f"  physics: {r['fidelity']} {r['pitch_m'] * 1e3:.3g} mm nodes: "
+                f"{pct(done[key][0])} (largest taxel {pct(done[key][1])})"
+            )
+        r["error_vs_physics"], r["physics_max"] = done[key]
+        r["physics"] = info
 
 
 def _analytic(
@@ -322,6 +369,8 @@ def _press_rows(scene: PressScene, sweep: Sweep, cache, log) -> list[dict]:
             if ref is None
             else (0.0 if r is ref else _err(r.pressure_pa, ref.pressure_pa)),
             "error_vs_analytic": max(abs(a_err), abs(p_err)),
+            "error_vs_physics": None,
+            "physics_note": "the press's physics is Hertz's closed form (error vs closed form)",
             "analytic": {
                 "what": "Hertz contact radius and peak pressure",
                 "contact_radius_m": r.contact_radius_m,

@@ -24,8 +24,11 @@ class Sweep:
     time step and node pitch for L0 and L1 (1 = the auto setting); l2_*: the same for L2,
     never finer than the reference. duration_s: slide duration [s] (None: cross the whole
     textured area); periods: if given (and no duration), slide until the whole pad has been
-    over the texture for this many feature spacings (enough for the period check). press_pitches_m: node pitches of the press's L0 and L1 rows;
-    press_ref_pitch_m: the reference's.
+    over the texture for this many feature spacings (enough for the period check).
+    press_pitches_m: node pitches of the press's L0 and L1 rows; press_ref_pitch_m: the
+    reference's. physics: also measure each configuration's error against physics (an
+    independent half-space solver, :mod:`~sim_tactile.bench.physics`) at
+    ``physics_offsets`` pad offsets.
     """
 
     scenes: tuple[str, ...] = ALL_SCENES
@@ -40,6 +43,8 @@ class Sweep:
     press_ref_pitch_m: float = 0.1e-3
     quick: bool = False
     force_control: str = "quasi-static"
+    physics: bool = True
+    physics_offsets: int = 4
 
     def __post_init__(self) -> None:
         if not self.scenes:
@@ -51,6 +56,7 @@ class Sweep:
         for lv in self.levels:
             v.one_of("level", lv, LEVELS)
         v.one_of("force_control", self.force_control, FORCE_CONTROLS)
+        v.integer("physics_offsets", self.physics_offsets, 1, 16)
 
         for name in ("dt_factors", "pitch_factors", "l2_dt_factors", "l2_pitch_factors"):
             for f in getattr(self, name):
@@ -90,6 +96,7 @@ QUICK = Sweep(
     press_pitches_m=(0.5e-3, 0.25e-3),
     press_ref_pitch_m=0.15e-3,
     quick=True,
+    physics_offsets=2,
 )
 
 #: Why a sweep leaves a scene out (printed in its document, never silent).
@@ -107,8 +114,10 @@ def sweep_for(
     scenes: Sequence[str] | None = None,
     levels: Sequence[str] | None = None,
     duration_s: float | None = None,
+    physics: bool = True,
 ) -> Sweep:
-    """The full or quick sweep, restricted to ``scenes`` and ``levels`` if given."""
+    """The full or quick sweep, restricted to ``scenes`` and ``levels`` if given;
+    ``physics=False`` leaves out the error against physics."""
     base = QUICK if quick else FULL
     changes: dict = {}
     if scenes is not None:
@@ -117,4 +126,6 @@ def sweep_for(
         changes["levels"] = tuple(levels)
     if duration_s is not None:
         changes["duration_s"] = duration_s
+    if not physics:
+        changes["physics"] = False
     return replace(base, **changes)

@@ -34,6 +34,7 @@ def cmd_bench_speed_error(args: argparse.Namespace) -> int:
         scenes=names_arg(args.scenes, "--scenes", list(ALL_SCENES)),
         levels=names_arg(args.levels, "--levels", list(LEVELS)),
         duration_s=args.duration,
+        physics=not args.no_physics,
     )
     doc = finite_json(run_speed_error(sweep, out, log=log))
     emit(
@@ -98,6 +99,12 @@ def add_parsers(sub) -> None:
         default=None,
         help="slide duration [s] (default: cross the texture; --quick: until the probe taxel "
         "has crossed a few features)",
+    )
+    se.add_argument(
+        "--no-physics",
+        action="store_true",
+        help="leave out the error against physics (static presses against Tamaas's half-space, "
+        "a test extra; about 10 s per scene and offset)",
     )
     st = add_command(
         bsub,

@@ -188,7 +188,7 @@ def _texture_warnings(plate: Plate, layout, scale: float | None, pitch: float) -
             f"micro-roughness (Ra {plate.texture.ra_m * 1e6:.3g} um) is below the node grid: the finger simulation sees "
             "it only as far as its MuJoCo height field resolves it"
         )
-    period = _texture_period(plate)
+    period = texture_period(plate)
     if period is not None and layout.min_pitch_m > period / 2 and layout.n > 1:
         warnings.append(
             f"taxel pitch {layout.min_pitch_m * 1e3:.3g} mm is coarser than half the texture "
@@ -230,7 +230,7 @@ def flat_stiffness(finger, coupled: bool, k_w: float) -> float:
     return 2 * math.sqrt(px * py / math.pi) * finger.e_star_pa
 
 
-def _texture_period(plate: Plate) -> float | None:
+def texture_period(plate: Plate) -> float | None:
     fs = features(plate)
     xs = sorted({round(f.x, 9) for f in fs})
     if len(xs) < 2:

@@ -1,0 +1,174 @@
+"""The skin's error against physics: a solver the project did not write.
+
+Every fidelity level is also set against an independent solution of the same contact. At a
+few offsets of the pad over the plate, spread over a texture period, the pad is pressed on
+the plate with the scene's force, statically. Two solutions of that press are compared:
+
+- the configuration's own: its node grid (node pitch along and across the slide), its skin
+  model (L0's Winkler bed, or the coupled half-space of L1 and L2), each node's depth from
+  the plate's height at its centre, and the sensor's taxels reading each node's patch at
+  their depths;
+- the reference: Tamaas's FFT boundary-element solve of the elastic half-space (Polonsky and
+  Keer's conjugate gradient), on a grid of :data:`REF_SPACING_M` over a periodic cell
+  :data:`CELL_PADS` times the pad's larger side; each cell's pressure is read by the same
+  taxels. It reproduces Hertz to 0.2% (``tests/test_ref_tamaas.py``).
+
+Both read the same taxels, so the difference is the skin model's discretisation against
+the physics. It is a static measure: the time step's error shows in the error against L2.
+The reference's own error is reported with it: the same solve on a grid twice as coarse
+moves its taxel loads by ``ref_change`` (on sharp ridge edges the pressure is singular, and
+the surface taxels converge slowly).
+
+Tamaas is a test extra (``pip install tamaas``), never a runtime dependency: without it the
+error against physics is left out and every row says why.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..plates import Plate, height_at
+from ..scene.elastic import subsurface_weights
+from ..scene.nodes import skin_grid
+from ..sensors import Sensor
+from ..sim.fidelity import texture_period
+from ..sim.skin import make_skin
+
+#: the reference's grid spacing [m]
+REF_SPACING_M = 0.0625e-3
+#: the reference's periodic cell, in the pad's larger side: its images then pull on the
+#: pad nearly uniformly (moving the approach, hardly the pressure: against a cell of 4 pad
+#: sides the taxel loads move by 0.8% of the largest on finger7, 0.02% on biotac19 and pvdf2)
+CELL_PADS = 2.5
+#: Polonsky-Keer's tolerance on the relative gap
+TOLERANCE = 1e-12
+
+
+def tamaas_missing() -> str | None:
+    """Why the error against physics cannot be computed here, or None."""
+    try:
+        import tamaas  # noqa: F401
+    except ImportError:
+        return (
+            "no error against physics: Tamaas is not installed (pip install tamaas, a test extra)"
+        )
+    return None
+
+
+def offsets_m(plate: Plate, n: int) -> tuple[float, ...]:
+    """``n`` pad offsets along the slide [m], spread over the texture's period (or 4 mm
+    where it has none) and off the node lattice, so that a node centre seldom sits on an
+    edge."""
+    period = texture_period(plate) or 4e-3
+    return tuple(round(period * (k + 0.137) / n, 9) for k in range(n))
+
+
+def gap_m(plate: Plate, finger, x, y, offset: float) -> np.ndarray:
+    """Height of the plate above the pad's undeformed surface at pad coordinates (x, y) [m]
+    with the pad ``offset`` along the slide; -1 m outside the pad (never touches)."""
+    z = height_at(plate, x + offset, y) - finger.surface(x, y)
+    px, py = finger.patch_m
+    inside = (np.abs(x) <= px / 2) & (np.abs(y) <= py / 2)
+    return np.where(inside & np.isfinite(z), z, -1.0)
+
+
+def tamaas_press(plate: Plate, finger, force_n: float, offset: float, spacing: float):
+    """(xy, p, spacing, None): cell centres [m] and pressures [Pa] of Tamaas's solution (the
+    cells that carry load), and the cells' side (as :func:`grid_press` gives its pitches)."""
+    import tamaas as tm
+
+    tm.set_log_level(tm.LogLevel.warning)
+    px, py = finger.patch_m
+    n = 2 * math.ceil(CELL_PADS * max(px, py) / spacing / 2)
+    cell = n * spacing
+    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [cell, cell], [n, n])
+    model.E, model.nu = finger.young_pa, finger.poisson
+    x = (np.arange(n) - n // 2) * spacing
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    gap = gap_m(plate, finger, X, Y, offset)
+    solver = tm.PolonskyKeerRey(
+        model, gap, TOLERANCE, tm.PolonskyKeerRey.pressure, tm.PolonskyKeerRey.pressure
+    )
+    solver.solve(force_n / cell**2)
+    p = np.asarray(model.traction).reshape(n, n)
+    loaded = p > 0
+    return np.column_stack([X[loaded], Y[loaded]]), p[loaded], spacing, None
+
+
+def grid_press(plate, finger, force_n, offset, level, pitch_m, pitch_y_m=None):
+    """(xy, p, pitch, pitch_y): the node grid's pressures [Pa] of a configuration, held at
+    ``force_n``."""
+    grid = skin_grid(finger, pitch_m, pitch_y_m)
+    gap = gap_m(plate, finger, grid.xy[:, 0], grid.xy[:, 1], offset)
+    pen = np.where(gap > -1.0, gap, -np.inf)
+    skin = make_skin(level, grid, finger, winkler_k_pa_per_m=finger.e_star_pa / finger.thickness_m)
+    p, _ = skin.solve_force(pen, force_n / grid.area_m2)
+    return grid.xy, p, grid.pitch_m, grid.pitch_y_m
+
+
+def taxel_loads(xy, p, pitch, pitch_y, layout, depth_m: float | None = None) -> np.ndarray:
+    """The layout's taxel loads [N] at their own depths (or all at ``depth_m``), each node or
+    cell read as a uniform pressure over its patch."""
+    depths = layout.depth_m if depth_m is None else np.full(layout.n, depth_m)
+    W = subsurface_weights(
+        xy, pitch, layout.positions[:, :2], layout.sizes, depths, pitch_y_m=pitch_y
+    )
+    return W @ (p * pitch * (pitch_y or pitch))
+
+
+@dataclass(frozen=True)
+class PhysicsReference:
+    """Tamaas's taxel loads (offsets x taxels) [N] of one scene, and how far a grid twice
+    as coarse moves them (relative norm)."""
+
+    offsets_m: tuple[float, ...]
+    loads: np.ndarray
+    ref_change: float
+    spacing_m: float
+
+    def error(self, loads: np.ndarray) -> tuple[float, float]:
+        """(relative norm over offsets x taxels, the largest taxel difference in units of
+        the largest reference load) of ``loads`` against the reference."""
+        d = loads - self.loads
+        return (
+            float(np.linalg.norm(d) / np.linalg.norm(self.loads)),
+            float(np.abs(d).max() / np.abs(self.loads).max()),
+        )
+
+
+def reference(plate: Plate, sensor: Sensor, force_n: float, n_offsets: int) -> PhysicsReference:
+    """The scene's reference taxel loads at ``n_offsets`` offsets."""
+    offs = offsets_m(plate, n_offsets)
+    fine, coarse = [], []
+    for off in offs:
+        fine.append(
+            taxel_loads(
+                *tamaas_press(plate, sensor.finger, force_n, off, REF_SPACING_M), sensor.layout
+            )
+        )
+        coarse.append(
+            taxel_loads(
+                *tamaas_press(plate, sensor.finger, force_n, off, 2 * REF_SPACING_M), sensor.layout
+            )
+        )
+    fine_a, coarse_a = np.array(fine), np.array(coarse)
+    change = float(np.linalg.norm(coarse_a - fine_a) / np.linalg.norm(fine_a))
+    return PhysicsReference(offs, fine_a, change, REF_SPACING_M)
+
+
+def configuration_loads(
+    ref: PhysicsReference, plate, sensor, force_n, level, pitch_m, pitch_y_m
+) -> np.ndarray:
+    """A configuration's taxel loads at the reference's offsets."""
+    return np.array(
+        [
+            taxel_loads(
+                *grid_press(plate, sensor.finger, force_n, off, level, pitch_m, pitch_y_m),
+                sensor.layout,
+            )
+            for off in ref.offsets_m
+        ]
+    )
