@@ -8,11 +8,15 @@ imperfections. A :class:`Sensor` is the whole definition; everything else reads 
 | ``biotac19`` | 19 electrodes, 2.5 mm deep (seed 000) | ellipsoid fingertip | impedance, counts | 100 Hz |
 | ``icub60`` | 6 triangles x 10 taxels (seed 000) | flat patch 32 x 22 mm | capacitive, 8-bit counts | 50 Hz |
 | ``pvdf2`` | 2 films, across and along the slide (seed 001) | spherical fingertip R 10 mm | piezoelectric, charge amplifier | 1 kHz |
+
+Each pad's skin is an elastic half-space (E 0.3 MPa, incompressible). The stacks of layers
+the papers describe, on their backings, are in :mod:`~sim_tactile.sensors.paper_stacks`
+(``Sensor.with_paper_stack()``), with the source of every number.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -49,6 +53,14 @@ class Sensor:
     @property
     def rate_hz(self) -> float:
         return self.layout.rate_hz
+
+    def with_paper_stack(self) -> Sensor:
+        """This preset with the skin its paper describes (layers on their backing, from
+        :mod:`~sim_tactile.sensors.paper_stacks`, most numbers assumptions) instead of the
+        half-space."""
+        from .paper_stacks import paper_stack
+
+        return replace(self, finger=self.finger.layered(paper_stack(self.name).stack()))
 
     @property
     def grid_shape(self) -> tuple[int, int] | None:
