@@ -178,7 +178,7 @@ def test_friction_coupled_contact_solves_the_unsymmetric_problem():
     tractions' deflection moved to the right-hand side (each step solved by the NNLS
     reference), and it satisfies the contact conditions at every node; the load moves to
     the trailing (-x) side."""
-    from sim_tactile.scene.layered import shear_normal_compliance
+    from sim_tactile.scene.tractions import shear_normal_compliance
     from sim_tactile.sensors.stack import Layer, Stack
     from sim_tactile.sim.contact import REFRESH, ActiveSet
 

@@ -15,9 +15,8 @@ from sim_tactile.scene.layered import (
     layer_response,
     layered_compliance_matrix,
     layered_subsurface_weights,
-    shear_normal_compliance,
-    shear_subsurface_weights,
 )
+from sim_tactile.scene.tractions import shear_normal_compliance, shear_subsurface_weights
 from sim_tactile.sim.contact import ActiveSet
 
 #: identities that hold to rounding

@@ -150,6 +150,29 @@ _MARKERS = {"L0": "o", "L1": "s", "L2": "*"}
 _COLOURS = {"L0": "tab:orange", "L1": "tab:blue", "L2": "tab:green"}
 
 
+def _scatter_levels(ax, points: list[tuple[float, float, str]], hollow: bool = False) -> None:
+    """(error, cost, level) points, one marker series per level: filled against L2, hollow
+    against physics."""
+    for level in LEVELS:
+        pts = [(e, c) for e, c, lv in points if lv == level]
+        if not pts:
+            continue
+        style = (
+            {"facecolors": "none", "edgecolors": _COLOURS[level]}
+            if hollow
+            else {"color": _COLOURS[level]}
+        )
+        ax.scatter(
+            [e for e, _ in pts],
+            [c for _, c in pts],
+            marker=_MARKERS[level],
+            s=110 if level == "L2" else 45,
+            label=f"{level} vs physics" if hollow else level,
+            zorder=3,
+            **style,
+        )
+
+
 def plot_pareto(rows: list[dict], path: str | Path) -> Path:
     """One panel per scene: cost against error vs the reference, log axes, one marker series
     per level, the Pareto front drawn through its points; the reference (error 0) is drawn
@@ -178,36 +201,13 @@ def plot_pareto(rows: list[dict], path: str | Path) -> Path:
         pos = [e for e in err if e > 0]
         floor = min(pos) / 3 if pos else 1e-3
         xs = [e if e > 0 else floor for e in err]
-        for level in LEVELS:
-            idx = [i for i, r in enumerate(ok) if r["fidelity"] == level]
-            if idx:
-                ax.scatter(
-                    [xs[i] for i in idx],
-                    [cost[i] for i in idx],
-                    marker=_MARKERS[level],
-                    s=110 if level == "L2" else 45,
-                    color=_COLOURS[level],
-                    label=level,
-                    zorder=3,
-                )
+        _scatter_levels(ax, [(xs[i], cost[i], r["fidelity"]) for i, r in enumerate(ok)])
         phys = [
             (r["error_vs_physics"], cost[i], r["fidelity"])
             for i, r in enumerate(ok)
             if r.get("error_vs_physics") is not None
         ]
-        for level in LEVELS:
-            pts = [(e, c) for e, c, lv in phys if lv == level]
-            if pts:
-                ax.scatter(
-                    [e for e, _ in pts],
-                    [c for _, c in pts],
-                    marker=_MARKERS[level],
-                    s=110 if level == "L2" else 45,
-                    facecolors="none",
-                    edgecolors=_COLOURS[level],
-                    label=f"{level} vs physics",
-                    zorder=3,
-                )
+        _scatter_levels(ax, phys, hollow=True)
         for i, r in enumerate(ok):
             label = "reference (error 0)" if err[i] == 0 else r["setting"]
             ax.annotate(

@@ -27,8 +27,9 @@ from ..plates import build as build_plate
 from ..sensors.layouts import Layout
 from ..sensors.pad import Finger
 from .elastic import subsurface_weights
-from .layered import Stack, layered_subsurface_weights, shear_subsurface_weights
+from .layered import Stack, layered_subsurface_weights
 from .nodes import SkinGrid
+from .tractions import shear_subsurface_weights
 
 _T = mujoco.mjtGeom
 #: Collision bit of the skin nodes (plates keep bit 1 for other uses).

@@ -32,8 +32,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene.elastic import compliance_matrix
-from ..scene.layered import Stack, layered_compliance_matrix, shear_normal_compliance
+from ..scene.layered import Stack, layered_compliance_matrix
 from ..scene.nodes import SkinGrid
+from ..scene.tractions import shear_normal_compliance
 from ..sensors.pad import Finger
 from . import contact
 

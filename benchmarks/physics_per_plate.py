@@ -1,0 +1,96 @@
+"""The default fidelity's error against physics on every plate of every simulated task.
+
+    python benchmarks/physics_per_plate.py [--tasks finger7-v1,...] [--offsets 4] [--json]
+
+``bench speed-error`` measures one plate per task (its bench scene) at every level; this
+measures the level each task actually runs (``auto``: its node grid as ``choose_fidelity``
+picks it for that plate) on each of the task's plates. For each plate, the task's sensor is
+pressed with the task's force at a few pad offsets over the texture period; its taxel loads
+are set against Tamaas's boundary-element half-space on a 0.0625 mm grid, read by the same
+taxels (:mod:`sim_tactile.bench.physics`). Columns: the node grid, the relative norm over
+offsets x taxels, the largest taxel difference in units of the largest reference load, and
+how far the reference moves on a grid twice as coarse.
+
+``textures20-icub60-v1`` is left out unless named: its 36 x 26 mm pad needs a 90 mm
+reference cell, about 10 minutes a plate. Tamaas is a test extra.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+from sim_tactile.bench import physics
+from sim_tactile.plates import get_plate
+from sim_tactile.sensors import get_sensor
+from sim_tactile.sim.fidelity import choose_fidelity
+from sim_tactile.slides import SlideSet
+from sim_tactile.tasks import get_task, task_ids
+
+SLOW = ("textures20-icub60-v1",)
+
+
+def measure(task_id: str, n_offsets: int, log=print) -> list[dict]:
+    ss = get_task(task_id).get_data
+    sensor = get_sensor(ss.sensor)
+    proto = ss.protocol.at_rate(sensor.layout.rate_hz)
+    rows = []
+    for name in ss.plates:
+        plate = get_plate(name)
+        fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
+        t0 = time.perf_counter()
+        ref = physics.reference(plate, sensor, proto.force_n, n_offsets)
+        loads = physics.configuration_loads(
+            ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m
+        )
+        norm, worst = ref.error(loads)
+        rows.append(
+            {
+                "task": task_id,
+                "plate": name,
+                "pitch_m": fid.pitch_m,
+                "pitch_y_m": fid.pitch_y_m,
+                "error_vs_physics": norm,
+                "largest_taxel": worst,
+                "ref_change": ref.ref_change,
+                "wall_s": time.perf_counter() - t0,
+            }
+        )
+        r = rows[-1]
+        log(
+            f"{task_id:24s} {name:34s} {_grid(r):>14s} {100 * norm:6.1f}% {100 * worst:6.1f}% "
+            f"{100 * ref.ref_change:5.1f}% {r['wall_s']:5.0f} s"
+        )
+    return rows
+
+
+def _grid(r: dict) -> str:
+    x = r["pitch_m"] * 1e3
+    return f"{x:.3g} mm" if r["pitch_y_m"] is None else f"{x:.3g} x {r['pitch_y_m'] * 1e3:.3g} mm"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tasks", default=None, help="comma-separated task ids")
+    ap.add_argument("--offsets", type=int, default=4)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    missing = physics.tamaas_missing()
+    if missing:
+        print(missing, file=sys.stderr)
+        return 2
+    sims = [t for t in task_ids() if isinstance(get_task(t).get_data, SlideSet)]
+    tasks = args.tasks.split(",") if args.tasks else [t for t in sims if t not in SLOW]
+    log = (lambda m: print(m, file=sys.stderr)) if args.json else print
+    if not args.json:
+        print(f"{'task':24s} {'plate':34s} {'nodes':>14s}  error  largest  ref   wall")
+    rows = [r for t in tasks for r in measure(t, args.offsets, log)]
+    if args.json:
+        print(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
