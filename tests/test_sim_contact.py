@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy.optimize import nnls
 
+from sim_tactile.errors import PhysicsError
 from sim_tactile.scene.elastic import compliance_matrix
 from sim_tactile.sim.contact import halfspace, winkler
 
@@ -190,7 +191,7 @@ def test_friction_coupled_contact_solves_the_unsymmetric_problem():
     D = shear_normal_compliance(xy, 0.25e-3, Stack((Layer(1e-3, 0.3e6, 0.5),)), pitch_y_m=0.75e-3)
     Ce = C - mu * D
     assert np.abs(Ce - Ce.T).max() > 0.01 * np.abs(C).max()
-    p, _ = ActiveSet(Ce, None, refresh=0).solve(pen)
+    p, _ = ActiveSet(Ce, None, refresh=0, symmetric=False).solve(pen)
     ref = _reference(C, pen)
     for _ in range(200):  # C p = pen + mu D p on the contact set
         nxt = _reference(C, pen + mu * D @ ref)
@@ -206,8 +207,47 @@ def test_friction_coupled_contact_solves_the_unsymmetric_problem():
     assert p[trailing].sum() > 1.05 * p[leading].sum()
     assert frictionless[trailing].sum() == pytest.approx(frictionless[leading].sum(), rel=1e-6)
     # held at a force: the same answer as the displacement-controlled solve at its shift
-    held, dz = ActiveSet(Ce, None, refresh=0).solve_force(pen, 2 * p.sum())
+    held, dz = ActiveSet(Ce, None, refresh=0, symmetric=False).solve_force(pen, 2 * p.sum())
     assert held.sum() == pytest.approx(2 * p.sum(), rel=1e-9)
-    again, _ = ActiveSet(Ce, None, refresh=0).solve(pen + dz)
+    again, _ = ActiveSet(Ce, None, refresh=0, symmetric=False).solve(pen + dz)
     np.testing.assert_allclose(held, again, atol=SOLVER_RTOL * held.max())
-    assert REFRESH > 0  # the symmetric skins keep their block updates
+    assert REFRESH > 0
+
+
+def test_the_unsymmetric_block_updates_follow_a_sliding_contact():
+    """The friction-coupled problem solved step after step while the ridge slides across
+    the pad, with the inverse of C - mu D updated by the general block formulas (and its K
+    for large sets, refreshed every 3 updates): every step equals a fresh factorisation of
+    its own contact set. Taking the symmetric formulas instead is wrong: answers off, or no
+    convergence (checked)."""
+    from sim_tactile.scene.layered import layered_compliance_matrix
+    from sim_tactile.scene.tractions import shear_normal_compliance
+    from sim_tactile.sensors.stack import Layer, Stack
+    from sim_tactile.sim.contact import ActiveSet
+
+    xs = np.arange(-12, 13) * 0.25e-3
+    X, Y = np.meshgrid(xs, xs[::3])
+    xy = np.column_stack([X.ravel(), Y.ravel()])
+    st = Stack((Layer(1e-3, 0.3e6, 0.5),))
+    Ce = layered_compliance_matrix(xy, 0.25e-3, st, pitch_y_m=0.75e-3) - 0.5 * (
+        shear_normal_compliance(xy, 0.25e-3, st, pitch_y_m=0.75e-3)
+    )
+    K = np.linalg.inv(Ce)
+    general = ActiveSet(Ce, K, refresh=3, symmetric=False)
+    wrong = ActiveSet(Ce, K, refresh=3, symmetric=True)
+    worst_wrong = 0.0
+    for k, centre in enumerate(np.linspace(-2.5e-3, 2.5e-3, 21)):
+        width = 1.0e-3 if k % 2 else 3.5e-3  # the set grows and shrinks by blocks
+        pen = np.where(np.abs(xy[:, 0] - centre) <= width / 2, 40e-6, -1e-6)
+        fresh, _ = ActiveSet(Ce, None, refresh=0, symmetric=False).solve(pen)
+        p, _ = general.solve(pen)
+        np.testing.assert_allclose(p, fresh, atol=SOLVER_RTOL * fresh.max())
+        try:
+            q, _ = wrong.solve(pen)
+        except PhysicsError:  # the symmetric formulas can lose the solve altogether
+            worst_wrong = np.inf
+            wrong = ActiveSet(Ce, K, refresh=3, symmetric=True)
+            continue
+        worst_wrong = max(worst_wrong, np.abs(q - fresh).max() / fresh.max())
+    assert general.updates + general.rebuilds > 10  # the block paths ran
+    assert worst_wrong > 1e-3

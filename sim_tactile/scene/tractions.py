@@ -82,61 +82,64 @@ def shear_normal_compliance(
 
     cx, cy = direction
     hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
-    c = _cerruti_coefficient(stack.layers[0])
-    d = xy[:, None, :] - xy[None, :, :]
-    D = (-c / (2 * np.pi)) * (
-        cx * _odd_rect(d[..., 0], d[..., 1], hx, hy) + cy * _odd_rect(d[..., 1], d[..., 0], hy, hx)
-    )
     top = stack.layers[0]
+    c = _cerruti_coefficient(top)
     uniform = (
         stack.backing == "halfspace"
         and len(stack.layers) == 1
         and stack.backing_young_pa == top.young_pa
         and stack.backing_poisson == top.poisson
     )
-    if uniform:  # the half-space itself: no remainder
-        return D
-    if stack.backing == "rigid":
-        a = -c  # w_s - c / k -> -c / k at long wavelengths: the base holds the surface
-    else:
-        nu_b = stack.backing_poisson
-        a = -(1 - 2 * nu_b) * (1 + nu_b) / stack.backing_young_pa - c
-    r_max = float(np.hypot(np.ptp(xy[:, 0]) + 2 * hx, np.ptp(xy[:, 1]) + 2 * hy))
-    r_end = max(min(r_max, REACH_LAYERS * stack.thickness_m), 1e-6)
+    rem = None  # the stack's remainder over the half-space of its top layer
+    if not uniform:
+        if stack.backing == "rigid":
+            a = -c  # w_s - c / k -> -c / k at long wavelengths: the base holds the surface
+        else:
+            nu_b = stack.backing_poisson
+            a = -(1 - 2 * nu_b) * (1 + nu_b) / stack.backing_young_pa - c
+        r_max = float(np.hypot(np.ptp(xy[:, 0]) + 2 * hx, np.ptp(xy[:, 1]) + 2 * hy))
+        r_end = max(min(r_max, REACH_LAYERS * stack.thickness_m), 1e-6)
 
-    def f(k):
-        return layer_response(stack, k, load="shear")[0] - c / k
+        def f(k):
+            return layer_response(stack, k, load="shear")[0] - c / k
 
-    # h(r) = (1/2pi) int f k J1(k r) dk, the remainder's g = -h; f ~ a / k gives h ~ a / (2 pi r)
-    h = _hankel_table(stack, f, r_end, _top_length(stack), a / (2 * np.pi), order=1)
+        # h(r) = (1/2pi) int f k J1(k r) dk, the remainder's g = -h; f ~ a / k: h ~ a / (2 pi r)
+        rem = _hankel_table(stack, f, r_end, _top_length(stack), a / (2 * np.pi), order=1)
     length = _top_length(stack)
     tx, wx = gauss_points(hx, length, _POINTS_PER_LENGTH, _POINTS_MAX)
     ty, wy = gauss_points(hy, length, _POINTS_PER_LENGTH, _POINTS_MAX)
+    area = 4 * hx * hy
 
-    def patch_mean(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
-        acc = np.zeros(np.broadcast(dx, dy).shape)
+    def kernel(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
+        """D at receiver-minus-source offsets (dx, dy)."""
+        out = np.zeros(np.broadcast(dx, dy).shape)
+        if c != 0.0:  # the top layer's half-space, in closed form (zero if incompressible)
+            if cx:
+                out += (-c / (2 * np.pi)) * cx * _odd_rect(dx, dy, hx, hy)
+            if cy:
+                out += (-c / (2 * np.pi)) * cy * _odd_rect(dy, dx, hy, hx)
+        if rem is None:
+            return out
         for ox, wxi in zip(tx, wx, strict=True):
             for oy, wyi in zip(ty, wy, strict=True):
                 ux, uy = dx - ox, dy - oy
                 r = np.hypot(ux, uy)
                 along = np.divide(cx * ux + cy * uy, r, out=np.zeros_like(r), where=r > 0)
-                acc -= wxi * wyi * along * h(r)
-        return acc
+                out -= area * wxi * wyi * along * rem(r)
+        return out
 
     ix = np.rint((xy[:, 0] - xy[:, 0].min()) / (2 * hx)).astype(np.int64)
     iy = np.rint((xy[:, 1] - xy[:, 1].min()) / (2 * hy)).astype(np.int64)
     lattice = np.allclose(xy[:, 0] - xy[:, 0].min(), ix * 2 * hx, atol=1e-9 * hx) and np.allclose(
         xy[:, 1] - xy[:, 1].min(), iy * 2 * hy, atol=1e-9 * hy
     )
-    area = 4 * hx * hy
-    if lattice:  # the remainder depends on the signed offset in pitches only
+    if lattice:  # D depends on the signed offset in pitches only: one table, gathered
         nx, ny = int(ix.max()), int(iy.max())
         gx, gy = np.meshgrid(np.arange(-nx, nx + 1), np.arange(-ny, ny + 1), indexing="ij")
-        table = patch_mean(gx * 2 * hx, gy * 2 * hy)
-        D += area * table[ix[:, None] - ix[None, :] + nx, iy[:, None] - iy[None, :] + ny]
-    else:
-        D += area * patch_mean(d[..., 0], d[..., 1])
-    return D
+        table = kernel(gx * 2 * hx, gy * 2 * hy)
+        return table[ix[:, None] - ix[None, :] + nx, iy[:, None] - iy[None, :] + ny]
+    d = xy[:, None, :] - xy[None, :, :]
+    return kernel(d[..., 0], d[..., 1])
 
 
 def shear_subsurface_weights(

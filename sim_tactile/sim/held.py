@@ -128,8 +128,9 @@ class CompiledHeldStep:
                     if skin.symmetric:
                         C = np.ascontiguousarray(0.5 * (Cf + Cf.T))
                         K = np.ascontiguousarray(np.linalg.inv(C))
-                    else:  # friction coupled in: C is not symmetric, and has no K
+                    else:  # friction coupled in: C is not symmetric
                         C = np.ascontiguousarray(Cf)
+                        K = None if K is None else np.ascontiguousarray(np.linalg.inv(C))
                 W = 0.5 * (W[:, nodes] + W[:, pair])
         self.nodes = nodes
         self.n_full = n
@@ -137,7 +138,7 @@ class CompiledHeldStep:
         self.mult = mult
         # the Winkler bed keeps no contact set: an empty solver stands in for it
         self.solver = (
-            contact.ActiveSet(C, K, refresh=skin.refresh)
+            contact.ActiveSet(C, K, symmetric=skin.symmetric)
             if coupled
             else contact.ActiveSet(np.zeros((0, 0)))
         )
@@ -182,7 +183,7 @@ class CompiledHeldStep:
             (self.bone0, qpos, self.jx, jz),
             self.probe.arrays,
             self._reduced,
-            (self.winkler_k, C, K, s.floor),
+            (self.winkler_k, C, K, s.floor, s.symmetric),
             (M, S, in_set, rowsum, s.updates, s.refresh),
             self._limits,
             total,
@@ -234,8 +235,9 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     - ``probe``: the collider's arrays (:attr:`PrimitiveCollider.arrays`);
     - ``reduced``: ``(small, group, mult)``: the probes' depths, each node's probe, the nodes
       each reduced node stands for;
-    - ``skin``: ``(winkler_k, C, K, floor)``: the Winkler stiffness (> 0 for L0), else the
-      reduced compliance, its inverse and the depth above which a node can touch;
+    - ``skin``: ``(winkler_k, C, K, floor, sym)``: the Winkler stiffness (> 0 for L0), else
+      the reduced compliance, its inverse, the depth above which a node can touch and
+      whether the compliance is symmetric;
     - ``state``: ``(M, S, in_set, rowsum, updates, refresh)``: the contact set's state;
     - ``limits``: ``(tol_rel, max_iter, n_collisions, qs_margin)``;
     - ``out``: ``(pen, f, W, area, taxel_out)``: the depths and pressures it writes, and the
@@ -246,7 +248,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     within the margin (from the contact solve)."""
     bone0, qpos, jx, jz = pose
     small, group, mult = reduced
-    winkler_k, C, K, floor = skin
+    winkler_k, C, K, floor, sym = skin
     M, S, in_set, rowsum, updates, refresh = state
     tol_rel, max_iter, n_collisions, qs_margin = limits
     pen, f, W, area, taxel_out = out
@@ -273,7 +275,21 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
             dz = force_same_set(M, S, pen, C, in_set, tol_rel, total, f, rowsum, floor)
         if dz != dz:
             st, dz, M, S, updates, rb = force_loop(
-                M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, f, False, floor
+                M,
+                S,
+                in_set,
+                C,
+                K,
+                pen,
+                tol_rel,
+                total,
+                updates,
+                refresh,
+                max_iter,
+                f,
+                False,
+                floor,
+                sym,
             )
             rebuilds += rb
             rowsum = M @ np.ones(S.size)  # M 1 for the new M (BLAS, as _force_loop forms it)

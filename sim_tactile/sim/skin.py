@@ -23,8 +23,8 @@ of its nodes (m, ``-inf`` for nodes out of reach):
 When the finger's skin carries its sliding friction (``Finger.skin_tractions``) and the skin
 is not an incompressible half-space, the tractions ``q = mu p`` against the slide deflect
 the surface normally too (:func:`~sim_tactile.scene.layered.shear_normal_compliance`): the
-normal problem's compliance becomes ``C - mu D``, no longer symmetric. Its contact set is
-then solved by factorising each set anew (no block updates, which assume symmetry).
+normal problem's compliance becomes ``C - mu D``, no longer symmetric: the contact solve's
+block updates then take their general formulas (``symmetric=False``).
 """
 
 from __future__ import annotations
@@ -71,14 +71,11 @@ class CoupledSkin:
     def __init__(
         self, C: np.ndarray, K: np.ndarray | None = None, what: str = "", *, symmetric: bool = True
     ) -> None:
-        #: whether C is symmetric (reciprocity; no friction coupling): the contact solve then
-        #: updates its inverse by blocks, else it factorises each contact set anew
+        #: whether C is symmetric (reciprocity; no friction coupling); the contact solve's
+        #: block updates take the general formulas when it is not
         self.symmetric = symmetric
-        if not symmetric:
-            K = None
         self.C, self.K = C, K
-        self.refresh = contact.REFRESH if self.symmetric else 0
-        self.solver = contact.ActiveSet(C, K, refresh=self.refresh)
+        self.solver = contact.ActiveSet(C, K, symmetric=symmetric)
         self.what = what
 
     @classmethod
@@ -97,7 +94,7 @@ class CoupledSkin:
         if finger.skin_tractions and finger.friction > 0 and finger.poisson < 0.5:
             stack = Stack.half_space(finger.thickness_m, finger.young_pa, finger.poisson)
             C, what = cls._with_friction(C, grid, finger, stack, slide_dir, what)
-            return cls(C, None, what, symmetric=False)
+            return cls(C, np.linalg.inv(C) if inverse else None, what, symmetric=False)
         return cls(C, np.linalg.inv(C) if inverse else None, what)
 
     @classmethod
@@ -120,7 +117,7 @@ class CoupledSkin:
         what = f"layered skin: {layers} on a {st.backing} backing"
         if finger.skin_tractions and finger.friction > 0:
             C, what = cls._with_friction(C, grid, finger, st, slide_dir, what)
-            return cls(C, None, what, symmetric=False)
+            return cls(C, np.linalg.inv(C) if inverse else None, what, symmetric=False)
         return cls(C, np.linalg.inv(C) if inverse else None, what)
 
     @staticmethod

@@ -33,13 +33,21 @@ class ActiveSet:
     round-off drift; the schedule is deterministic, so equal inputs give bit-identical
     outputs. Same answer as :func:`halfspace` (tested).
 
-    The block updates assume a symmetric ``C``. A compliance that is not (friction coupled
-    into the normal problem) takes ``refresh=0`` and no ``K``: each contact set is then
-    factorised anew.
+    A compliance that is not symmetric (friction coupled into the normal problem) takes
+    ``symmetric=False``: the block updates then use the general Schur formulas, which read
+    both off-diagonal blocks instead of taking one as the other's transpose.
     """
 
-    def __init__(self, C: np.ndarray, K: np.ndarray | None = None, refresh: int = REFRESH):
+    def __init__(
+        self,
+        C: np.ndarray,
+        K: np.ndarray | None = None,
+        refresh: int = REFRESH,
+        *,
+        symmetric: bool = True,
+    ):
         self.C, self.K, self.refresh = C, K, refresh
+        self.symmetric = symmetric
         #: the depth above which a node can touch: 0 when no load lifts any node toward the
         #: plate (C >= 0, the half-space), else -inf (a layered skin bulges around a load)
         self.floor = skin_floor(C)
@@ -73,6 +81,7 @@ class ActiveSet:
             MAX_ITER,
             p,
             self.floor,
+            self.symmetric,
         )
         self._take(M, S, updates, rebuilds)
         if status:
@@ -123,6 +132,7 @@ class ActiveSet:
             p,
             False,  # the same-set case was tried above
             self.floor,
+            self.symmetric,
         )
         self._take(M, S, updates, rebuilds)
         if status == 1:

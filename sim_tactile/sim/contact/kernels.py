@@ -59,9 +59,10 @@ def take(X, rows, cols):
 
 
 @numba.njit(cache=True)
-def inverse_subset(C, K, S):
+def inverse_subset(C, K, S, sym=True):
     """inv(C[S, S]); a large S goes through its small complement T with K = inv(C):
-    inv(C_SS) = K_SS - K_ST inv(K_TT) K_TS. ``K`` of shape (0, 0) stands for no inverse."""
+    inv(C_SS) = K_SS - K_ST inv(K_TT) K_TS. ``K`` of shape (0, 0) stands for no inverse.
+    ``sym``: C (and K) symmetric, K_TS taken as K_ST's transpose; else read as it is."""
     n = C.shape[0]
     m = S.size
     if K.shape[0] == 0 or 2 * m <= n:
@@ -76,18 +77,22 @@ def inverse_subset(C, K, S):
         return KSS
     KST = take(K, S, T)
     KTT = take(K, T, T)
-    return np.ascontiguousarray(KSS - KST @ np.linalg.solve(KTT, np.ascontiguousarray(KST.T)))
+    KTS = np.ascontiguousarray(KST.T) if sym else take(K, T, S)
+    return np.ascontiguousarray(KSS - KST @ np.linalg.solve(KTT, KTS))
 
 
 @numba.njit(cache=True)
-def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor=0.0):
+def solve_loop(
+    M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor=0.0, sym=True
+):
     """The active-set iteration of :meth:`ActiveSet.solve` from the current set: nodes that
     can no longer touch or carry tension leave, nodes left inside the plate join; the
     inverse ``M`` follows by block updates, rebuilt every ``refresh`` updates. A node can
     touch when its depth exceeds ``floor``: 0 where no load lifts the skin toward the plate
     (the half-space), -inf where one can (a layered skin), though the set starts from the
-    nodes that overlap the plate. Returns ``(converged, M, S, updates, rebuilds)`` and writes
-    the pressures to ``p``."""
+    nodes that overlap the plate. ``sym``: C is symmetric (the block updates use it); a
+    compliance that is not (friction coupled in) takes the general formulas. Returns
+    ``(converged, M, S, updates, rebuilds)`` and writes the pressures to ``p``."""
     n = pen.shape[0]
     rebuilds = 0
     for j in range(n):
@@ -121,13 +126,13 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
             keep = ~drop
             if not keep.any() or updates >= refresh:
                 S = np.sort(S[keep])
-                M = inverse_subset(C, K, S) if S.size else np.zeros((0, 0))
+                M = inverse_subset(C, K, S, sym) if S.size else np.zeros((0, 0))
                 updates = 0
                 rebuilds += 1
                 in_set[:] = False
                 in_set[S] = True
             else:
-                M = inverse_without(M, np.flatnonzero(keep), np.flatnonzero(drop))
+                M = inverse_without(M, np.flatnonzero(keep), np.flatnonzero(drop), sym)
                 in_set[S[drop]] = False
                 S = S[keep]
                 updates += 1
@@ -155,13 +160,13 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
         if A.size:  # nodes still inside the plate join the set
             if S.size == 0 or updates >= refresh:
                 S = np.sort(np.concatenate((S, A)))
-                M = inverse_subset(C, K, S)
+                M = inverse_subset(C, K, S, sym)
                 updates = 0
                 rebuilds += 1
                 in_set[:] = False
                 in_set[S] = True
             else:
-                M = inverse_with(M, C, S, A)
+                M = inverse_with(M, C, S, A, sym)
                 S = np.concatenate((S, A))
                 in_set[A] = True
                 updates += 1
@@ -174,7 +179,21 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
 
 @numba.njit(cache=True)
 def force_loop(
-    M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p, try_same=True, floor=0.0
+    M,
+    S,
+    in_set,
+    C,
+    K,
+    pen,
+    tol_rel,
+    total,
+    updates,
+    refresh,
+    max_iter,
+    p,
+    try_same=True,
+    floor=0.0,
+    sym=True,
 ):
     """:meth:`ActiveSet.solve_force` in one call. Returns ``(status, dz, M, S, updates,
     rebuilds)``: status 1 converged (pressures in ``p``), 0 not converged, 2 no node within
@@ -215,7 +234,7 @@ def force_loop(
                 shifted[j] = pen[j] + dz
             if not (S.size and kkt_same_set(M, S, shifted, C, in_set, tol_rel, p, floor)):
                 ok, M, S, updates, rb = solve_loop(
-                    M, S, in_set, C, K, shifted, tol_rel, updates, refresh, max_iter, p, floor
+                    M, S, in_set, C, K, shifted, tol_rel, updates, refresh, max_iter, p, floor, sym
                 )
                 rebuilds += rb
                 if not ok:
@@ -286,28 +305,41 @@ def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b, floor=0.0) -> flo
 
 
 @numba.njit(cache=True)
-def inverse_without(M, keep, drop):
-    """inv(C_KK) from M = inv(C_SS), S = K + R: the Schur complement M_KK - M_KR inv(M_RR) M_RK."""
+def inverse_without(M, keep, drop, sym=True):
+    """inv(C_KK) from M = inv(C_SS), S = K + R: the Schur complement M_KK - M_KR inv(M_RR) M_RK
+    (``sym``: M_RK taken as M_KR's transpose)."""
     Mkr = take(M, keep, drop)
     Mrr = take(M, drop, drop)
     Mkk = take(M, keep, keep)
-    X = np.linalg.solve(Mrr, np.ascontiguousarray(Mkr.T))
+    Mrk = np.ascontiguousarray(Mkr.T) if sym else take(M, drop, keep)
+    X = np.linalg.solve(Mrr, Mrk)
     return Mkk - Mkr @ X
 
 
 @numba.njit(cache=True)
-def inverse_with(M, C, S, A):
+def inverse_with(M, C, S, A, sym=True):
     """inv(C_TT) for T = S + A from M = inv(C_SS), through the Schur complement of C_SS:
-    Z = C_AA - C_AS M C_SA, inv = [[M + M B Z^-1 B' M, -M B Z^-1], [-Z^-1 B' M, Z^-1]]."""
+    Z = C_AA - C_AS M C_SA, inv = [[M + M C_SA Z^-1 C_AS M, -M C_SA Z^-1],
+    [-Z^-1 C_AS M, Z^-1]]; ``sym``: C_AS = C_SA' and M symmetric, which the symmetric
+    formulas use."""
     n, a = S.size, A.size
     B = take(C, S, A)
     D = take(C, A, A)
     MB = M @ B
-    Zi = np.linalg.inv(D - np.ascontiguousarray(B.T) @ MB)
-    G = MB @ Zi
     out = np.empty((n + a, n + a))
-    out[:n, :n] = M + G @ np.ascontiguousarray(MB.T)
+    if sym:
+        Zi = np.linalg.inv(D - np.ascontiguousarray(B.T) @ MB)
+        G = MB @ Zi
+        out[:n, :n] = M + G @ np.ascontiguousarray(MB.T)
+        out[:n, n:] = -G
+        out[n:, :n] = -G.T
+        out[n:, n:] = Zi
+        return out
+    E = take(C, A, S) @ M  # C_AS M
+    Zi = np.linalg.inv(D - E @ B)
+    G = MB @ Zi
+    out[:n, :n] = M + G @ E
     out[:n, n:] = -G
-    out[n:, :n] = -G.T
+    out[n:, :n] = -(Zi @ E)
     out[n:, n:] = Zi
     return out
