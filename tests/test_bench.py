@@ -195,7 +195,7 @@ def test_speed_error_tiny_sweep(tmp_path, cache):
         pitch_factors=(1.0,),
         l2_dt_factors=(),
         l2_pitch_factors=(),
-        physics_offsets=2,
+        physics=False,
     )
     doc = run_speed_error(sweep, tmp_path, cache=cache)
     rows = doc["rows"]
@@ -216,7 +216,24 @@ def test_speed_error_tiny_sweep(tmp_path, cache):
     assert doc["figures"] == [str(png)] and png.read_bytes()[:4] == b"\x89PNG"
     assert json.loads((tmp_path / "speed_error.json").read_text())["rows"][0]["fidelity"] == "L2"
     assert "| finger7/ridges-4" in (tmp_path / "speed_error.md").read_text()
-    # against physics: Tamaas's half-space (a test extra); the Winkler bed is far off it
+    assert all("error_vs_physics" not in r for r in rows)  # physics=False: not measured
+
+
+@pytest.mark.slow
+def test_speed_error_reports_the_error_against_physics(tmp_path, cache):
+    """The same tiny sweep against Tamaas at two pad offsets: every row has its error, the
+    Winkler bed is farther off than the coupled half-space, and the document names its
+    reference; without Tamaas every row says why."""
+    sweep = Sweep(
+        scenes=("finger7",),
+        levels=("L0", "L1"),
+        dt_factors=(1.0,),
+        pitch_factors=(1.0,),
+        l2_dt_factors=(),
+        l2_pitch_factors=(),
+        physics_offsets=2,
+    )
+    rows = run_speed_error(sweep, tmp_path, cache=cache)["rows"]
     if physics.tamaas_missing():
         assert all(r["error_vs_physics"] is None and "Tamaas" in r["physics_note"] for r in rows)
         return
