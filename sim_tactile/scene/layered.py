@@ -240,20 +240,40 @@ def surface_remainder(stack: Stack, r_max_m: float) -> _Radial:
     return _hankel_table(stack, f, max(r_end, 1e-6), _top_length(stack), tail)
 
 
+def patch_quadrature(stack: Stack, hx: float, hy: float):
+    """Gauss-Legendre offsets and weights (tx, wx, ty, wy) over a node patch of half-sides
+    hx, hy, spaced for a remainder that varies over the top layer's thickness."""
+    from .elastic import gauss_points
+
+    length = _top_length(stack)
+    tx, wx = gauss_points(hx, length, _POINTS_PER_LENGTH, _POINTS_MAX)
+    ty, wy = gauss_points(hy, length, _POINTS_PER_LENGTH, _POINTS_MAX)
+    return tx, wx, ty, wy
+
+
+def lattice_indices(xy: np.ndarray, hx: float, hy: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Each node's (column, row) on its lattice of patches ``2 hx`` by ``2 hy``, or None if
+    the nodes do not lie on one."""
+    ix = np.rint((xy[:, 0] - xy[:, 0].min()) / (2 * hx)).astype(np.int64)
+    iy = np.rint((xy[:, 1] - xy[:, 1].min()) / (2 * hy)).astype(np.int64)
+    on = np.allclose(xy[:, 0] - xy[:, 0].min(), ix * 2 * hx, atol=1e-9 * hx) and np.allclose(
+        xy[:, 1] - xy[:, 1].min(), iy * 2 * hy, atol=1e-9 * hy
+    )
+    return (ix, iy) if on else None
+
+
 def layered_compliance_matrix(
     xy: np.ndarray, pitch_m: float, stack: Stack, pitch_y_m: float | None = None
 ) -> np.ndarray:
     """(N, N) surface compliance [m/Pa] of the node patches centred at ``xy`` on ``stack``:
     the top layer's half-space (Love's closed form) plus the stack's remainder, integrated
     over each patch."""
-    from .elastic import compliance_matrix, gauss_points
+    from .elastic import compliance_matrix
 
     hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
     r_max = float(np.hypot(np.ptp(xy[:, 0]) + 2 * hx, np.ptp(xy[:, 1]) + 2 * hy))
     rem = surface_remainder(stack, r_max)
-    length = _top_length(stack)
-    tx, wx = gauss_points(hx, length, _POINTS_PER_LENGTH, _POINTS_MAX)
-    ty, wy = gauss_points(hy, length, _POINTS_PER_LENGTH, _POINTS_MAX)
+    tx, wx, ty, wy = patch_quadrature(stack, hx, hy)
     area = 4 * hx * hy
 
     def patch_mean(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
@@ -266,12 +286,9 @@ def layered_compliance_matrix(
     C = compliance_matrix(xy, pitch_m, stack.top_e_star_pa, pitch_y_m=pitch_y_m)
     # the node grid is a lattice: the remainder depends on the offset in pitches only, and
     # (the Gauss points being symmetric) on its magnitude along each axis
-    ix = np.rint((xy[:, 0] - xy[:, 0].min()) / (2 * hx)).astype(np.int64)
-    iy = np.rint((xy[:, 1] - xy[:, 1].min()) / (2 * hy)).astype(np.int64)
-    lattice = np.allclose(xy[:, 0] - xy[:, 0].min(), ix * 2 * hx, atol=1e-9 * hx) and np.allclose(
-        xy[:, 1] - xy[:, 1].min(), iy * 2 * hy, atol=1e-9 * hy
-    )
-    if lattice:
+    lattice = lattice_indices(xy, hx, hy)
+    if lattice is not None:
+        ix, iy = lattice
         gx, gy = np.meshgrid(np.arange(ix.max() + 1), np.arange(iy.max() + 1), indexing="ij")
         table = patch_mean(gx * 2 * hx, gy * 2 * hy)
         C += area * table[np.abs(ix[:, None] - ix[None, :]), np.abs(iy[:, None] - iy[None, :])]

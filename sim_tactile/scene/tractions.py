@@ -20,15 +20,15 @@ import numpy as np
 
 from ..sensors.stack import Layer, Stack
 from .layered import (
-    _POINTS_MAX,
-    _POINTS_PER_LENGTH,
     REACH_LAYERS,
     _fft_taxel_weights,
     _groups,
     _hankel_table,
     _radial_stress,
     _top_length,
+    lattice_indices,
     layer_response,
+    patch_quadrature,
 )
 
 __all__ = ["shear_normal_compliance", "shear_subsurface_weights"]
@@ -78,8 +78,6 @@ def shear_normal_compliance(
     traction along ``direction`` (a unit vector in the pad's plane) over node j's patch, on
     ``stack``. Zero for an incompressible half-space; on a layer it is not (the layer's base
     holds it), so friction shifts the contact pressure: ``u = C p + D q``."""
-    from .elastic import gauss_points
-
     cx, cy = direction
     hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
     top = stack.layers[0]
@@ -105,9 +103,7 @@ def shear_normal_compliance(
 
         # h(r) = (1/2pi) int f k J1(k r) dk, the remainder's g = -h; f ~ a / k: h ~ a / (2 pi r)
         rem = _hankel_table(stack, f, r_end, _top_length(stack), a / (2 * np.pi), order=1)
-    length = _top_length(stack)
-    tx, wx = gauss_points(hx, length, _POINTS_PER_LENGTH, _POINTS_MAX)
-    ty, wy = gauss_points(hy, length, _POINTS_PER_LENGTH, _POINTS_MAX)
+    tx, wx, ty, wy = patch_quadrature(stack, hx, hy)
     area = 4 * hx * hy
 
     def kernel(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
@@ -128,12 +124,9 @@ def shear_normal_compliance(
                 out -= area * wxi * wyi * along * rem(r)
         return out
 
-    ix = np.rint((xy[:, 0] - xy[:, 0].min()) / (2 * hx)).astype(np.int64)
-    iy = np.rint((xy[:, 1] - xy[:, 1].min()) / (2 * hy)).astype(np.int64)
-    lattice = np.allclose(xy[:, 0] - xy[:, 0].min(), ix * 2 * hx, atol=1e-9 * hx) and np.allclose(
-        xy[:, 1] - xy[:, 1].min(), iy * 2 * hy, atol=1e-9 * hy
-    )
-    if lattice:  # D depends on the signed offset in pitches only: one table, gathered
+    lattice = lattice_indices(xy, hx, hy)
+    if lattice is not None:
+        ix, iy = lattice  # D depends on the signed offset in pitches only: one table, gathered
         nx, ny = int(ix.max()), int(iy.max())
         gx, gy = np.meshgrid(np.arange(-nx, nx + 1), np.arange(-ny, ny + 1), indexing="ij")
         table = kernel(gx * 2 * hx, gy * 2 * hy)
