@@ -141,6 +141,7 @@ def test_press_a_layered_skin_and_read_the_stress_at_depth(cli):
         (["--layers", "[1,", "--backing", "rigid"], "--layers"),
         (["--backing", "halfspace", "--backing-young", "1"], "stack.backing_young_pa"),
         (["--depth", "0.01"], "depth_m"),
+        (["--node-pitch", "0.01"], "node_pitch_m"),
         (
             ["--layers", '[{"thickness_m": 0.001, "young_pa": 3e5, "poisson": 0.7}]'],
             "layer.poisson",
@@ -173,3 +174,27 @@ def test_press_with_friction_loads_the_trailing_side_at_depth(cli):
     assert ahead_r == pytest.approx(behind, rel=1e-9) and behind_r == pytest.approx(ahead, rel=1e-9)
     assert fwd["approach_m"] == pytest.approx(plain["approach_m"], rel=1e-9)
     assert fwd["contact_area_m2"] == plain["contact_area_m2"]
+
+
+@pytest.mark.slow
+def test_press_with_friction_on_a_layer_moves_the_contact_pressure(cli):
+    """On 4 mm of silicone bonded to a bone, sliding friction (mu 0.5) couples into the
+    normal problem: at the surface the trailing side's pressure rises and the leading
+    side's falls, the pad sinks deeper, and reversing the slide mirrors it (0.5 mm nodes)."""
+    common = [
+        "press", "--finger", "flat", "--force", "1", "--backing", "rigid", "--thickness",
+        "0.004", "--pitch", "0.001", "--node-pitch", "0.0005", "--json",
+    ]  # fmt: skip
+
+    def sides(extra):
+        doc = json.loads(cli([*common, *extra]).stdout)
+        p, x = np.array(doc["pressure_pa"]), np.array(doc["taxels"])[:, 0]
+        return doc, p[x < -2.5e-3].mean(), p[x > 2.5e-3].mean()
+
+    plain, trail0, lead0 = sides([])
+    fwd, trail, lead = sides(["--friction", "0.5", "--slide-dir", "x"])
+    back, trail_r, lead_r = sides(["--friction", "0.5", "--slide-dir=-x"])
+    assert trail0 == pytest.approx(lead0, rel=1e-6)
+    assert trail > 1.08 * trail0 and lead < 0.92 * lead0
+    assert trail_r == pytest.approx(lead, rel=1e-6) and lead_r == pytest.approx(trail, rel=1e-6)
+    assert fwd["approach_m"] > 1.02 * plain["approach_m"]

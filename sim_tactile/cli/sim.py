@@ -127,6 +127,7 @@ def cmd_press(args: argparse.Namespace) -> int:
         finger,
         args.force,
         readout_pitch_m=args.pitch,
+        node_pitch_m=args.node_pitch,
         plate=args.plate,
         fidelity=args.fidelity,
         depth_m=args.depth,
@@ -240,6 +241,12 @@ def add_parsers(sub) -> None:
     pr.add_argument("--force", type=float, default=1.0, help="normal force [N]")
     pr.add_argument(
         "--pitch", type=float, default=0.25e-3, help="taxel pitch of the dense grid [m]"
+    )
+    pr.add_argument(
+        "--node-pitch",
+        type=float,
+        default=None,
+        help="the skin's node pitch [m] (default: the taxel pitch, at most 0.2 mm)",
     )
     pr.add_argument("--plate", default="finger7/flat")
     pr.add_argument("--fidelity", default="L1", choices=PRESS_LEVELS)

@@ -104,6 +104,8 @@ def press(
 
     v.in_range("force_n", force_n, 1e-4, 100.0, unit="N")
     v.in_range("readout_pitch_m", readout_pitch_m, 20e-6, 5e-3, unit="m")
+    if node_pitch_m is not None:
+        v.in_range("node_pitch_m", node_pitch_m, 20e-6, 5e-3, unit="m")
     v.one_of("fidelity", fidelity, PRESS_LEVELS)
     v.in_range("depth_m", depth_m, 0.0, finger.thickness_m, hi_open=True, unit="m")
     if not np.isclose(math.hypot(*slide_dir), 1.0):
