@@ -1,6 +1,7 @@
 """The default fidelity's error against physics on every plate of every simulated task.
 
-    python benchmarks/physics_per_plate.py [--tasks finger7-v1,...] [--offsets 4] [--json]
+    python benchmarks/physics_per_plate.py [--tasks finger7-v1,...] [--plates P,...]
+        [--offsets 4] [--refine 1,2,4] [--json]
 
 ``bench speed-error`` measures one plate per task (its bench scene) at every level; this
 measures the level each task actually runs (``auto``: its node grid as ``choose_fidelity``
@@ -9,7 +10,9 @@ pressed with the task's force at a few pad offsets over the texture period; its 
 are set against Tamaas's boundary-element half-space on a 0.0625 mm grid, read by the same
 taxels (:mod:`sim_tactile.bench.physics`). Columns: the node grid, the relative norm over
 offsets x taxels, the largest taxel difference in units of the largest reference load, and
-how far the reference moves on a grid twice as coarse.
+how far the reference moves on a grid twice as coarse. ``--refine 1,2,4`` also measures the
+node grid at 1/2 and 1/4 of auto's pitch in both directions (what it would take to get
+within a given error; the cost is the dense solve's, which grows as the nodes cubed).
 
 ``textures20-icub60-v1`` is left out unless named: its 36 x 26 mm pad needs a 90 mm
 reference cell, about 10 minutes a plate. Tamaas is a test extra.
@@ -32,37 +35,41 @@ from sim_tactile.tasks import get_task, task_ids
 SLOW = ("textures20-icub60-v1",)
 
 
-def measure(task_id: str, n_offsets: int, log=print) -> list[dict]:
+def measure(task_id: str, n_offsets: int, refine=(1,), plates=None, log=print) -> list[dict]:
     ss = get_task(task_id).get_data
     sensor = get_sensor(ss.sensor)
     proto = ss.protocol.at_rate(sensor.layout.rate_hz)
     rows = []
     for name in ss.plates:
+        if plates and name not in plates:
+            continue
         plate = get_plate(name)
         fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
         t0 = time.perf_counter()
         ref = physics.reference(plate, sensor, proto.force_n, n_offsets)
-        loads = physics.configuration_loads(
-            ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m
-        )
-        norm, worst = ref.error(loads)
-        rows.append(
-            {
+        for f in refine:
+            py = None if fid.pitch_y_m is None else fid.pitch_y_m / f
+            t1 = time.perf_counter()
+            loads = physics.configuration_loads(
+                ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m / f, py
+            )
+            norm, worst = ref.error(loads)
+            r = {
                 "task": task_id,
                 "plate": name,
-                "pitch_m": fid.pitch_m,
-                "pitch_y_m": fid.pitch_y_m,
+                "refine": f,
+                "pitch_m": fid.pitch_m / f,
+                "pitch_y_m": py,
                 "error_vs_physics": norm,
                 "largest_taxel": worst,
                 "ref_change": ref.ref_change,
-                "wall_s": time.perf_counter() - t0,
+                "wall_s": time.perf_counter() - (t0 if f == refine[0] else t1),
             }
-        )
-        r = rows[-1]
-        log(
-            f"{task_id:24s} {name:34s} {_grid(r):>14s} {100 * norm:6.1f}% {100 * worst:6.1f}% "
-            f"{100 * ref.ref_change:5.1f}% {r['wall_s']:5.0f} s"
-        )
+            rows.append(r)
+            log(
+                f"{task_id:24s} {name:34s} {_grid(r):>14s} {100 * norm:6.1f}% "
+                f"{100 * worst:6.1f}% {100 * ref.ref_change:5.1f}% {r['wall_s']:5.0f} s"
+            )
     return rows
 
 
@@ -74,7 +81,11 @@ def _grid(r: dict) -> str:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", default=None, help="comma-separated task ids")
+    ap.add_argument("--plates", default=None, help="comma-separated plates (default: all)")
     ap.add_argument("--offsets", type=int, default=4)
+    ap.add_argument(
+        "--refine", default="1", help="comma-separated divisors of auto's node pitch (default 1)"
+    )
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     missing = physics.tamaas_missing()
@@ -86,7 +97,9 @@ def main() -> int:
     log = (lambda m: print(m, file=sys.stderr)) if args.json else print
     if not args.json:
         print(f"{'task':24s} {'plate':34s} {'nodes':>14s}  error  largest  ref   wall")
-    rows = [r for t in tasks for r in measure(t, args.offsets, log)]
+    refine = tuple(int(x) for x in args.refine.split(","))
+    plates = args.plates.split(",") if args.plates else None
+    rows = [r for t in tasks for r in measure(t, args.offsets, refine, plates, log)]
     if args.json:
         print(json.dumps(rows, indent=1))
     return 0
