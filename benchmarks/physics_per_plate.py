@@ -14,6 +14,10 @@ how far the reference moves on a grid twice as coarse. ``--refine 1,2,4`` also m
 node grid at 1/2 and 1/4 of auto's pitch in both directions (what it would take to get
 within a given error; the cost is the dense solve's, which grows as the nodes cubed).
 
+``--write-table`` stores the rows in ``sim_tactile/sim/measured_errors.json`` (each keyed by
+the scene and node grid, with the commit measured at), where ``auto`` finds its expected
+error; a partial run (``--tasks``/``--plates``) replaces only the rows it measured.
+
 ``textures20-icub60-v1`` is left out unless named: its 36 x 26 mm pad needs a 90 mm
 reference cell, about 10 minutes a plate. Tamaas is a test extra.
 """
@@ -22,12 +26,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import subprocess
 import sys
 import time
+from pathlib import Path
 
 from sim_tactile.bench import physics
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
+from sim_tactile.sim import measured_errors
 from sim_tactile.sim.fidelity import choose_fidelity
 from sim_tactile.slides import SlideSet
 from sim_tactile.tasks import get_task, task_ids
@@ -57,9 +64,15 @@ def measure(task_id: str, n_offsets: int, refine=(1,), plates=None, log=print) -
             r = {
                 "task": task_id,
                 "plate": name,
+                "sensor": ss.sensor,
+                "level": fid.level,
+                "force_n": proto.force_n,
                 "refine": f,
                 "pitch_m": fid.pitch_m / f,
                 "pitch_y_m": py,
+                "key": measured_errors.grid_key(
+                    plate, sensor.layout, sensor.finger, fid.level, fid.pitch_m / f, py
+                ),
                 "error_vs_physics": norm,
                 "largest_taxel": worst,
                 "ref_change": ref.ref_change,
@@ -87,6 +100,9 @@ def main() -> int:
         "--refine", default="1", help="comma-separated divisors of auto's node pitch (default 1)"
     )
     ap.add_argument("--json", action="store_true")
+    ap.add_argument(
+        "--write-table", action="store_true", help="store the rows where auto finds them"
+    )
     args = ap.parse_args()
     missing = physics.tamaas_missing()
     if missing:
@@ -102,7 +118,51 @@ def main() -> int:
     rows = [r for t in tasks for r in measure(t, args.offsets, refine, plates, log)]
     if args.json:
         print(json.dumps(rows, indent=1))
+    if args.write_table:
+        write_table(rows, measured_errors.TABLE)
     return 0
+
+
+def commit() -> str:
+    """The commit measured at (with ``+`` when the work tree differs from it)."""
+    root = Path(__file__).resolve().parents[1]
+    git = ["git", "-C", str(root)]
+    head = subprocess.run([*git, "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+    dirty = subprocess.run(
+        [*git, "status", "--porcelain", "--", "sim_tactile"], capture_output=True, text=True
+    )
+    return head.stdout.strip() + ("+" if dirty.stdout.strip() else "")
+
+
+def write_table(rows: list[dict], path: Path, at: str | None = None) -> None:
+    """Store ``rows`` in ``path``, replacing the rows of the same task, plate and grid."""
+    at = at or commit()
+    old = json.loads(path.read_text())["rows"] if path.is_file() else []
+    new = [{**{k: r[k] for k in KEEP}, "commit": at} for r in rows]
+    keys = {r["key"] for r in new}
+    merged = [r for r in old if r["key"] not in keys] + new
+    merged.sort(key=lambda r: (r["task"], r["plate"], -r["pitch_m"]))
+    doc = {
+        "about": "error of the taxel loads against Tamaas (0.0625 mm), static presses at "
+        "4 pad offsets; written by benchmarks/physics_per_plate.py --write-table",
+        "rows": merged,
+    }
+    path.write_text(json.dumps(doc, indent=1) + "\n")
+
+
+KEEP = (
+    "key",
+    "task",
+    "plate",
+    "sensor",
+    "level",
+    "force_n",
+    "pitch_m",
+    "pitch_y_m",
+    "error_vs_physics",
+    "largest_taxel",
+    "ref_change",
+)
 
 
 if __name__ == "__main__":

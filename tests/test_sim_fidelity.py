@@ -30,12 +30,13 @@ def _auto(plate: str, sensor: str = "grid3x3", finger: Finger | None = None, lev
 
 def test_ridges_under_a_flat_pad_get_nodes_along_the_slide():
     fid, finger = _auto("finger7/ridges-4")
-    # 2.5 mm ridges: x at a fifth of them; y as coarse as the 2 mm taxels
-    assert fid.pitch_m == pytest.approx(0.5e-3)
+    # 2.5 mm ridges: x at a tenth of them (the node cap leaves room); y as coarse as the
+    # 2 mm taxels
+    assert fid.pitch_m == pytest.approx(0.25e-3)
     assert fid.pitch_y_m == pytest.approx(2e-3)
-    assert "0.5 x 2 mm" in fid.reason
+    assert "0.25 x 2 mm" in fid.reason
     ref, _ = _auto("finger7/ridges-4", level="L2")
-    assert (ref.pitch_m, ref.pitch_y_m) == pytest.approx((0.25e-3, 1e-3))
+    assert (ref.pitch_m, ref.pitch_y_m) == pytest.approx((0.125e-3, 1e-3))
     assert skin_grid(finger, fid.pitch_m, fid.pitch_y_m).n <= MAX_NODES["L1"]
 
 

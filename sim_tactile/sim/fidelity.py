@@ -12,6 +12,12 @@ taxel; the time step lets each feature take at least 20 steps to cross and stays
 skin-bone coupling's stability limit. It warns when the taxels are coarser than the texture,
 when a forced pitch or time step is too coarse, and when the plate's roughness lies below what
 any node grid resolves (the micro-roughness model of the sensors handles that).
+
+The skin is the finger's own: its stack of layers on their backing when it has one (the cost
+in the loop is the same), otherwise the elastic half-space. The reason names it and, where the
+scene's node grid was measured against an independent half-space solver
+(:mod:`~sim_tactile.sim.measured_errors`), the expected error of the taxel loads; a warning
+says when that is above 10% and what the measured finer grids give.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ from dataclasses import asdict, dataclass, field
 from .. import _validate as v
 from ..plates import Plate, features
 from ..plates.spec import Roughness
+from .measured_errors import WARN_ABOVE, expected_error, finer_grids
 
 LEVELS = ("L0", "L1", "L2")
 #: What a ``fidelity`` argument may be (a :class:`Fidelity` too, in Python).
@@ -36,6 +43,12 @@ PITCH_MIN_M = 0.25e-3
 MAX_NODES = {"L0": 2500, "L1": 700, "L2": 2800}
 #: Coarsest node pitch across the slide auto may pick over ridges along y [m].
 PITCH_MAX_Y_M = 2.0e-3
+#: Nodes across the smallest feature along the slide over ridges (x pitch = feature / this).
+#: Against an independent half-space solver (Tamaas, 0.0625 mm), finger7/ridges-4's taxel
+#: loads are 16% off at 5 nodes per 2.5 mm ridge (0.5 x 2 mm) and 9.6% at 10 (0.25 x 2 mm);
+#: the y pitch hardly counts (0.25 x 1 mm: 7.0%). The nodes double, and the slide loop stays
+#: near 40x real time.
+RIDGE_NODES_PER_FEATURE = 10
 #: Steps to cross the smallest feature, at least.
 STEPS_PER_FEATURE = 20
 #: Longest time step auto may pick [s].
@@ -62,6 +75,9 @@ class Fidelity:
     warnings: tuple[str, ...] = field(default=())
     #: node pitch across the slide [m]; None: square nodes (``pitch_m``)
     pitch_y_m: float | None = None
+    #: the taxel loads' measured error against physics at this node grid on this scene
+    #: (relative norm over pad offsets x taxels; None: not measured)
+    expected_error: float | None = None
 
     @property
     def coupled(self) -> bool:
@@ -120,21 +136,9 @@ def choose_fidelity(
     if protocol.force_control == "dynamic":
         omega = math.sqrt(flat_stiffness(finger, level != "L0", k_w) / finger.bone_mass_kg)
         dt_need = min(dt_need, AUTO_OMEGA_DT / omega)
-    px, py = finger.patch_m
-    # Ridges along y under a flat pad: the load varies along the slide only, so the nodes
-    # go where it varies: x at 1/5 of the smallest feature, y as coarse as the taxels allow.
-    ridges = _varies_along_x_only(plate, finger)
-    aspect = 1.0
-    if ridges:
-        auto_pitch = min(PITCH_MAX_M, max(PITCH_MIN_M, min(taxel_x / 2, scale / 5)))
-        aspect = max(1.0, min(taxel_y, PITCH_MAX_Y_M) / auto_pitch)
-    floor = math.sqrt(px * py / MAX_NODES["L1" if level == "L2" else level] / aspect)
-    if auto_pitch < floor:
-        warnings.append(
-            f"node pitch raised from {auto_pitch * 1e3:.3g} to {floor * 1e3:.3g} mm to keep the skin "
-            f"under {MAX_NODES[level]} nodes: features below {2 * floor * 1e3:.3g} mm are smeared"
-        )
-        auto_pitch = floor
+    auto_pitch, aspect = _node_grid(
+        plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnings
+    )
     pitch = pitch_m or auto_pitch
     dt_target = dt_s or dt_need
     if level == "L2":
@@ -157,11 +161,31 @@ def choose_fidelity(
         if aspect == 1.0
         else (f"{pitch * 1e3:.3g} x {pitch_y * 1e3:.3g} mm (x x y: ridges along y)")
     )
+    py_key = None if aspect == 1.0 else float(pitch_y)
+    measured = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key)
     reason = (
-        f"{level}: node pitch {shape} (smallest feature "
+        f"{level}: {_skin_name(finger, level)}, node pitch {shape} (smallest feature "
         f"{'-' if scale is None else f'{scale * 1e3:.3g} mm'}, taxel {taxel * 1e3:.3g} mm), "
-        f"dt {dt * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample)"
+        f"dt {dt * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample); expected error: "
+        + (
+            measured.describe()
+            if measured
+            else "not measured for this scene and grid (benchmarks/physics_per_plate.py)"
+        )
     )
+    if measured and measured.error > WARN_ABOVE:
+        finer = finer_grids(plate, layout, finger, protocol.force_n, level, pitch, py_key)
+        warnings.append(
+            f"the taxel loads at this node grid ({shape}) are {100 * measured.error:.0f}% from the "
+            "physics on this plate"
+            + "".join(f"; {m.grid}: {100 * m.error:.1f}%" for m in finer)
+            + (
+                f" (finer grids are beyond the dense solve's {MAX_NODES[level]}-node cap; "
+                "pass pitch_m to choose one)"
+                if finer
+                else ""
+            )
+        )
     return Fidelity(
         level,
         float(pitch),
@@ -170,8 +194,46 @@ def choose_fidelity(
         k_w,
         reason,
         tuple(warnings),
-        None if aspect == 1.0 else float(pitch_y),
+        py_key,
+        None if measured is None else measured.error,
     )
+
+
+def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnings):
+    """auto's node pitch along the slide and the aspect of the nodes (y pitch / x pitch),
+    under the level's node cap (a warning says when the cap coarsens the grid)."""
+    px, py = finger.patch_m
+    # Ridges along y under a flat pad: the load varies along the slide only, so the nodes
+    # go where it varies: x at 1/5 of the smallest feature, y as coarse as the taxels allow;
+    # then x alone down to 1/RIDGE_NODES_PER_FEATURE where the node cap leaves room.
+    ridges = _varies_along_x_only(plate, finger)
+    aspect = 1.0
+    cap = MAX_NODES["L1" if level == "L2" else level]
+    if ridges:
+        auto_pitch = min(PITCH_MAX_M, max(PITCH_MIN_M, min(taxel_x / 2, scale / 5)))
+        aspect = max(1.0, min(taxel_y, PITCH_MAX_Y_M) / auto_pitch)
+    floor = math.sqrt(px * py / cap / aspect)
+    if auto_pitch < floor:
+        warnings.append(
+            f"node pitch raised from {auto_pitch * 1e3:.3g} to {floor * 1e3:.3g} mm to keep the skin "
+            f"under {cap} nodes: features below {2 * floor * 1e3:.3g} mm are smeared"
+        )
+        auto_pitch = floor
+    if ridges:
+        y = auto_pitch * aspect
+        x = max(PITCH_MIN_M, scale / RIDGE_NODES_PER_FEATURE, px * py / (cap * y))
+        if x < auto_pitch:
+            auto_pitch, aspect = x, y / x
+    return auto_pitch, aspect
+
+
+def _skin_name(finger, level: str) -> str:
+    if level == "L0":
+        return "Winkler bed"
+    stack = getattr(finger, "stack", None)
+    if stack is None:
+        return "elastic half-space (the finger declares no stack)"
+    return f"{len(stack.layers)}-layer stack ({stack.thickness_m * 1e3:.3g} mm) on a {stack.backing} backing"
 
 
 def _texture_warnings(plate: Plate, layout, scale: float | None, pitch: float) -> list[str]:

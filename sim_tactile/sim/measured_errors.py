@@ -1,0 +1,136 @@
+"""The measured error against physics of a node grid on a task scene: what ``auto`` expects.
+
+``benchmarks/physics_per_plate.py --write-table`` presses each simulated task's sensor on each
+of its plates, at ``auto``'s node grid and at half its pitch, and sets the taxel loads
+against an independent boundary-element half-space (Tamaas on a 0.0625 mm grid). It stores
+each result in ``measured_errors.json`` beside this module, with the commit it was measured
+at. :func:`expected_error` finds the row for a scene, so that :func:`choose_fidelity
+<sim_tactile.sim.fidelity.choose_fidelity>` can say how far its choice is from the physics
+and what a finer grid would give.
+
+A row is found only for the scene it was measured on: its key is the content hash of the
+plate's parameters, the sensor's layout and finger (its skin and stack included), the level
+and the node grid. Any change to these (a user's own sensor, an edited preset, another
+pitch) finds no row, and the reason says the error was not measured; it is never another
+scene's figure. The press force may differ from the measured one by at most
+:data:`FORCE_SPAN` (a data set's drawn forces), and the reason names the measured force.
+The error is that of a static press: the step, and what a slide adds (the node-crossing
+tone), are not in it.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+from ..hashing import content_hash
+
+#: The table, written by ``benchmarks/physics_per_plate.py --write-table``.
+TABLE = Path(__file__).with_name("measured_errors.json")
+#: Largest relative difference between a scene's force and the measured force for a row to apply.
+FORCE_SPAN = 0.5
+#: Error against physics above which auto warns (the target of issue 16's defaults).
+WARN_ABOVE = 0.10
+
+
+@dataclass(frozen=True)
+class MeasuredError:
+    """One measured node grid: the relative norm of the taxel loads against the physics over
+    the pad offsets, the largest taxel difference (in units of the largest reference load),
+    the reference's own convergence (its change on a grid twice as coarse), the force, and
+    the commit and the command that measured it."""
+
+    error: float
+    largest_taxel: float
+    ref_change: float
+    force_n: float
+    pitch_m: float
+    pitch_y_m: float | None
+    commit: str
+    task: str
+    plate: str
+
+    @property
+    def grid(self) -> str:
+        x = self.pitch_m * 1e3
+        return (
+            f"{x:.3g} mm" if self.pitch_y_m is None else f"{x:.3g} x {self.pitch_y_m * 1e3:.3g} mm"
+        )
+
+    def describe(self) -> str:
+        return (
+            f"{100 * self.error:.1f}% against physics (largest taxel {100 * self.largest_taxel:.1f}%; "
+            f"static press at {self.force_n:g} N on {self.plate}, measured at {self.commit})"
+        )
+
+
+def grid_key(plate, layout, finger, level: str, pitch_m: float, pitch_y_m: float | None) -> str:
+    """The key of a node grid on a scene: everything the static press's error depends on but
+    the force (node pitches rounded to 0.1 um)."""
+    return content_hash(
+        {
+            "plate": plate.hash,
+            "layout": layout.to_json(),
+            "finger": finger.to_json(),
+            "level": level,
+            "pitch_um": round(pitch_m * 1e6, 1),
+            "pitch_y_um": None if pitch_y_m is None else round(pitch_y_m * 1e6, 1),
+        }
+    )
+
+
+@lru_cache(maxsize=1)
+def _table() -> dict[str, list[dict]]:
+    if not TABLE.is_file():
+        return {}
+    rows = json.loads(TABLE.read_text())["rows"]
+    out: dict[str, list[dict]] = {}
+    for r in rows:
+        out.setdefault(r["key"], []).append(r)
+    return out
+
+
+def _row(r: dict) -> MeasuredError:
+    return MeasuredError(
+        float(r["error_vs_physics"]),
+        float(r["largest_taxel"]),
+        float(r["ref_change"]),
+        float(r["force_n"]),
+        float(r["pitch_m"]),
+        None if r["pitch_y_m"] is None else float(r["pitch_y_m"]),
+        str(r["commit"]),
+        str(r["task"]),
+        str(r["plate"]),
+    )
+
+
+def expected_error(
+    plate, layout, finger, force_n: float, level: str, pitch_m: float, pitch_y_m: float | None
+) -> MeasuredError | None:
+    """The measured error of this node grid on this scene, or None if it was not measured
+    (or only at a force more than :data:`FORCE_SPAN` away)."""
+    rows = _table().get(grid_key(plate, layout, finger, level, pitch_m, pitch_y_m), [])
+    near = [r for r in rows if abs(force_n / r["force_n"] - 1) <= FORCE_SPAN]
+    if not near:
+        return None
+    return _row(min(near, key=lambda r: abs(force_n / r["force_n"] - 1)))
+
+
+def finer_grids(plate, layout, finger, force_n: float, level: str, pitch_m: float, pitch_y_m):
+    """The measured grids at 1/2 and 1/4 of this one's pitch in both directions."""
+    out = []
+    for f in (2, 4):
+        m = expected_error(
+            plate,
+            layout,
+            finger,
+            force_n,
+            level,
+            pitch_m / f,
+            None if pitch_y_m is None else pitch_y_m / f,
+        )
+        if m is not None:
+            out.append(m)
+    return out
