@@ -246,7 +246,7 @@ def test_speed_error_reports_the_error_against_physics(tmp_path, cache):
 @pytest.mark.slow
 def test_the_error_against_physics_falls_as_the_grid_resolves_the_ridges():
     """finger7's scene at one pad offset: the coupled half-space on 1 x 2 mm nodes, 0.5 x
-    2 mm (the default) and 0.25 x 0.5 mm against Tamaas: the error falls as the nodes
+    2 mm (the default before 388cdc2) and 0.25 x 0.5 mm against Tamaas: the error falls as the nodes
     shrink (measured 22%, 20%, 5%; tests/test_ref_tamaas.py pins
     the reference itself; a grid twice as coarse moves it by 3%)."""
     pytest.importorskip("tamaas")

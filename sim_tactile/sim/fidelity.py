@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass, field
 from .. import _validate as v
 from ..plates import Plate, features
 from ..plates.spec import Roughness
+from ..scene.nodes import skin_grid
 from .measured_errors import WARN_ABOVE, expected_error, finer_grids
 
 LEVELS = ("L0", "L1", "L2")
@@ -174,18 +175,7 @@ def choose_fidelity(
         )
     )
     if measured and measured.error > WARN_ABOVE:
-        finer = finer_grids(plate, layout, finger, protocol.force_n, level, pitch, py_key)
-        warnings.append(
-            f"the taxel loads at this node grid ({shape}) are {100 * measured.error:.0f}% from the "
-            "physics on this plate"
-            + "".join(f"; {m.grid}: {100 * m.error:.1f}%" for m in finer)
-            + (
-                f" (finer grids are beyond the dense solve's {MAX_NODES[level]}-node cap; "
-                "pass pitch_m to choose one)"
-                if finer
-                else ""
-            )
-        )
+        warnings.append(_far_from_physics(plate, layout, finger, protocol, level, measured, shape))
     return Fidelity(
         level,
         float(pitch),
@@ -225,6 +215,22 @@ def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnin
         if x < auto_pitch:
             auto_pitch, aspect = x, y / x
     return auto_pitch, aspect
+
+
+def _far_from_physics(plate, layout, finger, protocol, level, measured, shape) -> str:
+    """The warning for a grid measured more than WARN_ABOVE from the physics, with what the
+    measured finer grids give and their node counts against the level's cap."""
+    cap = MAX_NODES["L1" if level == "L2" else level]
+    out = (
+        f"the taxel loads at this node grid ({shape}) are {100 * measured.error:.0f}% from the "
+        "physics on this plate"
+    )
+    py_m = measured.pitch_y_m
+    for m in finer_grids(plate, layout, finger, protocol.force_n, level, measured.pitch_m, py_m):
+        nodes = skin_grid(finger, m.pitch_m, m.pitch_y_m).n
+        over = f", over the dense solve's {cap}-node cap" if nodes > cap else ""
+        out += f"; {m.grid}: {100 * m.error:.1f}% ({nodes} nodes{over}; pass pitch_m)"
+    return out
 
 
 def _skin_name(finger, level: str) -> str:

@@ -1,0 +1,105 @@
+"""auto's expected error against physics: the measured table, its keys and what auto says."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import pytest
+
+from sim_tactile.plates import get_plate
+from sim_tactile.sensors import get_sensor
+from sim_tactile.sim import measured_errors as me
+from sim_tactile.sim.fidelity import choose_fidelity
+from sim_tactile.slides import SlideSet
+from sim_tactile.tasks import get_task, task_ids
+
+#: How far a re-measured error may move from the stored one (percentage points as a
+#: fraction): the same code gives the same number; this allows another BLAS or FFT library.
+REMEASURE_ATOL = 0.002
+
+
+def _rows() -> list[dict]:
+    return json.loads(me.TABLE.read_text())["rows"]
+
+
+def _scene(task_id: str):
+    ss = get_task(task_id).get_data
+    sensor = get_sensor(ss.sensor)
+    return ss, sensor, ss.protocol.at_rate(sensor.layout.rate_hz)
+
+
+def test_every_stored_row_is_the_measurement_of_todays_preset():
+    """A row whose key no longer matches its task's plate, sensor and grid was measured on
+    a scene that has since changed: regenerate it (physics_per_plate.py --write-table)."""
+    rows = _rows()
+    assert rows
+    for r in rows:
+        ss, sensor, _ = _scene(r["task"])
+        assert r["sensor"] == ss.sensor and r["plate"] in ss.plates, r
+        key = me.grid_key(
+            get_plate(r["plate"]), sensor.layout, sensor.finger, r["level"], r["pitch_m"], r["pitch_y_m"]
+        )
+        assert key == r["key"], f"stale row: {r['task']} {r['plate']} at {r['pitch_m']}"
+        assert 0 <= r["error_vs_physics"] and 0 <= r["largest_taxel"] and r["commit"], r
+
+
+def test_auto_finds_its_measured_error_on_every_plate_of_the_measured_tasks():
+    measured = {r["task"] for r in _rows()}
+    sims = [t for t in task_ids() if isinstance(get_task(t).get_data, SlideSet)]
+    assert {"finger7-v1", "multilayer3-v1", "roughness8-v1", "textures20-biotac19-v1"} <= measured
+    for t in sims:
+        if t not in measured:
+            continue
+        ss, sensor, proto = _scene(t)
+        for name in ss.plates:
+            fid = choose_fidelity(get_plate(name), sensor.layout, sensor.finger, proto, "auto")
+            assert fid.expected_error is not None, (t, name)
+            assert "against physics" in fid.reason and "measured at" in fid.reason
+
+
+def test_ridges_4_says_its_error_and_a_changed_scene_finds_none():
+    ss, sensor, proto = _scene("finger7-v1")
+    plate = get_plate("finger7/ridges-4")
+    fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
+    assert fid.expected_error == pytest.approx(0.096, abs=0.01)
+    assert "elastic half-space" in fid.reason
+    # another finger, another grid, another force: not this measurement
+    thicker = replace(sensor.finger, thickness_m=6e-3)
+    other = choose_fidelity(plate, sensor.layout, thicker, proto, "auto")
+    assert other.expected_error is None and "not measured" in other.reason
+    forced = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto", pitch_m=0.3e-3)
+    assert forced.expected_error is None
+    heavy = choose_fidelity(plate, sensor.layout, sensor.finger, replace(proto, force_n=3.0), "auto")
+    assert heavy.expected_error is None  # 3 N against the measured 1 N: beyond FORCE_SPAN
+    light = choose_fidelity(plate, sensor.layout, sensor.finger, replace(proto, force_n=1.1), "auto")
+    assert light.expected_error == fid.expected_error  # a drawn force near the measured one
+
+
+def test_auto_warns_where_its_grid_is_far_from_the_physics_and_names_finer_grids():
+    ss, sensor, proto = _scene("finger7-v1")
+    fid = choose_fidelity(get_plate("finger7/bumps-4x4"), sensor.layout, sensor.finger, proto, "auto")
+    assert fid.expected_error > me.WARN_ABOVE
+    warn = [w for w in fid.warnings if "from the physics" in w]
+    assert len(warn) == 1 and "0.5 mm:" in warn[0] and "node cap" in warn[0], fid.warnings
+    flat = choose_fidelity(get_plate("finger7/ridges-2"), sensor.layout, sensor.finger, proto, "auto")
+    assert flat.expected_error < me.WARN_ABOVE
+    assert not [w for w in flat.warnings if "from the physics" in w]
+
+
+@pytest.mark.slow
+def test_a_stored_row_is_what_the_benchmark_measures_today():
+    """finger7/ridges-4 at auto's grid, pressed again against Tamaas: the stored figure."""
+    pytest.importorskip("tamaas")
+    from sim_tactile.bench import physics
+
+    ss, sensor, proto = _scene("finger7-v1")
+    plate = get_plate("finger7/ridges-4")
+    fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
+    ref = physics.reference(plate, sensor, proto.force_n, 4)
+    norm, worst = ref.error(
+        physics.configuration_loads(ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m)
+    )
+    m = me.expected_error(plate, sensor.layout, sensor.finger, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m)
+    assert norm == pytest.approx(m.error, abs=REMEASURE_ATOL)
+    assert worst == pytest.approx(m.largest_taxel, abs=REMEASURE_ATOL)
