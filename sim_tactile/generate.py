@@ -20,7 +20,7 @@ import sys
 import time
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -31,17 +31,23 @@ from .cache import default_root
 from .datasets.export import spec_from_tactile
 from .datasets.store import SlideWriter, config_hash, create_store, open_root, versions
 from .errors import ConfigError, StoreError, WorkerError
+from .sensors.calibration import load_calibration
 from .slides.config import config_slide_set, load_config
 from .slides.jobs import SlideWorker
 from .slides.plan import Plan, slide_plan
 from .slides.run import BACKENDS, MAX_WORKERS, default_workers, make_backend, stream
 from .slides.slide_set import SlideSet
 from .tasks import DataRequest, get_task, task_ids
+from .tasks.registry import with_calibration
 
 
 # --------------------------------------------------------------------------- plans
-def _task_plans(task_id: str, quick: bool, seed: int, data, log) -> tuple[list[Plan], dict]:
+def _task_plans(
+    task_id: str, quick: bool, seed: int, data, log, cal=None
+) -> tuple[list[Plan], dict]:
     spec = get_task(task_id)
+    if cal is not None:
+        spec = with_calibration(spec, cal)
     if spec.parts:
         plans = []
         for part in spec.parts:
@@ -62,17 +68,25 @@ def _task_plans(task_id: str, quick: bool, seed: int, data, log) -> tuple[list[P
     return [Plan("", spec_from_tactile(ds, spec.id, cfg), dataset=ds)], {}
 
 
-def resolve(target: str, *, quick: bool, seed: int | None, data=None, log=None):
+def resolve(target: str, *, quick: bool, seed: int | None, data=None, log=None, sensor_config=None):
     """The plans of ``target``: a task id or a configuration file; returns ``(plans,
-    root_attrs)``. Everything is validated here, before any slide runs."""
+    root_attrs)``. Everything is validated here, before any slide runs. ``sensor_config``:
+    a calibration file (``sim-tactile calibrate``) for the task's sensor."""
     log = log or (lambda m: None)
+    cal = None if sensor_config is None else load_calibration(sensor_config)
     if target in task_ids(aliases=True):
         seed = 0 if seed is None else v.integer("--seed", seed, 0)
-        return _task_plans(target, quick, seed, data, log)
+        return _task_plans(target, quick, seed, data, log, cal)
     path = Path(target)
     if path.suffix.lower() in (".toml", ".json") or path.is_file():
         cfg = load_config(path)
         ss, file_seed, name = config_slide_set(cfg, f"configuration file {path}")
+        if cal is not None:
+            if ss.sensor != cal.sensor:
+                raise ConfigError(
+                    f"the sensor config calibrates {cal.sensor!r}; {path} simulates {ss.sensor!r}"
+                )
+            ss = replace(ss, calibration=cal)
         if seed is not None:
             file_seed = v.integer("--seed", seed, 0)
         plan = slide_plan(
@@ -238,6 +252,7 @@ def generate(
     data: str | Path | None = None,
     progress: bool = True,
     log: Callable[[str], None] | None = None,
+    sensor_config: str | Path | None = None,
     _worker: Callable | None = None,
 ) -> dict:
     """Simulate every slide of ``target`` (a task id or a configuration file) into the Zarr
@@ -249,6 +264,7 @@ def generate(
         ``auto``; None starts a local instance).
     resume: continue an interrupted store of the same configuration (without it an existing
         ``out`` is refused).
+    sensor_config: a calibration file (``sim-tactile calibrate``) for the task's sensor.
     _worker: what simulates a job (tests put faults in with it; default: a
         :class:`~sim_tactile.slides.jobs.SlideWorker` that reads the slide cache, never
         writes it).
@@ -261,7 +277,9 @@ def generate(
     if workers is not None:
         workers = v.integer("--workers", workers, 1, MAX_WORKERS)
     out = Path(out)
-    plans, root_attrs = resolve(target, quick=quick, seed=seed, data=data, log=log)
+    plans, root_attrs = resolve(
+        target, quick=quick, seed=seed, data=data, log=log, sensor_config=sensor_config
+    )
     total = sum(p.spec.n_slides for p in plans)
     resumed = out.exists()
     simulated = any(p.jobs is not None for p in plans)

@@ -24,6 +24,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
         data=args.data,
         progress=not args.json,
         log=log,
+        sensor_config=args.sensor_config,
     )
     emit(
         args,
@@ -47,7 +48,65 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    """Fit a sensor model's transducer and imperfections to real recordings of the sensor."""
+    from ..calibrate import calibrate
+
+    cal = calibrate(args.sensor, args.data)
+    out = cal.write(args.out)
+    fit = cal.to_json()
+    payload = {
+        "sensor": cal.sensor,
+        "channels": fit["channels"],
+        "n_recordings": cal.n_recordings,
+        "counts_per_n": fit["counts_per_n"],
+        "noise_std": fit["noise_std"],
+        "offset": fit["offset"],
+        "drift_per_s": fit["drift_per_s"],
+        "out": str(out),
+        "quant_step": cal.quant_step,
+        "r2": fit["r2"],
+        "gain": fit["gain"],
+        "force_n": cal.force_n,
+        "notes": fit["notes"],
+    }
+
+    def text() -> str:
+        lines = [f"{cal.sensor}: {cal.n_recordings} recordings, typical force {cal.force_n:g} N"]
+        lines.append(
+            f"{'channel':8s} {'counts/N':>9s} {'offset':>7s} {'noise':>6s} {'drift/s':>8s} {'r2':>5s}"
+        )
+        for k, name in enumerate(cal.channels):
+            lines.append(
+                f"{name:8s} {cal.counts_per_n[k]:9.2f} {cal.offset[k]:7.2f} {cal.noise_std[k]:6.2f} "
+                f"{cal.drift_per_s[k]:8.2f} {cal.r2[k]:5.2f}"
+            )
+        lines += [f"note: {n}" for n in cal.notes] + [f"written: {out}"]
+        return "\n".join(lines)
+
+    emit(args, payload, text)
+    return 0
+
+
+def add_sensor_config(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--sensor-config",
+        default=None,
+        help="a sensor calibration (.toml, from 'sim-tactile calibrate') for the sensor",
+    )
+
+
 def add_parsers(sub) -> None:
+    cb = add_command(
+        sub,
+        "calibrate",
+        cmd_calibrate,
+        "fit a sensor model's gains, offsets, noise, drift and ADC step to real recordings",
+    )
+    cb.add_argument("sensor", help="the sensor to calibrate (biotac19)")
+    cb.add_argument("--data", required=True, help="folder of the sensor's real data set")
+    cb.add_argument("--out", required=True, help="the calibration file to write (.toml)")
+
     gn = add_command(
         sub,
         "generate",
@@ -62,6 +121,7 @@ def add_parsers(sub) -> None:
         "sensor, protocol, randomise, finger, slides_per_plate, seed)",
     )
     gn.add_argument("--out", required=True, help="the store, a folder (e.g. set.zarr)")
+    add_sensor_config(gn)
     gn.add_argument(
         "--workers",
         type=int,

@@ -27,9 +27,16 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         rate_hz=args.rate,
         force_control=args.force_control,
     )
+    sensor = args.sensor
+    if args.sensor_config is not None:
+        from ..sensors import get_sensor
+        from ..sensors.calibration import calibrated, load_calibration
+
+        cal = load_calibration(args.sensor_config)
+        sensor = calibrated(get_sensor(args.sensor or cal.sensor), cal)
     res = simulate(
         args.plate,
-        args.sensor,
+        sensor or "grid3x3",
         protocol=proto,
         fidelity=args.fidelity,
         seed=args.seed,
@@ -158,9 +165,15 @@ def add_parsers(sub) -> None:
     sm.add_argument("--plate", required=True, help="preset plate name")
     sm.add_argument(
         "--sensor",
-        default="grid3x3",
-        help="sensor: grid3x3, multilayer3x3x2, biotac19, icub60, pvdf2, or a bare layout "
-        "dense-<pitch>mm",
+        default=None,
+        help="sensor: grid3x3 (default), multilayer3x3x2, biotac19, icub60, pvdf2, or a bare "
+        "layout dense-<pitch>mm",
+    )
+    sm.add_argument(
+        "--sensor-config",
+        default=None,
+        help="a sensor calibration (.toml, from 'sim-tactile calibrate'); its sensor unless "
+        "--sensor names it",
     )
     sm.add_argument("--speed", type=float, default=0.06, help="slide speed [m/s]")
     sm.add_argument("--force", type=float, default=1.0, help="normal force [N]")

@@ -6,6 +6,7 @@ import argparse
 
 from ..tables import text_table
 from ._common import add_command, emit, log
+from .data import add_sensor_config
 
 
 def _task_options(args: argparse.Namespace) -> dict:
@@ -26,7 +27,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from ..tasks import run_task
     from ..tasks.report import Report
 
-    report = run_task(args.task, args.out, **_task_options(args))
+    report = run_task(args.task, args.out, sensor_config=args.sensor_config, **_task_options(args))
     emit(args, report, lambda: Report.from_json(report).text())
     return 0
 
@@ -61,6 +62,7 @@ def _add_task_options(p: argparse.ArgumentParser, quick_help: str) -> None:
 
 def add_parsers(sub) -> None:
     rn = add_command(sub, "run", cmd_run, "run a benchmark task's evaluation protocol and report")
+    add_sensor_config(rn)
     rn.add_argument("task", help="task id, e.g. finger7-v1, biotac20-real-v1")
     _add_task_options(rn, "the task's quick data, fewer epochs and repeats (about a minute)")
     ab = add_command(

@@ -22,6 +22,24 @@ import numpy as np
 
 from .. import _validate as v
 
+#: A parameter given once for every channel, or per channel (a tuple, in channel order).
+PerChannel = float | tuple[float, ...]
+
+
+def per_channel(name: str, value, check) -> None:
+    """Validate a :data:`PerChannel` value with ``check(name, x)`` on each entry."""
+    if isinstance(value, tuple):
+        if not value:
+            raise v.ConfigError(f"{name} = () is empty; give one value or one per channel")
+        for k, x in enumerate(value):
+            check(f"{name}[{k}]", x)
+    else:
+        check(name, value)
+
+
+def _arr(value) -> np.ndarray | float:
+    return np.asarray(value, dtype=float) if isinstance(value, tuple) else value
+
 
 @dataclass(frozen=True)
 class PiezoResistive:
@@ -44,36 +62,41 @@ class PiezoResistive:
 
 @dataclass(frozen=True)
 class Capacitive:
-    """Baseline-compensated counts: gain * F / (1 + F / F_sat), clipped to [0, full scale]."""
+    """Baseline-compensated counts: gain * F / (1 + F / F_sat), clipped to [0, full scale].
+    ``gain_counts_per_n``: one gain, or one per channel (a calibration's)."""
 
-    gain_counts_per_n: float = 300.0
+    gain_counts_per_n: PerChannel = 300.0
     f_sat_n: float = 0.5
     full_scale: float = 255.0
     units: str = "counts"
 
     def __post_init__(self) -> None:
-        for k in ("gain_counts_per_n", "f_sat_n", "full_scale"):
+        per_channel("capacitive.gain_counts_per_n", self.gain_counts_per_n, v.positive)
+        for k in ("f_sat_n", "full_scale"):
             v.positive(f"capacitive.{k}", getattr(self, k))
 
     def apply(self, load_n: np.ndarray, rate_hz: float) -> np.ndarray:
         f = np.maximum(load_n, 0.0)
-        return np.minimum(self.gain_counts_per_n * f / (1.0 + f / self.f_sat_n), self.full_scale)
+        gain = _arr(self.gain_counts_per_n)
+        return np.minimum(gain * f / (1.0 + f / self.f_sat_n), self.full_scale)
 
 
 @dataclass(frozen=True)
 class Impedance:
-    """Baseline-subtracted electrode counts, linear in the load over the electrode."""
+    """Baseline-subtracted electrode counts, linear in the load over the electrode.
+    ``gain_counts_per_n``: one gain, or one per channel (a calibration's)."""
 
-    gain_counts_per_n: float = 250.0
+    gain_counts_per_n: PerChannel = 250.0
     full_scale: float = 4095.0
     units: str = "counts"
 
     def __post_init__(self) -> None:
-        v.positive("impedance.gain_counts_per_n", self.gain_counts_per_n)
+        per_channel("impedance.gain_counts_per_n", self.gain_counts_per_n, v.positive)
         v.positive("impedance.full_scale", self.full_scale)
 
     def apply(self, load_n: np.ndarray, rate_hz: float) -> np.ndarray:
-        return np.minimum(self.gain_counts_per_n * np.maximum(load_n, 0.0), self.full_scale)
+        gain = _arr(self.gain_counts_per_n)
+        return np.minimum(gain * np.maximum(load_n, 0.0), self.full_scale)
 
 
 @dataclass(frozen=True)
@@ -108,15 +131,17 @@ class Imperfections:
     """Seeded imperfections, in output units. ``noise_std`` white Gaussian; ``quant_step``
     ADC step (0: none); ``drift_std_per_sqrt_s`` random-walk drift; ``dead_fraction`` share
     of taxels stuck at ``dead_value``; ``crosstalk`` share of each neighbour's signal (within
-    ``crosstalk_radius_m``) added to a taxel; ``offset_max`` per-taxel baseline in [0, max).
+    ``crosstalk_radius_m``) added to a taxel; ``offset_max`` per-taxel baseline in [0, max);
+    ``offset`` a fixed baseline. ``noise_std``, ``drift_std_per_sqrt_s`` and ``offset`` take
+    one value or one per channel (a calibration's).
 
     The baselines and the dead taxels belong to the sensor, not to a slide: they are drawn
     from ``unit_seed`` (which physical unit) and are the same in every recording of that unit;
     noise and drift are drawn anew for every slide from the slide's generator."""
 
-    noise_std: float = 0.0
+    noise_std: PerChannel = 0.0
     quant_step: float = 0.0
-    drift_std_per_sqrt_s: float = 0.0
+    drift_std_per_sqrt_s: PerChannel = 0.0
     dead_fraction: float = 0.0
     dead_value: float = 0.0
     crosstalk: float = 0.0
@@ -124,11 +149,13 @@ class Imperfections:
     offset_max: float = 0.0
     clip_min: float | None = None
     unit_seed: int = 0
+    offset: PerChannel = 0.0
 
     def __post_init__(self) -> None:
-        v.non_negative("noise_std", self.noise_std)
+        per_channel("noise_std", self.noise_std, v.non_negative)
         v.non_negative("quant_step", self.quant_step)
-        v.non_negative("drift_std_per_sqrt_s", self.drift_std_per_sqrt_s)
+        per_channel("drift_std_per_sqrt_s", self.drift_std_per_sqrt_s, v.non_negative)
+        per_channel("offset", self.offset, v.finite)
         v.in_range("dead_fraction", self.dead_fraction, 0.0, 1.0)
         v.in_range("crosstalk", self.crosstalk, 0.0, 0.5)
         v.non_negative("crosstalk_radius_m", self.crosstalk_radius_m, unit="m")
@@ -139,6 +166,12 @@ class Imperfections:
         self, y: np.ndarray, positions: np.ndarray, rate_hz: float, rng: np.random.Generator
     ) -> np.ndarray:
         T, N = y.shape
+        for name in ("noise_std", "drift_std_per_sqrt_s", "offset"):
+            val = getattr(self, name)
+            if isinstance(val, tuple) and len(val) != N:
+                raise v.ConfigError(
+                    f"imperfections.{name} has {len(val)} values; valid: one, or one per channel ({N})"
+                )
         y = np.array(y, dtype=float)
         if self.crosstalk > 0 and N > 1:
             d = np.linalg.norm(positions[:, None, :] - positions[None, :, :], axis=-1)
@@ -149,11 +182,15 @@ class Imperfections:
         dead = unit.random(N) < self.dead_fraction
         if self.offset_max > 0:
             y += offsets
-        if self.drift_std_per_sqrt_s > 0:
-            steps = rng.standard_normal((T, N)) * self.drift_std_per_sqrt_s / np.sqrt(rate_hz)
+        if np.any(_arr(self.offset)):
+            y += _arr(self.offset)
+        drift = _arr(self.drift_std_per_sqrt_s)
+        if np.any(drift):
+            steps = rng.standard_normal((T, N)) * drift / np.sqrt(rate_hz)
             y += np.cumsum(steps, axis=0)
-        if self.noise_std > 0:
-            y += self.noise_std * rng.standard_normal((T, N))
+        noise = _arr(self.noise_std)
+        if np.any(noise):
+            y += noise * rng.standard_normal((T, N))
         y[:, dead] = self.dead_value
         if self.quant_step > 0:
             y = np.round(y / self.quant_step) * self.quant_step

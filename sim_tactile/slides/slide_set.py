@@ -21,6 +21,7 @@ from ..hashing import derive_seed
 from ..plates import get_plate, preset_names
 from ..records import TactileDataset
 from ..sensors import Finger, Sensor, get_sensor, sensor_names
+from ..sensors.calibration import Calibration, calibrated
 from ..sim.protocol import Protocol, SlideWindow
 from .jobs import SlideJob
 from .run import run_slides
@@ -47,6 +48,7 @@ class SlideSet:
     quick_plates: the plates of the quick run (a subset of ``plates``; None: all).
     ideal: record the noise-free normal loads [N] instead of the sensor's output.
     finger: a pad that replaces the sensor's (None: the sensor's own).
+    calibration: a sensor calibration (``sim-tactile calibrate``) applied to the sensor.
     """
 
     plates: tuple[str, ...]
@@ -58,6 +60,7 @@ class SlideSet:
     ideal: bool = False
     quick_plates: tuple[str, ...] | None = None
     finger: Finger | None = None
+    calibration: Calibration | None = None
 
     def __post_init__(self) -> None:
         if len(self.plates) < 2:
@@ -67,6 +70,8 @@ class SlideSet:
                 raise ConfigError(f"plate {p!r} is not a preset; valid: {preset_names()}")
         if self.sensor not in sensor_names():
             raise ConfigError(f"sensor {self.sensor!r} is not known; valid: {sensor_names()}")
+        if self.calibration is not None:
+            calibrated(get_sensor(self.sensor), self.calibration)  # fits this sensor
         v.integer("slides", self.slides, *SLIDES_RANGE)
         v.integer("quick_slides", self.quick_slides, SLIDES_RANGE[0], self.slides)
         if self.quick_plates is not None:
@@ -81,7 +86,8 @@ class SlideSet:
         return tuple(class_name(p) for p in self.plates)
 
     def sensor_def(self) -> Sensor:
-        return get_sensor(self.sensor)
+        sensor = get_sensor(self.sensor)
+        return sensor if self.calibration is None else calibrated(sensor, self.calibration)
 
     def pad(self) -> Finger:
         """The pad the slides are made with: ``finger``, else the sensor's."""

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -245,3 +245,28 @@ def get_task(task_id: str) -> TaskSpec:
         raise UnknownNameError(
             f"task {task_id!r} is not known; valid: {', '.join(_TASKS) or '(none)'}"
         ) from None
+
+
+def with_calibration(spec: TaskSpec, cal) -> TaskSpec:
+    """``spec`` simulated with a calibrated sensor (``--sensor-config``): a simulated task
+    whose sensor is the calibration's. Its reports say so in a remark (its numbers are not
+    the released task's)."""
+    from ..slides import SlideSet
+
+    if spec.parts:
+        raise ConfigError(
+            f"--sensor-config calibrates one sensor; task {spec.id} is a suite of "
+            f"{list(spec.parts)}: run the part with that sensor"
+        )
+    if not isinstance(spec.get_data, SlideSet):
+        raise ConfigError(f"--sensor-config is for simulated tasks; {spec.id} reads recordings")
+    ss = spec.get_data
+    if ss.sensor != cal.sensor:
+        raise ConfigError(
+            f"the sensor config calibrates {cal.sensor!r}; task {spec.id} simulates {ss.sensor!r}"
+        )
+    note = (
+        f"Sensor calibrated (--sensor-config) on {cal.n_recordings} real recordings: "
+        f"{cal.source}; per-channel gains, offsets, noise and drift from the fit."
+    )
+    return replace(spec, get_data=replace(ss, calibration=cal), remarks=(*spec.remarks, note))

@@ -27,10 +27,11 @@ from ..learn.classifiers import LearnContext, get_classifier, make_classifier
 from ..learn.precomputed import sample_index
 from ..learn.protocols import EvalResult, evaluate, repeated_splits
 from ..records import TactileDataset
+from ..sensors.calibration import load_calibration
 from ..slides import SlideSet
 from ..slides.plan import task_slide_config
 from .precompute import Precomputed
-from .registry import DataRequest, Run, TaskSpec, get_task
+from .registry import DataRequest, Run, TaskSpec, get_task, with_calibration
 from .report import Report, ResultRow, compare, write_figures
 
 
@@ -181,6 +182,7 @@ def run_task(
     seed: int = 0,
     log: Callable[[str], None] | None = None,
     store: str | Path | None = None,
+    sensor_config: str | Path | None = None,
 ) -> dict:
     """Run ``task_id`` and write its report into ``out_dir``; returns the report as JSON data.
 
@@ -191,10 +193,13 @@ def run_task(
         repeats: number of splits for every classifier instead of the task's numbers.
         seed: seeds the splits and every model.
         store: read the data from this store (``sim-tactile generate``) instead.
+        sensor_config: a calibration file (``sim-tactile calibrate``) for the task's sensor.
     """
     t_start = time.perf_counter()
     log = log or stderr_log
     spec = get_task(task_id)
+    if sensor_config is not None:
+        spec = with_calibration(spec, load_calibration(sensor_config))
     seed = integer("seed", seed, 0, None)
     if repeats is not None:
         repeats = integer("repeats", repeats, 1, None)

@@ -1,0 +1,142 @@
+"""Calibrate a sensor model against real recordings of that sensor.
+
+:func:`calibrate` reads a sensor's real recordings, fits per channel what they share with
+the simulation (:mod:`~sim_tactile.calibrate.fit`), presses the simulated sensor on a flat
+plate with the recordings' typical force to learn each taxel's share of the load, and
+returns a :class:`~sim_tactile.sensors.calibration.Calibration`, which
+``sim-tactile calibrate`` writes as TOML and ``--sensor-config`` applies.
+
+Sensors with real data here:
+
+- ``biotac19``: the public BioTac slides (seed 000). The static pressure channel ``pdc`` is
+  linear in the normal force, 100 counts per newton (seed 000, section IV-D), so every
+  sample carries its own force, and the 19 electrodes are fitted against it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..datasets.real import (
+    BIOTAC_ELECTRODES,
+    BIOTAC_RATE_HZ,
+    N_MATERIALS,
+    N_SLIDES,
+    read_biotac_csv,
+)
+from ..errors import ConfigError
+from ..sensors import Sensor, get_sensor
+from ..sensors.calibration import MIN_SHARE, Calibration
+from .fit import ChannelFit, fit_channels
+
+#: BioTac static pressure (pdc) counts per newton of normal force (seed 000, section IV-D).
+BIOTAC_PDC_COUNTS_PER_N = 100.0
+#: The sensors :func:`calibrate` has a reader for.
+CALIBRATABLE = ("biotac19",)
+#: The plate the simulated sensor presses to learn each taxel's share of the force.
+SHARE_PLATE = {"biotac19": "textures20/flat"}
+
+
+def read_biotac_forces(
+    path: object, *, materials: int = N_MATERIALS, slides: int = N_SLIDES
+) -> tuple[list[np.ndarray], list[np.ndarray], str]:
+    """Every BioTac recording of the data set at ``path``, whole: the electrodes (T, 19)
+    and the normal force [N] from pdc (T,), and the data set's root."""
+    root = Path(str(path))
+    raw = root / "raw_data"
+    if not raw.is_dir():
+        raise ConfigError(f"--data {str(path)!r}: no raw_data/ folder (the BioTac CSV files)")
+    levels, forces = [], []
+    for m in range(1, materials + 1):
+        for s in range(1, slides + 1):
+            f = raw / f"mat{m}" / f"mat{m}_{s}_bio.csv"
+            if not f.is_file():
+                continue
+            with open(f, encoding="ascii") as fh:
+                n = sum(1 for _ in fh) - 1
+            x = read_biotac_csv(f, start=0, n_samples=n, channels=("pdc", *BIOTAC_ELECTRODES))
+            forces.append(x[:, 0] / BIOTAC_PDC_COUNTS_PER_N)
+            levels.append(x[:, 1:])
+    if not levels:
+        raise ConfigError(
+            f"--data {str(path)!r}: no BioTac recordings (raw_data/matX/matX_N_bio.csv)"
+        )
+    return levels, forces, str(root)
+
+
+def force_share(sensor: Sensor, plate: str, force_n: float) -> np.ndarray:
+    """Each taxel's load per newton of normal force when the simulated sensor rests on
+    ``plate`` pressed with ``force_n`` (the ideal loads, before the transducer)."""
+    from ..sim.protocol import Protocol
+    from ..sim.simulate import prepare
+
+    proto = Protocol(force_n=force_n, force_jitter=0.0, offset_jitter_m=0.0, speed_jitter=0.0)
+    pressed = prepare(plate, sensor, protocol=proto)
+    out = np.zeros(sensor.layout.n)
+    for _ in range(5):
+        pressed.runner.step(force_cmd=force_n, slide_v=0.0, taxel_out=out)
+    return out / force_n
+
+
+def from_fit(
+    sensor: Sensor, fit: ChannelFit, share: np.ndarray, n: int, source: str
+) -> Calibration:
+    """The calibration of ``sensor`` from a channel fit and the simulated load shares."""
+    notes = [
+        "crosstalk: not identifiable from these data (every electrode responds to the same "
+        "normal force); left to the sensor model",
+        f"quiet stretches: {fit.n_quiet} (force <= 0.03 N for >= 0.3 s), median {fit.stretch_s:.2f} s",
+    ]
+    cpn = np.nan_to_num(fit.counts_per_n, nan=0.0)
+    fitted = (share >= MIN_SHARE) & (cpn > 0)
+    gain = np.zeros(sensor.layout.n)
+    gain[fitted] = cpn[fitted] / share[fitted]
+    if not fitted.any():
+        raise ConfigError(
+            f"no channel of {sensor.name!r} both responds to the force in the data and carries "
+            "load in the simulated press: nothing to calibrate"
+        )
+    borrowed = np.flatnonzero(~fitted)
+    if borrowed.size:
+        gain[borrowed] = float(np.median(gain[fitted]))
+        names = [sensor.layout.names[k] for k in borrowed]
+        notes.append(
+            f"gain borrowed (median of the fitted channels) for {names}: no load in the simulated "
+            f"press (share < {MIN_SHARE}) or no positive response to the force in the data"
+        )
+    return Calibration(
+        sensor=sensor.name,
+        channels=tuple(sensor.layout.names),
+        n_recordings=n,
+        force_n=round(float(fit.force_n), 6),
+        counts_per_n=tuple(float(x) for x in cpn),
+        offset=tuple(float(x) for x in np.nan_to_num(fit.offset)),
+        noise_std=tuple(float(x) for x in fit.noise_std),
+        drift_per_s=tuple(float(x) for x in fit.drift_per_s),
+        r2=tuple(float(x) for x in np.nan_to_num(fit.r2)),
+        force_share=tuple(float(x) for x in share),
+        gain=tuple(float(x) for x in gain),
+        quant_step=fit.quant_step,
+        stretch_s=fit.stretch_s,
+        crosstalk=None,
+        source=source,
+        notes=tuple(notes),
+    )
+
+
+def calibrate(
+    sensor: str, data: object, *, materials: int = N_MATERIALS, slides: int = N_SLIDES
+) -> Calibration:
+    """Fit ``sensor``'s model to the real recordings at ``data`` (see the module)."""
+    if sensor not in CALIBRATABLE:
+        raise ConfigError(
+            f"sensor = {sensor!r} has no real-data reader; valid: {list(CALIBRATABLE)}"
+        )
+    sen = get_sensor(sensor)
+    levels, forces, root = read_biotac_forces(data, materials=materials, slides=slides)
+    fit = fit_channels(levels, forces, BIOTAC_RATE_HZ, floor=0.0)
+    share = force_share(sen, SHARE_PLATE[sensor], fit.force_n)
+    source = f"{Path(root).name}: pdc / {BIOTAC_PDC_COUNTS_PER_N:g} counts per N of normal force"
+    return from_fit(sen, fit, share, len(levels), source)

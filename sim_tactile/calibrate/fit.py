@@ -1,0 +1,186 @@
+"""Statistics that a sensor's real recordings and its simulation share, fitted per channel.
+
+Only quantities that both sides have are fitted:
+
+- **the steady level under a known force**: each channel's level against the normal force,
+  as the median level in bins of force (medians, because a channel clipped at zero or
+  shaken by the texture is still centred in a bin), and a straight line through the bins:
+  its slope is the channel's change per newton, its intercept the offset;
+- **the noise floor on quiet stretches** (no contact: force below ``quiet_n`` for at least
+  ``min_quiet_s``, without 0.1 s at either end and without the response to what force is
+  left): the standard deviation of first differences over sqrt(2), without the
+  largest half percent (spikes and jumps), as recorded (quantisation included);
+- **the drift**, taken as a random walk: its rate (the standard deviation of its change
+  over one second) from the least-squares slopes of the quiet stretches, beyond what the
+  noise alone gives a stretch of each length;
+- **the ADC step**: the smallest non-zero difference between levels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConfigError
+
+#: A channel's force bin needs this many samples for its median.
+MIN_BIN_SAMPLES = 50
+#: Bins with more than this share of samples at the channel's floor (clipped) are left out.
+MAX_CLIPPED = 0.4
+#: Time cut from each end of a quiet stretch (the contact's onset and release) [s].
+QUIET_EDGE_S = 0.1
+#: Share of the largest first differences left out of the noise estimate (spikes, jumps).
+NOISE_TRIM = 0.005
+#: The standard deviation of a Gaussian without its largest NOISE_TRIM share of absolute
+#: values is this share of the whole one's (truncated at 2.807 sigma).
+TRIM_STD_RATIO = 0.9777
+
+
+@dataclass(frozen=True)
+class ChannelFit:
+    """Per channel (arrays of shape (C,)): see :mod:`sim_tactile.sensors.calibration`."""
+
+    counts_per_n: np.ndarray
+    offset: np.ndarray
+    r2: np.ndarray
+    noise_std: np.ndarray
+    drift_per_s: np.ndarray
+    quant_step: float
+    stretch_s: float
+    n_quiet: int
+    force_n: float
+
+
+def _segments(force: np.ndarray, quiet_n: float, n_min: int) -> list[slice]:
+    q = np.concatenate([[False], force <= quiet_n, [False]])
+    edges = np.flatnonzero(np.diff(q.astype(np.int8)))
+    return [slice(a, b) for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a >= n_min]
+
+
+def quant_step(levels: list[np.ndarray]) -> float:
+    """The ADC step: the smallest non-zero difference between any two recorded levels (0 if
+    the levels are not on a grid)."""
+    vals = np.unique(np.concatenate([np.ravel(x) for x in levels]))
+    d = np.diff(vals)
+    d = d[d > 0]
+    if d.size == 0:
+        return 0.0
+    step = float(d.min())
+    on_grid = np.allclose(np.round(vals / step) * step, vals, atol=1e-6 * max(step, 1e-12))
+    return step if on_grid and step > 0 else 0.0
+
+
+def linear_response(level: np.ndarray, force: np.ndarray, floor: float | None, bin_n: float):
+    """(slope, intercept, r2) of one channel's level against the force: a line through the
+    median level in each force bin of ``bin_n`` newtons."""
+    top = np.quantile(force, 0.99)
+    edges = np.arange(0.0, top + bin_n, bin_n)
+    xs, ys, ws = [], [], []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        m = (force >= a) & (force < b)
+        k = int(m.sum())
+        if k < MIN_BIN_SAMPLES:
+            continue
+        y = level[m]
+        if floor is not None and np.mean(y <= floor) > MAX_CLIPPED:
+            continue
+        xs.append(float(np.median(force[m])))
+        ys.append(float(np.median(y)))
+        ws.append(k)
+    if len(xs) < 2:
+        return np.nan, np.nan, np.nan
+    slope, intercept = np.polyfit(xs, ys, 1, w=np.sqrt(ws))
+    pred = intercept + slope * force
+    var = np.var(level)
+    r2 = 1.0 - np.var(level - pred) / var if var > 0 else 0.0
+    return float(slope), float(intercept), float(r2)
+
+
+def _slope_var_per_noise(n: int) -> float:
+    """Variance of the least-squares slope [1/s^2, per unit noise variance] over ``n``
+    samples one second apart: 12 / (n (n^2 - 1))."""
+    return 12.0 / (n * (n * n - 1.0))
+
+
+def fit_channels(
+    levels: list[np.ndarray],
+    forces: list[np.ndarray],
+    rate_hz: float,
+    *,
+    quiet_n: float = 0.03,
+    min_quiet_s: float = 0.3,
+    bin_n: float = 0.05,
+    floor: float | None = 0.0,
+) -> ChannelFit:
+    """Fit every channel of recordings ``levels`` (each (T, C)) against their normal forces
+    ``forces`` (each (T,), newtons) sampled at ``rate_hz``. ``floor``: the level at which the
+    data are clipped (None: not clipped)."""
+    if not levels or len(levels) != len(forces):
+        raise ConfigError(
+            f"calibration needs recordings with their forces: got {len(levels)} recordings "
+            f"and {len(forces)} force traces"
+        )
+    C = levels[0].shape[1]
+    for k, (x, f) in enumerate(zip(levels, forces, strict=True)):
+        if x.ndim != 2 or x.shape[1] != C or f.shape != (x.shape[0],):
+            raise ConfigError(
+                f"recording {k}: levels {x.shape} and force {f.shape}; valid: (T, {C}) and (T,)"
+            )
+    X = np.concatenate(levels)
+    F = np.concatenate(forces)
+    fits = [linear_response(X[:, c], F, floor, bin_n) for c in range(C)]
+    slope, intercept, r2 = (np.array(v) for v in zip(*fits, strict=True))
+    step = quant_step(levels)
+    n_min = max(3, round(min_quiet_s * rate_hz))
+    edge = round(QUIET_EDGE_S * rate_hz)
+    response = np.nan_to_num(slope)
+    diffs, stretches = [], []
+    for x, f in zip(levels, forces, strict=True):
+        for s in _segments(f, quiet_n, n_min + 2 * edge):
+            # away from the contact's onset and release, and without what force is left
+            s = slice(s.start + edge, s.stop - edge)
+            seg = x[s] - np.outer(f[s], response)
+            diffs.append(np.diff(seg, axis=0))
+            stretches.append(seg)
+    if not stretches:
+        raise ConfigError(
+            f"no quiet stretch (force <= {quiet_n} N for {min_quiet_s} s) in the recordings: "
+            "the noise floor and the drift cannot be fitted"
+        )
+    D = np.concatenate(diffs)
+    noise = np.empty(C)
+    for c in range(C):  # trimmed: a quantised signal's MAD is 0 below the step; spikes
+        d = D[:, c]  # would dominate a plain standard deviation
+        keep = np.abs(d) <= np.quantile(np.abs(d), 1.0 - NOISE_TRIM)
+        noise[c] = d[keep].std() / np.sqrt(2) / TRIM_STD_RATIO
+    # drift, a random walk of rate r: a stretch's least-squares slope S has E[S^2] =
+    # noise^2 c + r^2 g, c = 12 / (n (n^2 - 1)) rate^2, g = 6 / (5 L); r^2 by weighted least
+    # squares over the stretches, weights 1 / c^2 (short stretches, whose slopes the noise
+    # dominates, count little)
+    num = np.zeros(C)
+    den = 0.0
+    for seg in stretches:
+        n = seg.shape[0]
+        t = np.arange(n) / rate_hz
+        tc = t - t.mean()
+        slope_k = tc @ (seg - seg.mean(axis=0)) / (tc @ tc)
+        c = _slope_var_per_noise(n) * rate_hz**2
+        g = 6.0 / (5.0 * n / rate_hz)
+        w = 1.0 / c**2
+        num += w * g * (slope_k**2 - noise**2 * c)
+        den += w * g * g
+    drift = np.sqrt(np.maximum(num / den, 0.0))
+    lengths = np.array([seg.shape[0] / rate_hz for seg in stretches])
+    contact = F > quiet_n
+    return ChannelFit(
+        slope,
+        intercept,
+        r2,
+        noise,
+        drift,
+        step,
+        float(np.median(lengths)),
+        len(stretches),
+        float(np.median(F[contact])) if contact.any() else float("nan"),
+    )

@@ -1,0 +1,289 @@
+"""Sensor calibration against recordings: the fit recovers known parameters, the file is
+data, and a calibrated sensor simulates with the fitted gains."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sim_tactile.calibrate import calibrate, from_fit
+from sim_tactile.calibrate.fit import fit_channels
+from sim_tactile.cli import main
+from sim_tactile.errors import ConfigError
+from sim_tactile.sensors import get_sensor
+from sim_tactile.sensors.calibration import Calibration, calibrated, load_calibration
+from sim_tactile.sensors.transducers import Imperfections
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "datasets" / "biotac_slide_20_50"
+#: The issue's bar for recovering known parameters from synthetic recordings.
+RECOVERY_RTOL = 0.05
+RATE = 100.0
+
+
+def _synthetic(seed=0, n_rec=120, C=4):
+    """Recordings of a sensor with known parameters: the force rises from rest, wanders
+    for a few seconds and returns to rest; each channel is offset + gain * force + a random
+    walk + white noise, quantised to 1 count and clipped at 0."""
+    rng = np.random.default_rng(seed)
+    gain = np.array([60.0, 12.0, 25.0, 5.0])[:C]
+    offset = np.array([6.0, 4.0, 5.0, 8.0])[:C]
+    noise = np.array([0.9, 1.5, 0.7, 1.2])[:C]
+    drift = np.array([0.3, 0.0, 0.6, 0.2])[:C]
+    levels, forces = [], []
+    for _ in range(n_rec):
+        T = int(rng.integers(500, 800))
+        t = np.arange(T) / RATE
+        on, off = rng.uniform(0.8, 1.5), rng.uniform(4.0, 5.5)
+        shape = np.clip((t - on) / 0.2, 0, 1) * np.clip((off - t) / 0.2, 0, 1)
+        f = shape * (
+            0.5 + 0.3 * np.sin(2 * np.pi * t / rng.uniform(1, 3)) + 0.05 * rng.standard_normal(T)
+        )
+        f = np.maximum(f, 0.0)
+        walk = np.cumsum(rng.standard_normal((T, C)), axis=0) * drift / np.sqrt(RATE)
+        x = offset + np.outer(f, gain) + walk + noise * rng.standard_normal((T, C))
+        levels.append(np.maximum(np.round(x), 0.0))
+        forces.append(np.round(100 * f) / 100)  # pdc: 100 counts per newton, whole counts
+    return levels, forces, dict(gain=gain, offset=offset, noise=noise, drift=drift)
+
+
+def test_the_fit_recovers_known_gains_offsets_noise_and_step():
+    levels, forces, truth = _synthetic()
+    fit = fit_channels(levels, forces, RATE, floor=0.0)
+    np.testing.assert_allclose(fit.counts_per_n, truth["gain"], rtol=RECOVERY_RTOL)
+    # the fit reports the noise as recorded (quantised): sqrt(sigma^2 + 1/12)
+    recorded = np.sqrt(truth["noise"] ** 2 + 1 / 12)
+    np.testing.assert_allclose(fit.noise_std, recorded, rtol=RECOVERY_RTOL)
+    np.testing.assert_allclose(fit.offset, truth["offset"], atol=0.5)
+    assert fit.quant_step == 1.0
+    # and the model noise undoes the quantisation
+    cal = Calibration(
+        "s",
+        ("a", "b", "c", "d"),
+        len(levels),
+        0.5,
+        tuple(fit.counts_per_n),
+        tuple(fit.offset),
+        tuple(fit.noise_std),
+        tuple(fit.drift_per_s),
+        tuple(fit.r2),
+        (0.1,) * 4,
+        (1.0,) * 4,
+        quant_step=fit.quant_step,
+        stretch_s=fit.stretch_s,
+    )
+    np.testing.assert_allclose(cal.noise_model, truth["noise"], rtol=RECOVERY_RTOL)
+
+
+def test_the_drift_of_a_random_walk_is_recovered_as_its_rate():
+    """The quiet stretches' slopes, beyond what the noise gives them, are a random walk's
+    of rate r (a slope over L seconds has variance 6 r^2 / (5 L)): the fitted rate is the
+    walk's (from about 470 quiet stretches: within 10-20% here)."""
+    levels, forces, truth = _synthetic(seed=1, n_rec=250)
+    fit = fit_channels(levels, forces, RATE, floor=0.0)
+    cal = Calibration(
+        "s",
+        ("a", "b", "c", "d"),
+        len(levels),
+        0.5,
+        tuple(fit.counts_per_n),
+        tuple(fit.offset),
+        tuple(fit.noise_std),
+        tuple(fit.drift_per_s),
+        tuple(fit.r2),
+        (0.1,) * 4,
+        (1.0,) * 4,
+        quant_step=1.0,
+        stretch_s=fit.stretch_s,
+    )
+    got = np.array(cal.drift_model)
+    for k in (0, 2, 3):
+        assert got[k] == pytest.approx(truth["drift"][k], rel=0.25), (k, got)
+    assert got[1] < 0.08  # no drift: what remains is the estimate's noise
+
+
+def test_the_fit_needs_quiet_stretches_and_matching_shapes():
+    levels, forces, _ = _synthetic(n_rec=3)
+    with pytest.raises(ConfigError, match="no quiet stretch"):
+        fit_channels([x[100:300] for x in levels], [f[100:300] + 1.0 for f in forces], RATE)
+    with pytest.raises(ConfigError, match="levels .* and force"):
+        fit_channels(levels, [f[:-1] for f in forces], RATE)
+
+
+def _cal(**kw) -> Calibration:
+    n = 19
+    base = dict(
+        sensor="biotac19",
+        channels=tuple(f"ele{k}" for k in range(1, n + 1)),
+        n_recordings=10,
+        force_n=0.4,
+        counts_per_n=(10.0,) * n,
+        offset=(1.0,) * n,
+        noise_std=(0.6,) * n,
+        drift_per_s=(0.3,) * n,
+        r2=(0.5,) * n,
+        force_share=(0.02,) * n,
+        gain=(500.0,) * n,
+        quant_step=1.0,
+        stretch_s=1.5,
+        source="test",
+    )
+    return Calibration(**(base | kw))
+
+
+def test_the_file_round_trips_and_bad_files_name_what_is_wrong(tmp_path):
+    cal = _cal(notes=("a note",))
+    path = cal.write(tmp_path / "c.toml")
+    assert load_calibration(path) == cal
+    text = path.read_text()
+    for bad, msg in [
+        (text.replace("noise_std = [0.6,", "noise_std = [-0.6,"), r"calibration.noise_std\[0\]"),
+        (text.replace("format = 1", "format = 7"), "format = 7"),
+        (text + "pickle = 1\n", "unknown key"),
+        (text.replace("gain = [500.0, ", "gain = ["), "gain has 18 values"),
+        ("sensor = [", "not valid TOML"),
+    ]:
+        p = tmp_path / "bad.toml"
+        p.write_text(bad)
+        with pytest.raises(ConfigError, match=msg):
+            load_calibration(p)
+    with pytest.raises(ConfigError, match="ending in .toml"):
+        cal.write(tmp_path / "c.txt")
+    with pytest.raises(ConfigError, match="does not exist"):
+        load_calibration(tmp_path / "none.toml")
+
+
+def test_a_calibrated_sensor_carries_the_fitted_gains_and_noise():
+    sen = calibrated(get_sensor("biotac19"), _cal(gain=tuple(float(g) for g in range(100, 119))))
+    assert sen.transducer.gain_counts_per_n[3] == 103.0
+    assert sen.imperfections.quant_step == 1.0
+    assert sen.imperfections.noise_std[0] == pytest.approx(np.sqrt(0.36 - 1 / 12))
+    loads = np.full((50, 19), 0.01)
+    out = sen.transduce(loads, 100.0, np.random.default_rng(0))
+    # gain * load + offset, give or take the noise
+    np.testing.assert_allclose(out.mean(axis=0), np.arange(100, 119) * 0.01 + 1.0, atol=0.5)
+    with pytest.raises(ConfigError, match="cannot calibrate 'icub60'"):
+        calibrated(get_sensor("icub60"), _cal())
+    with pytest.raises(ConfigError, match="PiezoResistive transducer"):
+        calibrated(
+            get_sensor("grid3x3"),
+            _cal(
+                sensor="grid3x3",
+                channels=tuple("abcdefghi"),
+                **{
+                    k: (1.0,) * 9
+                    for k in (
+                        "counts_per_n",
+                        "offset",
+                        "noise_std",
+                        "drift_per_s",
+                        "r2",
+                        "force_share",
+                        "gain",
+                    )
+                },
+            ),
+        )
+    with pytest.raises(ConfigError, match="imperfections.noise_std has 2 values"):
+        Imperfections(noise_std=(1.0, 2.0)).apply(
+            np.zeros((5, 3)), np.zeros((3, 3)), 100.0, np.random.default_rng(0)
+        )
+
+
+def test_from_fit_borrows_the_gain_of_channels_the_press_does_not_load():
+    levels, forces, _ = _synthetic(n_rec=40)
+    fit = fit_channels(levels, forces, RATE, floor=0.0)
+    sen = replace(get_sensor("biotac19"))
+    # four fitted channels stand in for the first four electrodes; the rest are unloaded
+    fit = replace(
+        fit,
+        **{
+            k: np.concatenate([getattr(fit, k), np.zeros(15)])
+            for k in ("counts_per_n", "offset", "r2", "noise_std", "drift_per_s")
+        },
+    )
+    share = np.concatenate([[0.1, 0.2, 0.0, 0.05], np.zeros(15)])
+    cal = from_fit(sen, fit, share, 40, "synthetic")
+    assert cal.gain[0] == pytest.approx(fit.counts_per_n[0] / 0.1)
+    assert cal.gain[2] == pytest.approx(np.median([cal.gain[0], cal.gain[1], cal.gain[3]]))
+    assert "ele3" in cal.notes[-1]
+
+
+@pytest.mark.skipif(not DATA.is_dir(), reason=f"the real data set is not at {DATA}")
+def test_calibrate_biotac_on_the_real_recordings(tmp_path):
+    """On the public BioTac slides (pdc: 100 counts per newton): the electrodes 1 and 11 that
+    the force moves most, a one-count ADC, a noise floor under two counts; the CLI writes the
+    file and prints the fit's keys, and simulate takes the file."""
+    out = tmp_path / "biotac19.toml"
+    assert main(["calibrate", "biotac19", "--data", str(DATA), "--out", str(out), "--json"]) == 0
+    cal = load_calibration(out)
+    order = np.argsort(cal.counts_per_n)[::-1]
+    assert {cal.channels[order[0]], cal.channels[order[1]]} == {"ele1", "ele11"}
+    assert min(cal.counts_per_n[0], cal.counts_per_n[10]) > 40
+    assert cal.quant_step == 1.0 and all(0.2 < s < 2.0 for s in cal.noise_std)
+    assert cal.n_recordings == 1000
+    rec = tmp_path / "r.npz"
+    args = [
+        "simulate",
+        "--plate",
+        "textures20/grating-3.0mm",
+        "--sensor-config",
+        str(out),
+        "--speed",
+        "0.025",
+        "--force",
+        "0.5",
+        "--duration",
+        "1.0",
+        "--out",
+        str(rec),
+    ]
+    assert main(args) == 0
+    data = np.load(rec, allow_pickle=False)["data"]
+    assert data.max() > 10  # counts of the calibrated gains, not of the default
+
+
+def test_calibrate_json_has_the_contract_keys(tmp_path, capsys, monkeypatch):
+    import sim_tactile.calibrate as cb
+
+    monkeypatch.setattr(cb, "calibrate", lambda sensor, data: _cal())
+    out = tmp_path / "c.toml"
+    assert (
+        main(["calibrate", "biotac19", "--data", str(tmp_path), "--out", str(out), "--json"]) == 0
+    )
+    doc = json.loads(capsys.readouterr().out)
+    for k in (
+        "sensor",
+        "channels",
+        "n_recordings",
+        "counts_per_n",
+        "noise_std",
+        "offset",
+        "drift_per_s",
+        "out",
+    ):
+        assert k in doc
+    assert len(doc["counts_per_n"]) == len(doc["channels"]) == 19 and doc["out"] == str(out)
+    with pytest.raises(ConfigError, match="no real-data reader"):
+        calibrate("grid3x3", tmp_path)
+
+
+def test_a_task_runs_with_a_sensor_config_and_its_slides_are_keyed_by_it(tmp_path):
+    from sim_tactile.tasks import get_task
+    from sim_tactile.tasks.registry import with_calibration
+
+    spec = get_task("textures20-biotac19-v1")
+    cal = _cal()
+    cspec = with_calibration(spec, cal)
+    assert cspec.get_data.sensor_def().transducer.gain_counts_per_n == cal.gain
+    assert cspec.get_data.describe() != spec.get_data.describe()
+    assert "calibrated" in cspec.remarks[-1]
+    with pytest.raises(
+        ConfigError, match="calibrates 'biotac19'; task finger7-v1 simulates 'grid3x3'"
+    ):
+        with_calibration(get_task("finger7-v1"), cal)
+    with pytest.raises(ConfigError, match="suite"):
+        with_calibration(get_task("textures20-v1"), cal)
