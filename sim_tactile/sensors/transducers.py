@@ -199,4 +199,7 @@ class Imperfections:
         return y
 
     def to_json(self) -> dict:
-        return asdict(self)
+        d = asdict(self)
+        if d["offset"] == 0.0:  # a fixed baseline came later: without one, the definition
+            del d["offset"]  # (and every key made from it) stays as it was
+        return d
