@@ -193,6 +193,18 @@ def test_a_calibrated_sensor_carries_the_fitted_gains_and_noise():
         )
 
 
+def test_the_shipped_biotac_calibration_loads_by_name():
+    from sim_tactile.sensors.calibration import calibration_names
+
+    assert "biotac19" in calibration_names()
+    cal = load_calibration("biotac19")
+    assert cal.n_recordings == 1000 and "pdc" in cal.source
+    sen = calibrated(get_sensor("biotac19"), cal)
+    assert len(sen.transducer.gain_counts_per_n) == 19
+    with pytest.raises(ConfigError, match="shipped calibration"):
+        load_calibration("icub60")
+
+
 def test_from_fit_borrows_the_gain_of_channels_the_press_does_not_load():
     levels, forces, _ = _synthetic(n_rec=40)
     fit = fit_channels(levels, forces, RATE, floor=0.0)
@@ -225,6 +237,11 @@ def test_calibrate_biotac_on_the_real_recordings(tmp_path):
     assert min(cal.counts_per_n[0], cal.counts_per_n[10]) > 40
     assert cal.quant_step == 1.0 and all(0.2 < s < 2.0 for s in cal.noise_std)
     assert cal.n_recordings == 1000
+    # the calibration that ships is this fit (regenerate it with the same command if not)
+    shipped = load_calibration("biotac19")
+    np.testing.assert_allclose(shipped.counts_per_n, cal.counts_per_n, rtol=1e-9)
+    np.testing.assert_allclose(shipped.gain, cal.gain, rtol=1e-6)
+    np.testing.assert_allclose(shipped.noise_std, cal.noise_std, rtol=1e-9)
     rec = tmp_path / "r.npz"
     args = [
         "simulate",

@@ -37,7 +37,12 @@ def test_every_stored_row_is_the_measurement_of_todays_preset():
         ss, sensor, _ = _scene(r["task"])
         assert r["sensor"] == ss.sensor and r["plate"] in ss.plates, r
         key = me.grid_key(
-            get_plate(r["plate"]), sensor.layout, sensor.finger, r["level"], r["pitch_m"], r["pitch_y_m"]
+            get_plate(r["plate"]),
+            sensor.layout,
+            sensor.finger,
+            r["level"],
+            r["pitch_m"],
+            r["pitch_y_m"],
         )
         assert key == r["key"], f"stale row: {r['task']} {r['plate']} at {r['pitch_m']}"
         assert 0 <= r["error_vs_physics"] and 0 <= r["largest_taxel"] and r["commit"], r
@@ -70,19 +75,27 @@ def test_ridges_4_says_its_error_and_a_changed_scene_finds_none():
     assert other.expected_error is None and "not measured" in other.reason
     forced = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto", pitch_m=0.3e-3)
     assert forced.expected_error is None
-    heavy = choose_fidelity(plate, sensor.layout, sensor.finger, replace(proto, force_n=3.0), "auto")
+    heavy = choose_fidelity(
+        plate, sensor.layout, sensor.finger, replace(proto, force_n=3.0), "auto"
+    )
     assert heavy.expected_error is None  # 3 N against the measured 1 N: beyond FORCE_SPAN
-    light = choose_fidelity(plate, sensor.layout, sensor.finger, replace(proto, force_n=1.1), "auto")
+    light = choose_fidelity(
+        plate, sensor.layout, sensor.finger, replace(proto, force_n=1.1), "auto"
+    )
     assert light.expected_error == fid.expected_error  # a drawn force near the measured one
 
 
 def test_auto_warns_where_its_grid_is_far_from_the_physics_and_names_finer_grids():
     ss, sensor, proto = _scene("finger7-v1")
-    fid = choose_fidelity(get_plate("finger7/bumps-4x4"), sensor.layout, sensor.finger, proto, "auto")
+    fid = choose_fidelity(
+        get_plate("finger7/bumps-4x4"), sensor.layout, sensor.finger, proto, "auto"
+    )
     assert fid.expected_error > me.WARN_ABOVE
     warn = [w for w in fid.warnings if "from the physics" in w]
     assert len(warn) == 1 and "0.5 mm:" in warn[0] and "node cap" in warn[0], fid.warnings
-    flat = choose_fidelity(get_plate("finger7/ridges-2"), sensor.layout, sensor.finger, proto, "auto")
+    flat = choose_fidelity(
+        get_plate("finger7/ridges-2"), sensor.layout, sensor.finger, proto, "auto"
+    )
     assert flat.expected_error < me.WARN_ABOVE
     assert not [w for w in flat.warnings if "from the physics" in w]
 
@@ -98,8 +111,12 @@ def test_a_stored_row_is_what_the_benchmark_measures_today():
     fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
     ref = physics.reference(plate, sensor, proto.force_n, 4)
     norm, worst = ref.error(
-        physics.configuration_loads(ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m)
+        physics.configuration_loads(
+            ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m
+        )
     )
-    m = me.expected_error(plate, sensor.layout, sensor.finger, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m)
+    m = me.expected_error(
+        plate, sensor.layout, sensor.finger, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m
+    )
     assert norm == pytest.approx(m.error, abs=REMEASURE_ATOL)
     assert worst == pytest.approx(m.largest_taxel, abs=REMEASURE_ATOL)

@@ -63,6 +63,29 @@ def cmd_bench_stability(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench_sim_real(args: argparse.Namespace) -> int:
+    """Simulated against real streams of the sensors with real data."""
+    from ..bench.sim_real import SENSORS, run_sim_real, table
+
+    sensors = names_arg(args.sensors, "--sensors", list(SENSORS)) or list(SENSORS)
+    slides = {}
+    if args.slides is not None:
+        n = v.integer("--slides", args.slides, 2, 50)
+        slides = {s: n for s in sensors}
+    doc = finite_json(
+        run_sim_real(
+            args.data,
+            args.out,
+            sensors=tuple(sensors),
+            slides=slides,
+            sensor_config=args.sensor_config,
+            log=log,
+        )
+    )
+    emit(args, doc, lambda: table(doc) + "\n".join(f"figure: {f}" for f in doc["figures"]))
+    return 0
+
+
 def add_parsers(sub) -> None:
     bn = sub.add_parser(
         "bench",
@@ -105,6 +128,30 @@ def add_parsers(sub) -> None:
         action="store_true",
         help="leave out the error against physics (static presses against Tamaas's half-space, "
         "a test extra; about 10 s per scene and offset)",
+    )
+    sr = add_command(
+        bsub,
+        "sim-real",
+        cmd_bench_sim_real,
+        "simulated against real streams of each sensor with real data: the distributions of "
+        "mean, maximum, temporal spread, noise, spectral slope, channel correlation and class "
+        "separability; table and figure",
+    )
+    sr.add_argument("--data", required=True, help="folder of the real data set")
+    sr.add_argument("--out", required=True, help="output directory (the figure)")
+    sr.add_argument(
+        "--sensors", default=None, help="comma-separated: biotac19, icub60 (default: both)"
+    )
+    sr.add_argument(
+        "--slides",
+        type=int,
+        default=None,
+        help="slides per class, real and simulated (default: BioTac 5, iCub 2)",
+    )
+    sr.add_argument(
+        "--sensor-config",
+        default=None,
+        help="a calibration (.toml) for one of the sensors: a column of its own",
     )
     st = add_command(
         bsub,

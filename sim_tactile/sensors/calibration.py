@@ -28,6 +28,14 @@ from ..errors import ConfigError
 
 #: The file format's version (a reader refuses others).
 FORMAT = 1
+#: Calibrations that ship with the package, fitted on public data sets: ``--sensor-config
+#: NAME`` takes one by its sensor's name.
+SHIPPED = Path(__file__).with_name("calibrations")
+
+
+def calibration_names() -> list[str]:
+    """The shipped calibrations (each named by its sensor)."""
+    return sorted(p.stem for p in SHIPPED.glob("*.toml"))
 #: Smallest simulated load share for which a channel's gain is fitted rather than borrowed.
 MIN_SHARE = 1e-3
 
@@ -146,10 +154,16 @@ def _toml(x) -> str:
 
 
 def load_calibration(path: Path | str) -> Calibration:
-    """Read a calibration file as data (TOML), check every value, and name what is wrong."""
+    """Read a calibration file as data (TOML), check every value, and name what is wrong.
+    ``path`` may also name a shipped calibration (:func:`calibration_names`)."""
+    if str(path) in calibration_names():
+        path = SHIPPED / f"{path}.toml"
     path = Path(path)
     if not path.is_file():
-        raise ConfigError(f"sensor config {str(path)!r} does not exist")
+        raise ConfigError(
+            f"sensor config {str(path)!r} does not exist; valid: a .toml file or a shipped "
+            f"calibration {calibration_names()}"
+        )
     try:
         d = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
