@@ -253,3 +253,34 @@ def test_sliding_tractions_load_each_taxel_from_its_nearer_rim_and_leave_the_for
     assert np.all(change[ahead] > 0.015) and np.all(change[ahead] < 0.05)
     np.testing.assert_allclose(change[behind], -change[ahead], atol=1e-3)
     np.testing.assert_allclose(change[middle], 0.0, atol=1e-3)
+
+
+#: The commanded speed is held after the ramp (a robot arm holds its speed).
+SPEED_RTOL = 1e-3
+
+
+@pytest.mark.parametrize("force_control", ["quasi-static", "dynamic"])
+def test_the_pad_holds_its_commanded_speed_and_the_period_is_pitch_over_speed(force_control, cache):
+    """finger7/ridges-4 at 45 mm/s, jitter off: the pad's speed over the texture is the
+    command within 0.1% (the skin's drag, mu N, once slowed it behind the velocity servo by
+    0.9%), and the ridge period is pitch / commanded speed within 0.2%."""
+    from sim_tactile.bench.closed_forms import probe_taxel, pulse_period
+    from sim_tactile.plates import get_plate
+    from sim_tactile.sensors import get_sensor
+
+    v = 0.045
+    proto = Protocol(
+        speed_m_s=v,
+        speed_jitter=0.0,
+        force_jitter=0.0,
+        offset_jitter_m=0.0,
+        force_control=force_control,
+    )
+    rec = simulate("finger7/ridges-4", "grid3x3", protocol=proto, ideal=True, cache=cache).recording
+    plate, sensor = get_plate("finger7/ridges-4"), get_sensor("grid3x3")
+    m = pulse_period(
+        rec, probe_taxel(sensor.layout), plate, RIDGE_PITCH_M, v, sensor.finger.patch_m[0]
+    )
+    assert m["pad_speed_m_s"] == pytest.approx(v, rel=SPEED_RTOL)
+    assert m["period_s"] == pytest.approx(RIDGE_PITCH_M / v, rel=2e-3)
+    assert rec.meta["mean_drag_n"] > 0.5  # the drag is still measured (mu 0.8 x 1 N)

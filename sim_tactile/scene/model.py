@@ -34,8 +34,8 @@ from .tractions import shear_subsurface_weights
 _T = mujoco.mjtGeom
 #: Collision bit of the skin nodes (plates keep bit 1 for other uses).
 NODE_BIT = 2
-#: Velocity actuator gain of the slide [N s/m]: stiff enough that friction drag changes the
-#: speed by well under 1%.
+#: Velocity actuator gain of the slide [N s/m] (the arm reacts the skin's drag: the runner
+#: records it but does not apply it to the slide joint, so the pad holds its command).
 SLIDE_KV = 2000.0
 #: Radius of a skin node's probe sphere, as a fraction of the node pitch: the sphere rounds a
 #: sharp edge over about this distance, so a node half over an edge feels part of it.
