@@ -50,6 +50,22 @@ def _synthetic(seed=0, n_rec=120, C=4):
     return levels, forces, dict(gain=gain, offset=offset, noise=noise, drift=drift)
 
 
+def _of_fit(fit, n: int) -> Calibration:
+    """A calibration of four channels from a fit (its shares and gains placeholders)."""
+    lists = ("counts_per_n", "offset", "noise_std", "drift_per_s", "r2")
+    return Calibration(
+        "s",
+        ("a", "b", "c", "d"),
+        n,
+        0.5,
+        *(tuple(getattr(fit, k)) for k in lists),
+        (0.1,) * 4,
+        (1.0,) * 4,
+        quant_step=fit.quant_step,
+        stretch_s=fit.stretch_s,
+    )
+
+
 def test_the_fit_recovers_known_gains_offsets_noise_and_step():
     levels, forces, truth = _synthetic()
     fit = fit_channels(levels, forces, RATE, floor=0.0)
@@ -60,21 +76,7 @@ def test_the_fit_recovers_known_gains_offsets_noise_and_step():
     np.testing.assert_allclose(fit.offset, truth["offset"], atol=0.5)
     assert fit.quant_step == 1.0
     # and the model noise undoes the quantisation
-    cal = Calibration(
-        "s",
-        ("a", "b", "c", "d"),
-        len(levels),
-        0.5,
-        tuple(fit.counts_per_n),
-        tuple(fit.offset),
-        tuple(fit.noise_std),
-        tuple(fit.drift_per_s),
-        tuple(fit.r2),
-        (0.1,) * 4,
-        (1.0,) * 4,
-        quant_step=fit.quant_step,
-        stretch_s=fit.stretch_s,
-    )
+    cal = _of_fit(fit, len(levels))
     np.testing.assert_allclose(cal.noise_model, truth["noise"], rtol=RECOVERY_RTOL)
 
 
@@ -84,21 +86,7 @@ def test_the_drift_of_a_random_walk_is_recovered_as_its_rate():
     walk's (from about 470 quiet stretches: within 10-20% here)."""
     levels, forces, truth = _synthetic(seed=1, n_rec=250)
     fit = fit_channels(levels, forces, RATE, floor=0.0)
-    cal = Calibration(
-        "s",
-        ("a", "b", "c", "d"),
-        len(levels),
-        0.5,
-        tuple(fit.counts_per_n),
-        tuple(fit.offset),
-        tuple(fit.noise_std),
-        tuple(fit.drift_per_s),
-        tuple(fit.r2),
-        (0.1,) * 4,
-        (1.0,) * 4,
-        quant_step=1.0,
-        stretch_s=fit.stretch_s,
-    )
+    cal = _of_fit(fit, len(levels))
     got = np.array(cal.drift_model)
     for k in (0, 2, 3):
         assert got[k] == pytest.approx(truth["drift"][k], rel=0.25), (k, got)
@@ -224,6 +212,7 @@ def test_from_fit_borrows_the_gain_of_channels_the_press_does_not_load():
     assert "ele3" in cal.notes[-1]
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not DATA.is_dir(), reason=f"the real data set is not at {DATA}")
 def test_calibrate_biotac_on_the_real_recordings(tmp_path):
     """On the public BioTac slides (pdc: 100 counts per newton): the electrodes 1 and 11 that
