@@ -36,6 +36,8 @@ SHIPPED = Path(__file__).with_name("calibrations")
 def calibration_names() -> list[str]:
     """The shipped calibrations (each named by its sensor)."""
     return sorted(p.stem for p in SHIPPED.glob("*.toml"))
+
+
 #: Smallest simulated load share for which a channel's gain is fitted rather than borrowed.
 MIN_SHARE = 1e-3
 
