@@ -321,7 +321,13 @@ def generate(
     finally:
         runner.close(cancel=True)
         _record_run(root, run, backend, runner.workers, address, t_start)
-    n_workers = runner.workers
+    return _summary(
+        out, total, resumed, backend, workers, runner.workers, plans, root, run, t_start
+    )
+
+
+def _summary(out, total, resumed, backend, workers, n_workers, plans, root, run, t_start) -> dict:
+    """What :func:`generate` returns."""
     wall = time.perf_counter() - t_start
     return {
         "out": str(out),

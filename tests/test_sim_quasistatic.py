@@ -68,7 +68,10 @@ def _peak_spread(rec, v: float) -> float:
     return float(np.ptp(peaks) / np.mean(peaks))
 
 
-@pytest.mark.parametrize("v", [0.06, 0.12])
+# Speeds at which the ridge period (9 mm) is a whole number of samples at the grid's 100 Hz:
+# at 0.12 m/s it is 7.5 samples, and the sampled peaks alternate between two phases
+# (0.088 and 0.095) however steady the contact is.
+@pytest.mark.parametrize("v", [0.06, 0.09])
 def test_the_force_is_held_exactly_and_the_pulses_repeat(v, cache):
     res = _ridges(v, cache)
     rec = res.recording

@@ -159,6 +159,11 @@ def cmd_press(args: argparse.Namespace) -> int:
 
 
 def add_parsers(sub) -> None:
+    _add_simulate(sub)
+    _add_press(sub)
+
+
+def _add_simulate(sub) -> None:
     sm = add_command(
         sub, "simulate", cmd_simulate, "press a finger on a plate, slide it, record the taxels"
     )
@@ -197,6 +202,8 @@ def add_parsers(sub) -> None:
     sm.add_argument("--ideal", action="store_true", help="record the noise-free normal load [N]")
     sm.add_argument("--out", required=True, help="output .npz")
 
+
+def _add_press(sub) -> None:
     pr = add_command(
         sub, "press", cmd_press, "static indentation of a pad on a plate, read by a dense grid"
     )
