@@ -2,6 +2,8 @@
 
 - :func:`compliance_matrix`: surface deflection at node i per unit pressure on the square
   patch of node j (Love 1929; Johnson, *Contact Mechanics*, eq. 3.25). ``u = C @ p``.
+- :func:`compliance_table`: the same on a lattice of nodes, as a function of the offset
+  (the kernel the spectral contact solve convolves with).
 - :func:`subsurface_weights`: the share of a node's load that reaches a taxel of given size
   at depth d under the surface: Boussinesq's vertical stress of the node's load, spread
   uniformly over the node's patch, integrated over the taxel's rectangle (Holl's corner
@@ -46,6 +48,18 @@ def compliance_matrix(
     d = xy[:, None, :] - xy[None, :, :]
     hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
     return rect_integral(d[..., 0], d[..., 1], hx, hy) / (np.pi * e_star_pa)
+
+
+def compliance_table(
+    nx: int, ny: int, pitch_m: float, e_star_pa: float, pitch_y_m: float | None = None
+) -> np.ndarray:
+    """(ny, nx) surface compliance [m/Pa] between node patches ``i`` pitches apart along x and
+    ``j`` along y (entry ``[j, i]``), on a half-space of plane-strain modulus ``E*``: the
+    kernel of :func:`compliance_matrix` on a lattice, which depends on the offset alone
+    (and is even in each axis)."""
+    qy = pitch_y_m or pitch_m
+    X, Y = np.meshgrid(np.arange(nx) * pitch_m, np.arange(ny) * qy, indexing="xy")
+    return rect_integral(X, Y, pitch_m / 2, qy / 2) / (np.pi * e_star_pa)
 
 
 def _corner(X: np.ndarray, Y: np.ndarray, z: float) -> np.ndarray:

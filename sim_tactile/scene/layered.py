@@ -35,6 +35,7 @@ __all__ = [
     "Stack",
     "layer_response",
     "layered_compliance_matrix",
+    "layered_compliance_table",
     "layered_subsurface_weights",
     "surface_remainder",
 ]
@@ -296,6 +297,27 @@ def layered_compliance_matrix(
         d = xy[:, None, :] - xy[None, :, :]
         C += area * patch_mean(d[..., 0], d[..., 1])
     return 0.5 * (C + C.T)  # symmetric by reciprocity; the quadrature is symmetric to rounding
+
+
+def layered_compliance_table(
+    nx: int, ny: int, pitch_m: float, stack: Stack, pitch_y_m: float | None = None
+) -> np.ndarray:
+    """(ny, nx) surface compliance [m/Pa] between node patches ``i`` pitches apart along x
+    and ``j`` along y on ``stack``: the kernel of :func:`layered_compliance_matrix` on an
+    ``nx`` by ``ny`` lattice (the matrix's entries, as a function of the offset)."""
+    from .elastic import compliance_table
+
+    hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
+    r_max = float(np.hypot(nx * 2 * hx, ny * 2 * hy))  # as the matrix takes it
+    rem = surface_remainder(stack, r_max)
+    tx, wx, ty, wy = patch_quadrature(stack, hx, hy)
+    gy, gx = np.meshgrid(np.arange(ny) * 2 * hy, np.arange(nx) * 2 * hx, indexing="ij")
+    table = np.zeros(gx.shape)
+    for ox, wxi in zip(tx, wx, strict=True):
+        for oy, wyi in zip(ty, wy, strict=True):
+            table += wxi * wyi * rem(np.hypot(gx - ox, gy - oy))
+    T = compliance_table(nx, ny, pitch_m, stack.top_e_star_pa, pitch_y_m)
+    return T + 4 * hx * hy * table
 
 
 #: the FFT grid of the taxel weights: its spacing resolves the remainder's transform out to

@@ -37,6 +37,13 @@ class SkinGrid:
         return (self.pitch_m, self.pitch_y_m or self.pitch_m)
 
     @property
+    def lattice(self) -> tuple[int, int]:
+        """``(nx, ny)``: the nodes per row along x and the rows along y (node ``iy * nx +
+        ix``)."""
+        ny = int(np.count_nonzero(self.xy[:, 0] == self.xy[0, 0]))
+        return self.n // ny, ny
+
+    @property
     def area_m2(self) -> float:
         px, py = self.pitch_xy
         return px * py

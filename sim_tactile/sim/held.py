@@ -66,7 +66,8 @@ class HeldStep:
         self.p = np.zeros(W.shape[1])  # the pressures [Pa] of the last step
 
     def describe(self) -> str:
-        return "full problem"
+        spectral = getattr(self.skin, "solver", None).__class__.__name__ == "Spectral"
+        return f"full problem, {self.skin.describe()}" if spectral else "full problem"
 
     def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
         """Move the pad (``qpos[jz]``) to the height where the node pressures sum to ``total``

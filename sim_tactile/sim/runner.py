@@ -26,7 +26,7 @@ from ..sensors.pad import Finger
 from .collide import make_collider
 from .fidelity import MAX_OMEGA_DT, Fidelity
 from .held import CompiledHeldStep, HeldStep
-from .skin import SkinModel
+from .skin import SkinModel, SpectralSkin
 
 #: Velocity of the friction regularisation [m/s]: Coulomb drag mu*N*tanh(v / V_STICK).
 V_STICK = 1e-3
@@ -43,11 +43,15 @@ class StepOptions:
     compiled_hold: the held step as one compiled call where the compiled collider serves
         (else the plain loop, the reference);
     reduce_skin: the compiled held step on the smallest exact problem (columns, mirror half).
+    skin_solver: the coupled skin's contact solve, ``auto`` (spectral above
+        :data:`~.skin.DENSE_MAX_NODES` nodes), ``dense`` or ``spectral``
+        (:func:`~.skin.make_skin`).
     """
 
     primitive_collider: bool = True
     compiled_hold: bool = True
     reduce_skin: bool = True
+    skin_solver: str = "auto"
 
 
 class Runner:
@@ -80,7 +84,8 @@ class Runner:
         self._area = scene.grid.area_m2
         self.hold = None
         if quasi_static:
-            if self.collider.compiled and options.compiled_hold:
+            dense = not isinstance(skin, SpectralSkin)  # the compiled step is dense
+            if self.collider.compiled and options.compiled_hold and dense:
                 self.hold = CompiledHeldStep(
                     self.collider, skin, scene.W, self._area, self._margin, options.reduce_skin
                 )

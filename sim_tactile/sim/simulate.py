@@ -262,7 +262,13 @@ def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
         node_margin_m=node_margin_m(plate) if quasi_static else 0.0,
         cache=cache,
     )
-    skin = make_skin(fid.level, grid, finger, winkler_k_pa_per_m=fid.winkler_k_pa_per_m)
+    skin = make_skin(
+        fid.level,
+        grid,
+        finger,
+        winkler_k_pa_per_m=fid.winkler_k_pa_per_m,
+        solver=options.skin_solver,
+    )
     return Runner(
         scene,
         skin,

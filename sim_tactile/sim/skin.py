@@ -20,6 +20,11 @@ of its nodes (m, ``-inf`` for nodes out of reach):
   (:func:`~sim_tactile.scene.layered.layered_compliance_matrix`); any symmetric positive
   definite compliance of the node grid takes the same path.
 
+- :class:`SpectralSkin` (L1, L2 on many nodes): the same skin, its compliance applied as a
+  convolution by FFT and the contact solved by constrained conjugate gradients
+  (:class:`~sim_tactile.sim.contact.spectral.Spectral`): no dense matrix, cost ``N log N``
+  per iteration. :func:`make_skin` takes it above :data:`DENSE_MAX_NODES` nodes.
+
 When the finger's skin carries its sliding friction (``Finger.skin_tractions``) and the skin
 is not an incompressible half-space, the tractions ``q = mu p`` against the slide deflect
 the surface normally too (:func:`~sim_tactile.scene.layered.shear_normal_compliance`): the
@@ -31,12 +36,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..scene.elastic import compliance_matrix
-from ..scene.layered import Stack, layered_compliance_matrix
+from ..errors import ConfigError
+from ..scene.elastic import compliance_matrix, compliance_table
+from ..scene.layered import Stack, layered_compliance_matrix, layered_compliance_table
 from ..scene.nodes import SkinGrid
 from ..scene.tractions import shear_normal_compliance
 from ..sensors.pad import Finger
 from . import contact
+from .contact.spectral import Spectral
+
+#: Most nodes the dense solve takes; above it the skin is solved spectrally. The dense
+#: solve's set updates, and its compiled held step with the column and mirror reductions,
+#: are the faster below (measured: benchmarks/bench_spectral.py); its matrices grow as N^2
+#: (two of 8 N^2 bytes: 290 MB at 4225 nodes) and its factorisation as N^3.
+DENSE_MAX_NODES = 1200
 
 
 class WinklerSkin:
@@ -147,7 +160,63 @@ class CoupledSkin:
         return self.what or f"coupled skin of {self.C.shape[0]} nodes"
 
 
-SkinModel = WinklerSkin | CoupledSkin
+class SpectralSkin:
+    """A translation-invariant skin (half-space or stack of layers) on a node lattice, its
+    contact solved spectrally (:class:`~sim_tactile.sim.contact.spectral.Spectral`). Same
+    interface and answers as :class:`CoupledSkin` (tested), without its dense matrices."""
+
+    coupled = True
+    symmetric = True
+
+    def __init__(self, table: np.ndarray, what: str = "") -> None:
+        self.solver = Spectral(table)
+        self.what = what
+
+    @classmethod
+    def of(cls, grid: SkinGrid, finger: Finger) -> SpectralSkin:
+        """The finger's skin (its stack, else the half-space) on ``grid``'s lattice."""
+        nx, ny = grid.lattice
+        st = finger.stack
+        if st is None:
+            table = compliance_table(nx, ny, grid.pitch_m, finger.e_star_pa, grid.pitch_y_m)
+            what = f"elastic half-space, E* {finger.e_star_pa:.4g} Pa"
+        else:
+            table = layered_compliance_table(nx, ny, grid.pitch_m, st, grid.pitch_y_m)
+            layers = " / ".join(
+                f"{la.thickness_m * 1e3:g} mm E {la.young_pa:.3g} Pa nu {la.poisson:g}"
+                for la in st.layers
+            )
+            what = f"layered skin: {layers} on a {st.backing} backing"
+        return cls(table, f"{what}; spectral solve on {nx} x {ny} nodes")
+
+    def solve(self, pen_m: np.ndarray) -> np.ndarray:
+        p, _ = self.solver.solve(pen_m)
+        return p
+
+    def solve_force(self, pen_m: np.ndarray, total_pa: float) -> tuple[np.ndarray, float]:
+        return self.solver.solve_force(pen_m, total_pa)
+
+    def stiffness(self, p: np.ndarray, area_m2: float) -> float:
+        """``area * 1' inv(C_SS) 1`` on the contact set of ``p`` [N/m]."""
+        return area_m2 * self.solver.stiffness_per_area(p)
+
+    def describe(self) -> str:
+        return self.what
+
+
+#: The contact solvers of a coupled skin.
+SOLVERS = ("auto", "dense", "spectral")
+
+SkinModel = WinklerSkin | CoupledSkin | SpectralSkin
+
+
+def _friction_coupled(finger: Finger) -> bool:
+    """Whether the finger's sliding friction enters its normal problem (C not symmetric)."""
+    return bool(
+        finger.skin_tractions
+        and finger.friction > 0
+        and (finger.stack is not None or finger.poisson < 0.5)
+    )
 
 
 def make_skin(
@@ -158,13 +227,28 @@ def make_skin(
     winkler_k_pa_per_m: float,
     inverse: bool = True,
     slide_dir: tuple[float, float] = (1.0, 0.0),
+    solver: str = "auto",
 ) -> SkinModel:
     """The skin model of a fidelity level: L0 the Winkler bed, L1 and L2 the coupled
     half-space (or the finger's layered stack). ``inverse``: also invert the compliance
     (cheap large contact sets; skip it for one static solve on a fine grid). ``slide_dir``:
-    the direction the pad slides in, for a skin that carries its friction."""
+    the direction the pad slides in, for a skin that carries its friction. ``solver``:
+    ``dense``, ``spectral`` or ``auto`` (spectral above :data:`DENSE_MAX_NODES` nodes; a skin
+    whose friction enters the normal problem is always dense)."""
+    if solver not in SOLVERS:
+        raise ConfigError(f"solver = {solver!r}; valid: {', '.join(SOLVERS)}")
     if level == "L0":
         return WinklerSkin(winkler_k_pa_per_m)
+    spectral = solver == "spectral" or (solver == "auto" and grid.n > DENSE_MAX_NODES)
+    if spectral and _friction_coupled(finger):
+        if solver == "spectral":
+            raise ConfigError(
+                "solver = 'spectral' needs a symmetric compliance; this finger's sliding "
+                "friction enters its normal problem (valid: solver 'dense' or 'auto')"
+            )
+        spectral = False
+    if spectral:
+        return SpectralSkin.of(grid, finger)
     if finger.stack is not None:
         return CoupledSkin.layered(grid, finger, inverse=inverse, slide_dir=slide_dir)
     return CoupledSkin.half_space(grid, finger, inverse=inverse, slide_dir=slide_dir)

@@ -1,0 +1,140 @@
+"""The spectral contact solve (FFT products, constrained conjugate gradients) against the
+dense active-set solve it stands in for on large pads."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sim_tactile.errors import ConfigError, PhysicsError
+from sim_tactile.scene.elastic import compliance_matrix, compliance_table
+from sim_tactile.scene.layered import layered_compliance_matrix, layered_compliance_table
+from sim_tactile.scene.nodes import skin_grid
+from sim_tactile.sensors import resolve_sensor
+from sim_tactile.sensors.stack import Layer, Stack
+from sim_tactile.sim.contact import ActiveSet
+from sim_tactile.sim.contact.spectral import TOL, Spectral
+from sim_tactile.sim.runner import StepOptions
+from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.skin import CoupledSkin, SpectralSkin, make_skin
+
+E = 0.4e6
+#: How close the two solves' pressures come, relative to the peak: the iteration stops when
+#: a step changes the pressures by TOL of their sum; the answer is then about that close
+#: (measured: 1e-11 to 2e-10 on these problems).
+AGREE = 1e4 * TOL
+
+
+def _lattice(nx: int, ny: int, px: float, py: float) -> np.ndarray:
+    xs = (np.arange(nx) - (nx - 1) / 2) * px
+    ys = (np.arange(ny) - (ny - 1) / 2) * py
+    X, Y = np.meshgrid(xs, ys, indexing="xy")  # as skin_grid numbers the nodes
+    return np.column_stack([X.ravel(), Y.ravel()])
+
+
+def _bumps(xy: np.ndarray, shift: float, rng) -> np.ndarray:
+    """A curved pad over 2 mm square bumps, rough, one node beyond the collider's margin."""
+    bx = ((xy[:, 0] + shift) % 4e-3) < 2e-3
+    by = (xy[:, 1] % 4e-3) < 2e-3
+    pen = np.where(bx & by, 0.3e-3, 0.0) - 0.2e-3 - (xy**2).sum(axis=1) / (2 * 20e-3)
+    pen += 2e-6 * rng.standard_normal(len(pen))
+    pen[7] = -np.inf
+    return pen
+
+
+# nx, ny, px, py: square and oblong nodes, odd and even counts
+LATTICES = [(17, 17, 0.5e-3, 0.5e-3), (24, 15, 0.4e-3, 0.7e-3)]
+
+
+@pytest.mark.parametrize("nx,ny,px,py", LATTICES)
+def test_the_kernel_table_is_the_compliance_matrix_and_the_fft_product_is_its_product(
+    nx, ny, px, py
+):
+    xy = _lattice(nx, ny, px, py)
+    C = compliance_matrix(xy, px, E, pitch_y_m=py)
+    sp = Spectral(compliance_table(nx, ny, px, E, py))
+    p = np.random.default_rng(0).random(nx * ny)
+    u = C @ p
+    np.testing.assert_allclose(sp.apply(p), u, rtol=0, atol=1e-13 * np.abs(u).max())
+
+
+def test_the_layered_table_is_the_layered_matrix():
+    nx, ny, px, py = 15, 11, 0.5e-3, 0.8e-3
+    st = Stack((Layer(1e-3, 2 * E, 0.45), Layer(2e-3, E, 0.49)))
+    xy = _lattice(nx, ny, px, py)
+    C = layered_compliance_matrix(xy, px, st, pitch_y_m=py)
+    sp = Spectral(layered_compliance_table(nx, ny, px, st, py))
+    p = np.random.default_rng(1).random(nx * ny)
+    np.testing.assert_allclose(sp.apply(p), C @ p, rtol=0, atol=1e-12 * np.abs(C @ p).max())
+
+
+@pytest.mark.parametrize("nx,ny,px,py", LATTICES)
+def test_spectral_solves_equal_the_dense_solves_while_a_pad_slides(nx, ny, px, py):
+    rng = np.random.default_rng(2)
+    xy = _lattice(nx, ny, px, py)
+    C = compliance_matrix(xy, px, E, pitch_y_m=py)
+    dense, sp = ActiveSet(C, np.linalg.inv(C)), Spectral(compliance_table(nx, ny, px, E, py))
+    total = 0.5 / (px * py)  # 0.5 N
+    for k in range(6):  # the bumps move under the pad: the contact set changes
+        pen = _bumps(xy, k * 0.3e-3, rng)
+        p1, dz1 = dense.solve_force(pen, total)
+        p2, dz2 = sp.solve_force(pen, total)
+        assert np.abs(p2 - p1).max() < AGREE * p1.max()
+        assert dz2 == pytest.approx(dz1, rel=AGREE)
+        assert p2.sum() == pytest.approx(total, rel=1e-12)
+        assert p2[7] == 0.0  # beyond the margin: never loaded
+        # the pad where it is: the same problem without the force
+        q1, on1 = dense.solve(pen + dz1)
+        q2, on2 = sp.solve(pen + dz1)
+        assert np.abs(q2 - q1).max() < AGREE * q1.max()
+    assert sp.stiffness_per_area(p2) == pytest.approx(dense.stiffness_per_area(), rel=1e-6)
+
+
+def test_a_layered_skin_that_bulges_is_solved_alike():
+    """On a layer over a rigid base a load lifts its neighbours (negative compliance entries):
+    nodes short of the plate can touch; both solves agree."""
+    nx, ny, px = 21, 21, 0.5e-3
+    st = Stack((Layer(1.5e-3, E, 0.3),))
+    xy = _lattice(nx, ny, px, px)
+    C = layered_compliance_matrix(xy, px, st)
+    assert (C < 0).any()
+    dense = ActiveSet(C, np.linalg.inv(C))
+    sp = Spectral(layered_compliance_table(nx, ny, px, st))
+    pen = _bumps(xy, 0.1e-3, np.random.default_rng(3))
+    p1, dz1 = dense.solve_force(pen, 1.0 / px**2)
+    p2, dz2 = sp.solve_force(pen, 1.0 / px**2)
+    assert np.abs(p2 - p1).max() < AGREE * p1.max()
+    assert dz2 == pytest.approx(dz1, rel=AGREE)
+
+
+def test_nothing_in_reach_gets_no_load_or_a_named_error():
+    sp = Spectral(compliance_table(5, 5, 1e-3, E))
+    p, on = sp.solve(np.full(25, -1e-4))
+    assert not p.any() and not on.any()
+    with pytest.raises(PhysicsError, match="margin"):
+        sp.solve_force(np.full(25, -np.inf), 1e5)
+    with pytest.raises(PhysicsError, match="positive total"):
+        sp.solve_force(np.zeros(25), 0.0)
+
+
+def test_make_skin_goes_spectral_above_the_dense_cap_and_says_so():
+    finger = resolve_sensor("grid3x3").finger
+    small = make_skin("L1", skin_grid(finger, 1e-3), finger, winkler_k_pa_per_m=1.0)
+    big = make_skin("L1", skin_grid(finger, 0.25e-3), finger, winkler_k_pa_per_m=1.0)
+    assert isinstance(small, CoupledSkin) and isinstance(big, SpectralSkin)
+    assert "spectral solve on 65 x 65 nodes" in big.describe()
+    with pytest.raises(ConfigError, match="solver.*valid: auto, dense, spectral"):
+        make_skin("L1", skin_grid(finger, 1e-3), finger, winkler_k_pa_per_m=1.0, solver="cg")
+    rough = finger.__class__(**{**finger.__dict__, "poisson": 0.45, "skin_tractions": True})
+    with pytest.raises(ConfigError, match="symmetric compliance"):
+        make_skin("L1", skin_grid(rough, 1e-3), rough, winkler_k_pa_per_m=1.0, solver="spectral")
+
+
+def test_a_slide_on_the_spectral_skin_records_what_the_dense_skin_records(cache):
+    kw = dict(ideal=True, pitch_m=0.8e-3, cache=cache)
+    a = simulate("finger7/bumps-3x3", "grid3x3", options=StepOptions(skin_solver="dense"), **kw)
+    b = simulate("finger7/bumps-3x3", "grid3x3", options=StepOptions(skin_solver="spectral"), **kw)
+    assert "spectral solve" in b.recording.meta["skin_problem"]
+    x, y = a.recording.data.astype(float), b.recording.data.astype(float)
+    assert x.max() > 0
+    np.testing.assert_allclose(y, x, rtol=0, atol=1e-6 * x.max())
