@@ -12,7 +12,10 @@ taxels (:mod:`sim_tactile.bench.physics`). Columns: the node grid, the relative 
 offsets x taxels, the largest taxel difference in units of the largest reference load, and
 how far the reference moves on a grid twice as coarse. ``--refine 1,2,4`` also measures the
 node grid at 1/2 and 1/4 of auto's pitch in both directions (what it would take to get
-within a given error; the cost is the dense solve's, which grows as the nodes cubed).
+within a given error; above 1200 nodes the solve is spectral). Where the grid that resolves
+the features is more than 10% from the physics, auto takes the coarsest finer grid of the
+table within 10% (the divisors it knows are ``measured_errors.REFINEMENTS``); the pitches
+here are always divisions of that resolving grid.
 
 ``--write-table`` stores the rows in ``sim_tactile/sim/measured_errors.json`` (each keyed by
 the scene and node grid, with the commit measured at), where ``auto`` finds its expected
@@ -51,7 +54,8 @@ def measure(task_id: str, n_offsets: int, refine=(1,), plates=None, log=print) -
         if plates and name not in plates:
             continue
         plate = get_plate(name)
-        fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
+        # the grid that resolves the features, before auto refines it from this table
+        fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto", refine=False)
         t0 = time.perf_counter()
         ref = physics.reference(plate, sensor, proto.force_n, n_offsets)
         for f in refine:

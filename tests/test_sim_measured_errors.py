@@ -92,12 +92,44 @@ def test_auto_warns_where_its_grid_is_far_from_the_physics_and_names_finer_grids
     )
     assert fid.expected_error > me.WARN_ABOVE
     warn = [w for w in fid.warnings if "from the physics" in w]
-    assert len(warn) == 1 and "0.5 mm:" in warn[0] and "node cap" in warn[0], fid.warnings
+    assert len(warn) == 1 and "0.5 mm:" in warn[0], fid.warnings
+    # the finer grids say how they are solved, and which lie beyond what auto takes
+    assert "0.125 mm: 4.8% (16641 nodes, over auto's 5000, solved spectrally" in warn[0]
     flat = choose_fidelity(
         get_plate("finger7/ridges-2"), sensor.layout, sensor.finger, proto, "auto"
     )
     assert flat.expected_error < me.WARN_ABOVE
     assert not [w for w in flat.warnings if "from the physics" in w]
+
+
+def test_auto_refines_to_the_coarsest_grid_from_which_every_finer_one_is_within_the_target():
+    ss, sensor, proto = _scene("finger7-v1")
+    plate = get_plate("finger7/bumps-6x6")
+    args = (plate, sensor.layout, sensor.finger, proto, "auto")
+    base = choose_fidelity(*args, refine=False)
+    fid = choose_fidelity(*args)
+    assert base.pitch_m == pytest.approx(1e-3) and base.expected_error > me.WARN_ABOVE
+    # measured: 1 mm 25.5%, 0.5 mm 16.7%, then 0.333 mm 5.1%, 0.25 8.1%, 0.2 5.1%, ...
+    assert fid.pitch_m == pytest.approx(1e-3 / 3) and fid.expected_error <= me.WARN_ABOVE
+    assert "refined from 1 mm" in fid.reason and "solved spectrally" in fid.reason
+    assert not [w for w in fid.warnings if "from the physics" in w]
+    # bumps-3x3: 0.25 mm is 6.1% but 0.167 mm 12.5% (an alignment of nodes and edges that a
+    # slide does not keep); every grid from 0.125 mm is within, beyond auto's node count
+    b3 = choose_fidelity(get_plate("finger7/bumps-3x3"), *args[1:])
+    assert b3.pitch_m == pytest.approx(1e-3) and b3.expected_error > me.WARN_ABOVE
+    # a forced level, a forced pitch: no refinement
+    l1 = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "L1")
+    assert l1.pitch_m == pytest.approx(1e-3)
+
+
+def test_the_refined_choice_follows_the_table(monkeypatch):
+    """Without the finer rows auto keeps its grid: the choice comes from the measurements."""
+    ss, sensor, proto = _scene("finger7-v1")
+    plate = get_plate("finger7/bumps-6x6")
+    coarse = {k: v for k, v in me._table().items() if all(r["pitch_m"] > 0.6e-3 for r in v)}
+    monkeypatch.setattr(me, "_table", lambda: coarse)
+    fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
+    assert fid.pitch_m == pytest.approx(1e-3) and fid.expected_error > me.WARN_ABOVE
 
 
 @pytest.mark.slow

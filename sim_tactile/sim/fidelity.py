@@ -29,7 +29,7 @@ from .. import _validate as v
 from ..plates import Plate, features
 from ..plates.spec import Roughness
 from ..scene.nodes import skin_grid
-from .measured_errors import WARN_ABOVE, expected_error, finer_grids
+from .measured_errors import WARN_ABOVE, MeasuredError, expected_error, finer_grids
 
 LEVELS = ("L0", "L1", "L2")
 #: What a ``fidelity`` argument may be (a :class:`Fidelity` too, in Python).
@@ -42,6 +42,19 @@ PITCH_MAX_M = 1.0e-3
 PITCH_MIN_M = 0.25e-3
 #: Most skin nodes auto may use per level (the dense half-space solve grows as nodes^3).
 MAX_NODES = {"L0": 2500, "L1": 700, "L2": 2800}
+#: Most nodes the dense solve takes; above it the skin is solved spectrally. Whole slides,
+#: dense against spectral (benchmarks/bench_spectral.py at dd13e9a, slide loop + set-up):
+#: finger7/bumps-6x6 at 1089 nodes 0.76 s against 1.52 s, at 2401 nodes 6.9 s against
+#: 3.1 s, at 4225 nodes 65 s against 6.1 s; textures20/boxes-3.0mm on the BioTac at 2835
+#: nodes 4.9 s against 5.1 s. The dense matrices also grow as N^2 (two of 8 N^2 bytes) and
+#: the factorisation as N^3.
+DENSE_MAX_NODES = 2000
+#: Most skin nodes auto may take when the measured error sends it to a finer grid (solved
+#: spectrally above :data:`DENSE_MAX_NODES`): a slide there costs a few seconds per second
+#: of contact (finger7/bumps-6x6 at 2401 nodes 0.33x real time, the BioTac's boxes at 2835
+#: nodes 0.23x); finger7/bumps-4x4 at 16641 nodes (0.125 mm, 4.8% from the physics) runs at
+#: 0.03x and is left to the user (``pitch_m``; the warning names it).
+MAX_NODES_MEASURED = 5000
 #: Coarsest node pitch across the slide auto may pick over ridges along y [m].
 PITCH_MAX_Y_M = 2.0e-3
 #: Nodes across the smallest feature along the slide over ridges (x pitch = feature / this).
@@ -115,9 +128,13 @@ def choose_fidelity(
     *,
     pitch_m: float | None = None,
     dt_s: float | None = None,
+    refine: bool = True,
 ) -> Fidelity:
     """Resolve ``fidelity`` ('auto', 'L0', 'L1', 'L2' or a Fidelity) for this scene (the
-    protocol's rate defaults to the layout's)."""
+    protocol's rate defaults to the layout's). ``refine``: under ``auto``, where the grid
+    that resolves the features was measured more than :data:`WARN_ABOVE` from the physics,
+    take the coarsest finer grid measured within it (False: the resolving grid itself, the
+    base the measurements refine)."""
     if isinstance(fidelity, Fidelity):
         return fidelity
     protocol = protocol.at_rate(layout.rate_hz)
@@ -164,8 +181,30 @@ def choose_fidelity(
     )
     py_key = None if aspect == 1.0 else float(pitch_y)
     measured = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key)
+    refined = ""
+    if (
+        fidelity == "auto"
+        and refine
+        and pitch_m is None
+        and measured
+        and measured.error > WARN_ABOVE
+    ):
+        better = _measured_within(plate, layout, finger, protocol.force_n, level, measured)
+        if better is not None:
+            refined = (
+                f" (refined from {shape}, measured {100 * measured.error:.0f}% from the "
+                f"physics: the coarsest measured grid from which every finer one is within "
+                f"{100 * WARN_ABOVE:.0f}%)"
+            )
+            measured = better
+            pitch, py_key = better.pitch_m, better.pitch_y_m
+            pitch_y = py_key if py_key is not None else pitch
+            aspect = pitch_y / pitch
+            shape = better.grid
+    nodes = _node_count(finger, pitch, py_key)
     reason = (
-        f"{level}: {_skin_name(finger, level)}, node pitch {shape} (smallest feature "
+        f"{level}: {_skin_name(finger, level)}, node pitch {shape}{refined}, {nodes} nodes, "
+        f"{'solved spectrally' if nodes > DENSE_MAX_NODES else 'dense solve'} (smallest feature "
         f"{'-' if scale is None else f'{scale * 1e3:.3g} mm'}, taxel {taxel * 1e3:.3g} mm), "
         f"dt {dt * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample); expected error: "
         + (
@@ -217,10 +256,35 @@ def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnin
     return auto_pitch, aspect
 
 
+def _node_count(finger, pitch_m: float, pitch_y_m: float | None) -> int:
+    """The nodes :func:`~sim_tactile.scene.nodes.skin_grid` lays on the finger's patch at
+    these pitches (an odd count per side), without its range checks."""
+    px, py = finger.patch_m
+    nx = 2 * int(math.floor(px / pitch_m / 2)) + 1
+    ny = 2 * int(math.floor(py / (pitch_y_m or pitch_m) / 2)) + 1
+    return nx * ny
+
+
+def _measured_within(plate, layout, finger, force_n, level, measured) -> MeasuredError | None:
+    """The coarsest measured finer grid from which every finer measured grid is within
+    :data:`WARN_ABOVE` of the physics (under :data:`MAX_NODES_MEASURED` nodes), or None.
+    A grid within it whose finer neighbours are not is a lucky alignment of the nodes with
+    the features' edges (measured: finger7/bumps-3x3 at 0.25 mm 6.1%, at 0.167 mm 12.5%),
+    which a slide does not keep."""
+    py = measured.pitch_y_m
+    grids = finer_grids(plate, layout, finger, force_n, level, measured.pitch_m, py)
+    best = None
+    for m in reversed(grids):  # finest first
+        if m.error > WARN_ABOVE:
+            break
+        if skin_grid(finger, m.pitch_m, m.pitch_y_m).n <= MAX_NODES_MEASURED:
+            best = m
+    return best
+
+
 def _far_from_physics(plate, layout, finger, protocol, level, measured, shape) -> str:
     """The warning for a grid measured more than WARN_ABOVE from the physics, with what the
-    measured finer grids give and their node counts against the level's cap."""
-    cap = MAX_NODES["L1" if level == "L2" else level]
+    measured finer grids give, their node counts and how they are solved."""
     out = (
         f"the taxel loads at this node grid ({shape}) are {100 * measured.error:.0f}% from the "
         "physics on this plate"
@@ -228,8 +292,9 @@ def _far_from_physics(plate, layout, finger, protocol, level, measured, shape) -
     py_m = measured.pitch_y_m
     for m in finer_grids(plate, layout, finger, protocol.force_n, level, measured.pitch_m, py_m):
         nodes = skin_grid(finger, m.pitch_m, m.pitch_y_m).n
-        over = f", over the dense solve's {cap}-node cap" if nodes > cap else ""
-        out += f"; {m.grid}: {100 * m.error:.1f}% ({nodes} nodes{over}; pass pitch_m)"
+        how = "solved spectrally" if nodes > DENSE_MAX_NODES else "dense solve"
+        over = f", over auto's {MAX_NODES_MEASURED}" if nodes > MAX_NODES_MEASURED else ""
+        out += f"; {m.grid}: {100 * m.error:.1f}% ({nodes} nodes{over}, {how}; pass pitch_m)"
     return out
 
 

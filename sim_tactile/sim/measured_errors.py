@@ -118,10 +118,16 @@ def expected_error(
     return _row(min(near, key=lambda r: abs(force_n / r["force_n"] - 1)))
 
 
+#: The refinements ``benchmarks/physics_per_plate.py --refine`` measures: the grids at 1/f of
+#: auto's pitch in both directions.
+REFINEMENTS = (2, 3, 4, 5, 6, 8)
+
+
 def finer_grids(plate, layout, finger, force_n: float, level: str, pitch_m: float, pitch_y_m):
-    """The measured grids at 1/2 and 1/4 of this one's pitch in both directions."""
+    """The measured grids at 1/f of this one's pitch in both directions (f in
+    :data:`REFINEMENTS`), coarsest first."""
     out = []
-    for f in (2, 4):
+    for f in REFINEMENTS:
         m = expected_error(
             plate,
             layout,

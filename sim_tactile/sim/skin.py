@@ -44,12 +44,7 @@ from ..scene.tractions import shear_normal_compliance
 from ..sensors.pad import Finger
 from . import contact
 from .contact.spectral import Spectral
-
-#: Most nodes the dense solve takes; above it the skin is solved spectrally. The dense
-#: solve's set updates, and its compiled held step with the column and mirror reductions,
-#: are the faster below (measured: benchmarks/bench_spectral.py); its matrices grow as N^2
-#: (two of 8 N^2 bytes: 290 MB at 4225 nodes) and its factorisation as N^3.
-DENSE_MAX_NODES = 1200
+from .fidelity import DENSE_MAX_NODES
 
 
 class WinklerSkin:

@@ -63,20 +63,25 @@ class Spectral:
         self.diag = float(table[0, 0])
         self.p = np.zeros(self.n)  # the last solve's pressures: the next one's start
         self.iterations = 0  # of the last solve
-        self._pad = np.zeros(self.shape)
+        self._last = (None, None, None)  # (pen, total, answer) of the last solve
 
     def apply(self, p: np.ndarray) -> np.ndarray:
-        """``C p`` [m]: the deflection of the nodes under pressures ``p`` [Pa]."""
-        pad = self._pad
-        pad[: self.ny, : self.nx] = p.reshape(self.ny, self.nx)
-        u = fft.irfft2(fft.rfft2(pad) * self.khat, s=self.shape)
-        return np.ascontiguousarray(u[: self.ny, : self.nx]).ravel()
+        """``C p`` [m]: the deflection of the nodes under pressures ``p`` [Pa]. The padded
+        lattice's extra rows hold no load and its extra columns are not read: the transforms
+        along x skip them (half the work of a plain 2D transform)."""
+        ny, nx = self.ny, self.nx
+        Ly, Lx = self.shape
+        a = fft.rfft(p.reshape(ny, nx), n=Lx, axis=1)
+        a = fft.fft(a, n=Ly, axis=0)
+        a *= self.khat
+        a = fft.ifft(a, axis=0, overwrite_x=True)[:ny]
+        return fft.irfft(a, n=Lx, axis=1)[:, :nx].ravel()
 
     # -- the contact problem
     def solve(self, pen_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Pressures [Pa] for node penetrations ``pen_m`` (``-inf``: out of reach), and the
         nodes in contact."""
-        p = self._iterate(pen_m, None)
+        p, _ = self._answer(pen_m, None)
         return p, p > 0
 
     def solve_force(self, pen_m: np.ndarray, total_pa: float) -> tuple[np.ndarray, float]:
@@ -85,9 +90,21 @@ class Spectral:
         :meth:`~.active_set.ActiveSet.solve_force`)."""
         if not total_pa > 0:
             raise PhysicsError(f"solve_force needs a positive total pressure, got {total_pa!r}")
-        p = self._iterate(pen_m, float(total_pa))
-        on = p > 0
-        dz = float(np.mean(self.apply(p)[on] - pen_m[on]))
+        return self._answer(pen_m, float(total_pa))
+
+    def _answer(self, pen: np.ndarray, total: float | None) -> tuple[np.ndarray, float]:
+        """``(p, dz)`` (``dz`` 0 without a total). A problem equal to the last one (a flat pad
+        over flat tops between two edge crossings) returns the last answer."""
+        pen = np.asarray(pen, dtype=np.float64)
+        last_pen, last_total, last = self._last
+        if last_pen is not None and total == last_total and np.array_equal(pen, last_pen):
+            return last[0].copy(), last[1]
+        p = self._solve(pen, total)
+        dz = 0.0
+        if total is not None:
+            on = p > 0
+            dz = float(np.mean(self.apply(p)[on] - pen[on]))
+        self._last = (pen.copy(), total, (p.copy(), dz))
         return p, dz
 
     def _start(self, ok: np.ndarray, pen: np.ndarray, total: float | None) -> np.ndarray:
@@ -104,10 +121,9 @@ class Spectral:
             p *= total / p.sum()
         return p
 
-    def _iterate(self, pen: np.ndarray, total: float | None) -> np.ndarray:
+    def _solve(self, pen: np.ndarray, total: float | None) -> np.ndarray:
         """Polonsky and Keer's iteration; ``total`` None: the pad at its place (no mean gap
         removed, no scaling), else the sum of the pressures held at ``total``."""
-        pen = np.asarray(pen, dtype=np.float64)
         ok = np.isfinite(pen)  # nodes beyond the collider's margin cannot join
         if not ok.any() and total is not None:
             raise PhysicsError("no skin node lies within the collider's margin of the plate")
