@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from sim_tactile.calibrate import calibrate, from_fit
-from sim_tactile.calibrate.fit import fit_channels
+from sim_tactile.calibrate.fit import RECTIFIED_DIFF, fit_channels, fit_unforced
 from sim_tactile.cli import main
 from sim_tactile.errors import ConfigError
 from sim_tactile.sensors import get_sensor
@@ -190,7 +190,39 @@ def test_the_shipped_biotac_calibration_loads_by_name():
     sen = calibrated(get_sensor("biotac19"), cal)
     assert len(sen.transducer.gain_counts_per_n) == 19
     with pytest.raises(ConfigError, match="shipped calibration"):
-        load_calibration("icub60")
+        load_calibration("pvdf2")
+
+
+def _unforced(seed=0, n_rec=600, T=75, rate=50.0):
+    """Clips of a sensor with no force recorded: each channel rests at 0 with Gaussian noise
+    of a known deviation, clipped at 0; in a third of the clips it is in contact at a known
+    steady level (with the same noise)."""
+    rng = np.random.default_rng(seed)
+    sigma = np.array([0.6, 1.0, 1.5, 2.2])
+    level = np.array([20.0, 45.0, 30.0, 60.0])
+    out = []
+    for _ in range(n_rec):
+        contact = rng.random(4) < 1 / 3
+        x = np.where(contact, level, 0.0) + sigma * rng.standard_normal((T, 4))
+        out.append(np.maximum(x, 0.0))
+    return out, sigma, level
+
+
+def test_the_unforced_fit_recovers_noise_and_steady_levels_under_the_assumed_force():
+    levels, sigma, level = _unforced()
+    fit = fit_unforced(levels, 50.0, 2.0)
+    np.testing.assert_allclose(fit.noise_std, sigma, rtol=RECOVERY_RTOL)
+    np.testing.assert_allclose(fit.counts_per_n, level / 2.0, rtol=RECOVERY_RTOL)
+    assert (fit.offset == 0).all() and fit.quant_step == 0.0 and (fit.r2 == 0).all()
+    np.testing.assert_array_less(fit.drift_per_s, 0.2)  # none was put in
+    # the clipping matters: the plain spread of the quiet differences is 0.58 of the noise
+    quiet = [x[:, 0] for x in levels if x[:, 0].max() < 4 * sigma[0]]
+    plain = np.diff(np.concatenate(quiet)).std() / np.sqrt(2)
+    assert plain == pytest.approx(RECTIFIED_DIFF * sigma[0], rel=0.1)
+    with pytest.raises(ConfigError, match="force_n = 0.*valid: > 0 N"):
+        fit_unforced(levels, 50.0, 0.0)
+    with pytest.raises(ConfigError, match="fewer than 2 quiet"):
+        fit_unforced([x + 100.0 for x in levels[:10]], 50.0, 1.0)
 
 
 def test_from_fit_borrows_the_gain_of_channels_the_press_does_not_load():
@@ -250,6 +282,24 @@ def test_calibrate_biotac_on_the_real_recordings(tmp_path):
     assert main(args) == 0
     data = np.load(rec, allow_pickle=False)["data"]
     assert data.max() > 10  # counts of the calibrated gains, not of the default
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not DATA.is_dir(), reason=f"the real data set is not at {DATA}")
+def test_calibrate_icub_on_the_real_clips(tmp_path):
+    """On the public iCub clips (no force): noise floors of about a count, steady levels of
+    tens of counts; the shipped calibration is this fit, and it names its free parameter."""
+    out = tmp_path / "icub60.toml"
+    assert main(["calibrate", "icub60", "--data", str(DATA), "--out", str(out)]) == 0
+    cal = load_calibration(out)
+    assert cal.n_recordings == 1000 and cal.quant_step == 0.0
+    assert all(0.3 < s < 4.0 for s in cal.noise_std)
+    assert all(5.0 < c < 100.0 for c in cal.counts_per_n)
+    assert "free parameter" in cal.notes[0] and "assumed 1 N" in cal.notes[0]
+    shipped = load_calibration("icub60")
+    np.testing.assert_allclose(shipped.counts_per_n, cal.counts_per_n, rtol=1e-9)
+    np.testing.assert_allclose(shipped.gain, cal.gain, rtol=1e-6)
+    np.testing.assert_allclose(shipped.noise_std, cal.noise_std, rtol=1e-9)
 
 
 def test_calibrate_json_has_the_contract_keys(tmp_path, capsys, monkeypatch):

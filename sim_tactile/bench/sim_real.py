@@ -12,7 +12,7 @@ and their distributions over slides are set side by side:
 - per data set: the **class separability** of the time-averaged channels (between-class
   over within-class spread, the traces of their scatter matrices).
 
-A simulated sensor may carry a calibration (``--sensor-config``, from ``sim-tactile
+Each simulated sensor may carry a calibration (``--sensor-config``, once per sensor, from ``sim-tactile
 calibrate``); then the table has a column for the preset and one for the calibrated sensor.
 A ratio within [1/2, 2] of the real median is marked as within a factor of 2.
 """
@@ -123,17 +123,32 @@ def run_sim_real(
     *,
     sensors: tuple[str, ...] = ("biotac19", "icub60"),
     slides: dict[str, int] | None = None,
-    sensor_config: str | Path | None = None,
+    sensor_config: str | Path | list | tuple | None = None,
     log=print,
 ) -> dict:
     """The table (as JSON data) and figure of the comparison; see the module."""
     t0 = time.perf_counter()
     slides = {"biotac19": 5, "icub60": 2} | (slides or {})
-    cal = None if sensor_config is None else load_calibration(sensor_config)
-    if cal is not None and cal.sensor not in sensors:
-        raise ConfigError(
-            f"--sensor-config calibrates {cal.sensor!r}, which is not among {list(sensors)}"
-        )
+    configs = (
+        []
+        if sensor_config is None
+        else [sensor_config]
+        if isinstance(sensor_config, str | Path)
+        else list(sensor_config)
+    )
+    cals = {}
+    for c in configs:
+        cal = load_calibration(c)
+        if cal.sensor not in sensors:
+            raise ConfigError(
+                f"--sensor-config {str(c)!r} calibrates {cal.sensor!r}, which is not among "
+                f"{list(sensors)}"
+            )
+        if cal.sensor in cals:
+            raise ConfigError(
+                f"--sensor-config: two calibrations of {cal.sensor!r}; valid: one per sensor"
+            )
+        cals[cal.sensor] = cal
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     doc = {"sensors": {}, "factor": FACTOR, "figures": []}
@@ -150,8 +165,8 @@ def run_sim_real(
         xs, ys, rate = _simulated(task_id, slides[name], None, log)
         cols["simulated"] = _summary(slide_stats(xs, rate), separability(xs, ys))
         raw["simulated"] = slide_stats(xs, rate)
-        if cal is not None and cal.sensor == name:
-            xc, yc, rate = _simulated(task_id, slides[name], cal, log)
+        if name in cals:
+            xc, yc, rate = _simulated(task_id, slides[name], cals[name], log)
             cols["calibrated"] = _summary(slide_stats(xc, rate), separability(xc, yc))
             raw["calibrated"] = slide_stats(xc, rate)
         doc["sensors"][name] = {

@@ -11,6 +11,15 @@ Sensors with real data here:
 - ``biotac19``: the public BioTac slides (seed 000). The static pressure channel ``pdc`` is
   linear in the normal force, 100 counts per newton (seed 000, section IV-D), so every
   sample carries its own force, and the 19 electrodes are fitted against it.
+- ``icub60``: the public iCub forearm slides (seed 000; compiled 1.5 s clips, the rest level
+  subtracted and clipped at 0). No force was recorded and none was controlled (seed 000,
+  section III-C), so what is fitted is what needs none: each taxel's noise floor on the
+  clips where it stays quiet, its drift, and its steady level in contact. The steady level
+  over an *assumed* force (:data:`ICUB_ASSUMED_FORCE_N`, the simulated task's nominal force,
+  a free parameter the notes name) is the taxel's counts per newton. The gain the simulation
+  takes is that over the taxel's simulated share at the same force, so a simulated press of
+  that force reproduces the real steady level whatever force is assumed; only the reported
+  counts per newton scale with it.
 """
 
 from __future__ import annotations
@@ -24,19 +33,24 @@ from ..datasets.real import (
     BIOTAC_RATE_HZ,
     N_MATERIALS,
     N_SLIDES,
+    load_icub,
     read_biotac_csv,
 )
 from ..errors import ConfigError
 from ..sensors import Sensor, get_sensor
 from ..sensors.calibration import MIN_SHARE, Calibration
-from .fit import ChannelFit, fit_channels
+from .fit import ACTIVE_SIGMAS, QUIET_SIGMAS, ChannelFit, fit_channels, fit_unforced
 
 #: BioTac static pressure (pdc) counts per newton of normal force (seed 000, section IV-D).
 BIOTAC_PDC_COUNTS_PER_N = 100.0
 #: The sensors :func:`calibrate` has a reader for.
-CALIBRATABLE = ("biotac19",)
+CALIBRATABLE = ("biotac19", "icub60")
 #: The plate the simulated sensor presses to learn each taxel's share of the force.
-SHARE_PLATE = {"biotac19": "textures20/flat"}
+SHARE_PLATE = {"biotac19": "textures20/flat", "icub60": "textures20/flat"}
+#: The normal force assumed for the iCub's recordings [N] (none was recorded): the nominal
+#: force of the simulated task ``textures20-icub60-v1``, so that its slides meet the real
+#: steady levels at their own force. A free parameter; the calibration's notes say so.
+ICUB_ASSUMED_FORCE_N = 1.0
 
 
 def read_biotac_forces(
@@ -81,14 +95,24 @@ def force_share(sensor: Sensor, plate: str, force_n: float) -> np.ndarray:
 
 
 def from_fit(
-    sensor: Sensor, fit: ChannelFit, share: np.ndarray, n: int, source: str
+    sensor: Sensor,
+    fit: ChannelFit,
+    share: np.ndarray,
+    n: int,
+    source: str,
+    notes: tuple[str, ...] | None = None,
 ) -> Calibration:
-    """The calibration of ``sensor`` from a channel fit and the simulated load shares."""
-    notes = [
-        "crosstalk: not identifiable from these data (every electrode responds to the same "
-        "normal force); left to the sensor model",
-        f"quiet stretches: {fit.n_quiet} (force <= 0.03 N for >= 0.3 s), median {fit.stretch_s:.2f} s",
-    ]
+    """The calibration of ``sensor`` from a channel fit and the simulated load shares;
+    ``notes``: what the fit assumed (default: the BioTac's, fitted against its force)."""
+    notes = (
+        list(notes)
+        if notes is not None
+        else [
+            "crosstalk: not identifiable from these data (every electrode responds to the same "
+            "normal force); left to the sensor model",
+            f"quiet stretches: {fit.n_quiet} (force <= 0.03 N for >= 0.3 s), median {fit.stretch_s:.2f} s",
+        ]
+    )
     cpn = np.nan_to_num(fit.counts_per_n, nan=0.0)
     fitted = (share >= MIN_SHARE) & (cpn > 0)
     gain = np.zeros(sensor.layout.n)
@@ -135,8 +159,33 @@ def calibrate(
             f"sensor = {sensor!r} has no real-data reader; valid: {list(CALIBRATABLE)}"
         )
     sen = get_sensor(sensor)
+    if sensor == "icub60":
+        return _calibrate_icub(sen, data)
     levels, forces, root = read_biotac_forces(data, materials=materials, slides=slides)
     fit = fit_channels(levels, forces, BIOTAC_RATE_HZ, floor=0.0)
     share = force_share(sen, SHARE_PLATE[sensor], fit.force_n)
     source = f"{Path(root).name}: pdc / {BIOTAC_PDC_COUNTS_PER_N:g} counts per N of normal force"
     return from_fit(sen, fit, share, len(levels), source)
+
+
+def _calibrate_icub(sen: Sensor, data: object) -> Calibration:
+    ds = load_icub(data)
+    levels = list(ds.data.astype(np.float64))
+    fit = fit_unforced(levels, ds.rate_hz, ICUB_ASSUMED_FORCE_N, floor=0.0)
+    share = force_share(sen, SHARE_PLATE["icub60"], ICUB_ASSUMED_FORCE_N)
+    notes = (
+        f"free parameter: the normal force, assumed {ICUB_ASSUMED_FORCE_N:g} N (none was "
+        "recorded or controlled, seed 000 section III-C): the task's nominal force. "
+        "counts_per_n scales with 1 / it; the gains, and so the simulated levels at that "
+        "force, do not",
+        f"noise: a Gaussian about the rest level clipped at 0, fitted to the first differences "
+        f"of the clips where the taxel stays within {QUIET_SIGMAS:g} noise deviations of 0 "
+        f"(median {fit.n_quiet} clips a taxel, {fit.stretch_s:g} s each)",
+        f"steady level: the median over the clips in which the taxel rises {ACTIVE_SIGMAS:g} "
+        "noise deviations above 0 of its median level there",
+        "offset 0 and no ADC step: the compiled data have the rest level subtracted and are "
+        "not on a grid of levels",
+        "crosstalk: not identifiable without a known load; left to the sensor model",
+    )
+    source = f"{Path(ds.meta['path']).name}: compiled iCub clips, no force (assumed)"
+    return from_fit(sen, fit, share, len(levels), source, notes)

@@ -67,7 +67,9 @@ def quant_step(levels: list[np.ndarray]) -> float:
     if d.size == 0:
         return 0.0
     step = float(d.min())
-    on_grid = np.allclose(np.round(vals / step) * step, vals, atol=1e-6 * max(step, 1e-12))
+    on_grid = np.allclose(
+        np.round(vals / step) * step, vals, rtol=0.0, atol=1e-6 * max(step, 1e-12)
+    )
     return step if on_grid and step > 0 else 0.0
 
 
@@ -101,6 +103,29 @@ def _slope_var_per_noise(n: int) -> float:
     """Variance of the least-squares slope [1/s^2, per unit noise variance] over ``n``
     samples one second apart: 12 / (n (n^2 - 1))."""
     return 12.0 / (n * (n * n - 1.0))
+
+
+def random_walk_rate(stretches: list[np.ndarray], noise: np.ndarray, rate_hz: float):
+    """Per channel, the rate of a random-walk drift (the standard deviation of its change over
+    one second) from the least-squares slopes of quiet stretches (each (n, C)) beyond what
+    white noise of ``noise`` (per channel) gives them."""
+    # a random walk of rate r: a stretch's least-squares slope S has E[S^2] =
+    # noise^2 c + r^2 g, c = 12 / (n (n^2 - 1)) rate^2, g = 6 / (5 L); r^2 by weighted least
+    # squares over the stretches, weights 1 / c^2 (short stretches, whose slopes the noise
+    # dominates, count little)
+    num = np.zeros(len(noise))
+    den = 0.0
+    for seg in stretches:
+        n = seg.shape[0]
+        t = np.arange(n) / rate_hz
+        tc = t - t.mean()
+        slope_k = tc @ (seg - seg.mean(axis=0)) / (tc @ tc)
+        c = _slope_var_per_noise(n) * rate_hz**2
+        g = 6.0 / (5.0 * n / rate_hz)
+        w = 1.0 / c**2
+        num += w * g * (slope_k**2 - noise**2 * c)
+        den += w * g * g
+    return np.sqrt(np.maximum(num / den, 0.0))
 
 
 def fit_channels(
@@ -154,23 +179,7 @@ def fit_channels(
         d = D[:, c]  # would dominate a plain standard deviation
         keep = np.abs(d) <= np.quantile(np.abs(d), 1.0 - NOISE_TRIM)
         noise[c] = d[keep].std() / np.sqrt(2) / TRIM_STD_RATIO
-    # drift, a random walk of rate r: a stretch's least-squares slope S has E[S^2] =
-    # noise^2 c + r^2 g, c = 12 / (n (n^2 - 1)) rate^2, g = 6 / (5 L); r^2 by weighted least
-    # squares over the stretches, weights 1 / c^2 (short stretches, whose slopes the noise
-    # dominates, count little)
-    num = np.zeros(C)
-    den = 0.0
-    for seg in stretches:
-        n = seg.shape[0]
-        t = np.arange(n) / rate_hz
-        tc = t - t.mean()
-        slope_k = tc @ (seg - seg.mean(axis=0)) / (tc @ tc)
-        c = _slope_var_per_noise(n) * rate_hz**2
-        g = 6.0 / (5.0 * n / rate_hz)
-        w = 1.0 / c**2
-        num += w * g * (slope_k**2 - noise**2 * c)
-        den += w * g * g
-    drift = np.sqrt(np.maximum(num / den, 0.0))
+    drift = random_walk_rate(stretches, noise, rate_hz)
     lengths = np.array([seg.shape[0] / rate_hz for seg in stretches])
     contact = F > quiet_n
     return ChannelFit(
@@ -183,4 +192,91 @@ def fit_channels(
         float(np.median(lengths)),
         len(stretches),
         float(np.median(F[contact])) if contact.any() else float("nan"),
+    )
+
+
+#: A Gaussian noise of standard deviation s about a rest level at the clipping floor, clipped
+#: there, has first differences of standard deviation sqrt(2) * RECTIFIED_DIFF * s
+#: (the variance of max(n, 0) is s^2 (1/2 - 1/(2 pi)): sqrt of that is 0.5838 s).
+RECTIFIED_DIFF = float(np.sqrt(0.5 - 1.0 / (2.0 * np.pi)))
+#: A channel's recording is quiet when its maximum is within this many noise standard
+#: deviations of the floor (the bound and the noise are found together, see fit_unforced).
+QUIET_SIGMAS = 4.0
+#: A channel is in contact in a recording when it rises this many noise deviations above
+#: the floor; its steady level is the median of those samples.
+ACTIVE_SIGMAS = 8.0
+
+
+def fit_unforced(
+    levels: list[np.ndarray], rate_hz: float, force_n: float, *, floor: float = 0.0
+) -> ChannelFit:
+    """Fit every channel of recordings ``levels`` (each (T, C)) that carry no force, clipped
+    at ``floor`` at rest (the rest level subtracted, as the iCub's compiled data are), under
+    an assumed normal force ``force_n`` [N] (a free parameter: the gains scale with it).
+
+    - noise: a channel's recordings whose maximum stays within QUIET_SIGMAS noise deviations
+      of the floor are quiet; the noise is the one whose clipped Gaussian gives their first
+      differences' spread (trimmed as in :func:`fit_channels`), the bound and the noise found
+      together by a fixed point from 1 count;
+    - the steady level in contact: the median over the recordings in which the channel rises
+      ACTIVE_SIGMAS deviations above the floor of its median level there; over ``force_n``
+      it is the channel's counts per newton (r2 0: no force to explain);
+    - offset: the floor; drift: :func:`random_walk_rate` on the quiet recordings.
+    """
+    if not levels:
+        raise ConfigError("calibration needs recordings: got none")
+    v_force = float(force_n)
+    if not v_force > 0:
+        raise ConfigError(f"force_n = {force_n!r}; valid: > 0 N (the assumed normal force)")
+    C = levels[0].shape[1]
+    for k, x in enumerate(levels):
+        if x.ndim != 2 or x.shape[1] != C:
+            raise ConfigError(f"recording {k}: levels {x.shape}; valid: (T, {C})")
+    X = np.stack(levels)  # (R, T, C)
+    top = X.max(axis=1) - floor  # (R, C)
+    noise, recorded = np.empty(C), np.empty(C)
+    quiet_sets = []
+    for c in range(C):
+        sigma = 1.0
+        for _ in range(50):
+            q = top[:, c] <= QUIET_SIGMAS * sigma
+            if q.sum() < 2:
+                raise ConfigError(
+                    f"channel {c}: fewer than 2 quiet recordings (maximum within "
+                    f"{QUIET_SIGMAS:g} noise deviations of the floor): no noise floor to fit"
+                )
+            d = np.diff(X[q, :, c], axis=1).ravel()
+            keep = np.abs(d) <= np.quantile(np.abs(d), 1.0 - NOISE_TRIM)
+            rec = d[keep].std() / np.sqrt(2) / TRIM_STD_RATIO
+            new = rec / RECTIFIED_DIFF
+            if abs(new - sigma) <= 1e-6 * sigma:
+                break
+            sigma = new
+        noise[c], recorded[c] = sigma, rec
+        quiet_sets.append(np.flatnonzero(q))
+    steady = np.full(C, np.nan)
+    for c in range(C):
+        vals = [
+            float(np.median(x[x - floor >= ACTIVE_SIGMAS * noise[c]]))
+            for x in X[:, :, c]
+            if (x - floor >= ACTIVE_SIGMAS * noise[c]).any()
+        ]
+        if vals:
+            steady[c] = float(np.median(vals)) - floor
+    drift = np.array(
+        [
+            random_walk_rate(list(X[quiet_sets[c], :, c : c + 1]), recorded[c : c + 1], rate_hz)[0]
+            for c in range(C)
+        ]
+    )
+    return ChannelFit(
+        steady / v_force,
+        np.full(C, float(floor)),
+        np.zeros(C),
+        noise,
+        drift,
+        quant_step(levels),
+        float(X.shape[1] / rate_hz),
+        int(np.median([len(q) for q in quiet_sets])),
+        v_force,
     )

@@ -150,8 +150,10 @@ def add_parsers(sub) -> None:
     )
     sr.add_argument(
         "--sensor-config",
+        action="append",
         default=None,
-        help="a calibration (.toml) for one of the sensors: a column of its own",
+        help="a calibration (.toml, or a shipped one by its sensor's name) for one of the "
+        "sensors: a column of its own (repeat it for each sensor)",
     )
     st = add_command(
         bsub,

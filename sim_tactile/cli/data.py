@@ -103,7 +103,7 @@ def add_parsers(sub) -> None:
         cmd_calibrate,
         "fit a sensor model's gains, offsets, noise, drift and ADC step to real recordings",
     )
-    cb.add_argument("sensor", help="the sensor to calibrate (biotac19)")
+    cb.add_argument("sensor", help="the sensor to calibrate (biotac19, icub60)")
     cb.add_argument("--data", required=True, help="folder of the sensor's real data set")
     cb.add_argument("--out", required=True, help="the calibration file to write (.toml)")
 
