@@ -5,7 +5,9 @@
 
 For each node pitch [mm] the same slide runs with each solver (``StepOptions.skin_solver``),
 alternating A B A B, and the table gives the median wall time of the slide loop, its
-real-time factor, the set-up time (scene, compliance, factorisation), and the largest
+real-time factor, the set-up time (scene, approach and press; the dense compliance and its
+inverse are read from a cache after the first run at each pitch, as when a data set is
+made), and the largest
 difference between the two recordings relative to their peak. The dense solve's matrices
 grow as N^2 and its factorisation as N^3, so it is skipped above ``--dense-max`` nodes.
 ``DENSE_MAX_NODES`` in ``sim_tactile/sim/skin.py`` is set from this table: the node count
@@ -19,21 +21,28 @@ import json
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
+from sim_tactile.cache import ArtefactCache
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim.runner import StepOptions
 from sim_tactile.sim.simulate import simulate
 
 
-def _run(plate: str, sensor: str, pitch_m: float, solver: str):
+def _run(plate: str, sensor: str, pitch_m: float, solver: str, cache=None):
     t = time.perf_counter()
     res = simulate(
-        plate, sensor, ideal=True, pitch_m=pitch_m, options=StepOptions(skin_solver=solver)
+        plate,
+        sensor,
+        ideal=True,
+        pitch_m=pitch_m,
+        options=StepOptions(skin_solver=solver),
+        cache=cache,
     )
     wall = time.perf_counter() - t
     meta = res.recording.meta
@@ -50,6 +59,9 @@ def main(argv=None) -> int:
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     finger = get_sensor(a.sensor).finger
+    # a cache of its own, as a worker making a data set has: the dense skin's arrays are
+    # computed by the first run at each pitch and read by the others
+    cache = ArtefactCache(Path(tempfile.mkdtemp(prefix="bench_spectral_")))
     for s in ("dense", "spectral"):  # compile and warm both paths once
         _run(a.plate, a.sensor, 1e-3, s)
     rows = []
@@ -62,7 +74,7 @@ def main(argv=None) -> int:
         data = {}
         for _ in range(a.repeats):
             for s in solvers:
-                data[s], slide_s, wall, sim_s = _run(a.plate, a.sensor, pitch, s)
+                data[s], slide_s, wall, sim_s = _run(a.plate, a.sensor, pitch, s, cache)
                 loop[s].append(slide_s)
                 total[s].append(wall)
         row = {"pitch_mm": mm, "nodes": n, "sim_s": sim_s}

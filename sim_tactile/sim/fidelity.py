@@ -43,12 +43,15 @@ PITCH_MIN_M = 0.25e-3
 #: Most skin nodes auto may use per level (the dense half-space solve grows as nodes^3).
 MAX_NODES = {"L0": 2500, "L1": 700, "L2": 2800}
 #: Most nodes the dense solve takes; above it the skin is solved spectrally. Whole slides,
-#: dense against spectral (benchmarks/bench_spectral.py at dd13e9a, slide loop + set-up):
-#: finger7/bumps-6x6 at 1089 nodes 0.76 s against 1.52 s, at 2401 nodes 6.9 s against
-#: 3.1 s, at 4225 nodes 65 s against 6.1 s; textures20/boxes-3.0mm on the BioTac at 2835
-#: nodes 4.9 s against 5.1 s. The dense matrices also grow as N^2 (two of 8 N^2 bytes) and
-#: the factorisation as N^3.
-DENSE_MAX_NODES = 2000
+#: dense against spectral, the dense arrays read from the slide cache as when a data set is
+#: made (benchmarks/bench_spectral.py at a5d399a, medians of 3, slide loop + set-up):
+#: textures20/boxes-3.0mm on the BioTac at 2835 nodes 2.3 s against 10.7 s (few contact
+#: changes a step: the dense step is one product); finger7/bumps-6x6 at 2401 nodes 9.6 s
+#: against 6.5 s (edges everywhere: the dense set updates cost |S|^2 each), at 1089 nodes
+#: 0.9 s against 3.1 s. Without the cache, the compliance and its inverse take 4 s and
+#: 3 s at 2835 nodes; the matrices grow as N^2 (two of 8 N^2 bytes) and the factorisation
+#: as N^3.
+DENSE_MAX_NODES = 3000
 #: Most skin nodes auto may take when the measured error sends it to a finer grid (solved
 #: spectrally above :data:`DENSE_MAX_NODES`): a slide there costs a few seconds per second
 #: of contact (finger7/bumps-6x6 at 2401 nodes 0.33x real time, the BioTac's boxes at 2835

@@ -268,6 +268,7 @@ def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
         finger,
         winkler_k_pa_per_m=fid.winkler_k_pa_per_m,
         solver=options.skin_solver,
+        cache=cache,
     )
     return Runner(
         scene,

@@ -34,9 +34,13 @@ block updates then take their general formulas (``symmetric=False``).
 
 from __future__ import annotations
 
+import hashlib
+import io
+
 import numpy as np
 
 from ..errors import ConfigError
+from ..hashing import code_version, content_hash
 from ..scene.elastic import compliance_matrix, compliance_table
 from ..scene.layered import Stack, layered_compliance_matrix, layered_compliance_table
 from ..scene.nodes import SkinGrid
@@ -199,6 +203,65 @@ class SpectralSkin:
         return self.what
 
 
+#: Fewest nodes whose dense arrays go through the cache (600 nodes: 6 MB and 0.2 s to
+#: compute; a read costs about as much).
+CACHE_MIN_NODES = 1000
+#: What the dense compliance and its inverse are computed by: their cache key holds the
+#: source of these modules (and what they import) and the libraries' versions.
+SKIN_MODULES = ("sim_tactile.sim.skin",)
+SKIN_LIBRARIES = ("numpy", "scipy")
+
+
+def _dense_key(grid: SkinGrid, finger: Finger, slide_dir, inverse: bool) -> str:
+    """The content key of a coupled skin's dense arrays: the node grid (its centres
+    whole), the finger (skin, stack, friction), the slide's direction, whether the inverse
+    is kept, and the code that computes them."""
+    return content_hash(
+        {
+            "what": "dense skin compliance",
+            "xy": hashlib.sha256(np.ascontiguousarray(grid.xy, dtype=np.float64)).hexdigest(),
+            "pitch_m": grid.pitch_m,
+            "pitch_y_m": grid.pitch_y_m,
+            "finger": finger.to_json(),
+            "slide_dir": list(slide_dir),
+            "inverse": inverse,
+            "code": code_version(*SKIN_MODULES, libraries=SKIN_LIBRARIES),
+        }
+    )
+
+
+def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
+    """:class:`CoupledSkin` of the finger on ``grid``, its arrays read from ``cache`` (an
+    :class:`~sim_tactile.cache.ArtefactCache`) when they were computed before, else computed
+    and stored there: the compliance of a large pad and its inverse take seconds (2835
+    nodes: 4 s and 3 s), reading them a tenth of that. The arrays are the computed ones bit
+    for bit, so a slide does not depend on whether they came from the cache (tested)."""
+    key = _dense_key(grid, finger, slide_dir, inverse)
+    hit = cache.get(key, "skin.npz")
+    if hit is not None:
+        try:
+            with np.load(hit, allow_pickle=False) as z:
+                C, K = z["C"], (z["K"] if inverse else None)
+                what, symmetric = str(z["what"]), bool(z["symmetric"])
+            return CoupledSkin(C, K, what, symmetric=symmetric)
+        except (OSError, ValueError, KeyError):
+            pass  # unreadable: computed again and stored over it
+    skin = _dense(grid, finger, slide_dir, inverse)
+    buf = io.BytesIO()
+    arrays = {"C": skin.C, "what": np.array(skin.what), "symmetric": np.array(skin.symmetric)}
+    if inverse:
+        arrays["K"] = skin.K
+    np.savez(buf, **arrays)
+    cache.put(key, "skin.npz", buf.getvalue())
+    return skin
+
+
+def _dense(grid, finger, slide_dir, inverse) -> CoupledSkin:
+    if finger.stack is not None:
+        return CoupledSkin.layered(grid, finger, inverse=inverse, slide_dir=slide_dir)
+    return CoupledSkin.half_space(grid, finger, inverse=inverse, slide_dir=slide_dir)
+
+
 #: The contact solvers of a coupled skin.
 SOLVERS = ("auto", "dense", "spectral")
 
@@ -223,13 +286,16 @@ def make_skin(
     inverse: bool = True,
     slide_dir: tuple[float, float] = (1.0, 0.0),
     solver: str = "auto",
+    cache=None,
 ) -> SkinModel:
     """The skin model of a fidelity level: L0 the Winkler bed, L1 and L2 the coupled
     half-space (or the finger's layered stack). ``inverse``: also invert the compliance
     (cheap large contact sets; skip it for one static solve on a fine grid). ``slide_dir``:
     the direction the pad slides in, for a skin that carries its friction. ``solver``:
     ``dense``, ``spectral`` or ``auto`` (spectral above :data:`DENSE_MAX_NODES` nodes; a skin
-    whose friction enters the normal problem is always dense)."""
+    whose friction enters the normal problem is always dense). ``cache``: an
+    :class:`~sim_tactile.cache.ArtefactCache` that keeps a dense skin's arrays from one slide
+    to the next (from :data:`CACHE_MIN_NODES` nodes; below, computing them is as quick)."""
     if solver not in SOLVERS:
         raise ConfigError(f"solver = {solver!r}; valid: {', '.join(SOLVERS)}")
     if level == "L0":
@@ -244,6 +310,6 @@ def make_skin(
         spectral = False
     if spectral:
         return SpectralSkin.of(grid, finger)
-    if finger.stack is not None:
-        return CoupledSkin.layered(grid, finger, inverse=inverse, slide_dir=slide_dir)
-    return CoupledSkin.half_space(grid, finger, inverse=inverse, slide_dir=slide_dir)
+    if cache is not None and grid.n >= CACHE_MIN_NODES:
+        return _cached_dense(grid, finger, slide_dir, inverse, cache)
+    return _dense(grid, finger, slide_dir, inverse)
