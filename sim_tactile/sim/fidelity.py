@@ -185,25 +185,14 @@ def choose_fidelity(
     py_key = None if aspect == 1.0 else float(pitch_y)
     measured = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key)
     refined = ""
-    if (
-        fidelity == "auto"
-        and refine
-        and pitch_m is None
-        and measured
-        and measured.error > WARN_ABOVE
-    ):
-        better = _measured_within(plate, layout, finger, protocol.force_n, level, measured)
-        if better is not None:
-            refined = (
-                f" (refined from {shape}, measured {100 * measured.error:.0f}% from the "
-                f"physics: the coarsest measured grid from which every finer one is within "
-                f"{100 * WARN_ABOVE:.0f}%)"
-            )
-            measured = better
-            pitch, py_key = better.pitch_m, better.pitch_y_m
-            pitch_y = py_key if py_key is not None else pitch
-            aspect = pitch_y / pitch
-            shape = better.grid
+    better = _refinement(plate, layout, finger, protocol.force_n, level, measured)
+    if fidelity == "auto" and refine and pitch_m is None and better is not None:
+        refined = (
+            f" (refined from {shape}, measured {100 * measured.error:.0f}% from the physics: "
+            "the coarsest measured grid from which every finer one is within "
+            f"{100 * WARN_ABOVE:.0f}%)"
+        )
+        measured, pitch, py_key, shape = better, better.pitch_m, better.pitch_y_m, better.grid
     nodes = _node_count(finger, pitch, py_key)
     reason = (
         f"{level}: {_skin_name(finger, level)}, node pitch {shape}{refined}, {nodes} nodes, "
@@ -266,6 +255,14 @@ def _node_count(finger, pitch_m: float, pitch_y_m: float | None) -> int:
     nx = 2 * int(math.floor(px / pitch_m / 2)) + 1
     ny = 2 * int(math.floor(py / (pitch_y_m or pitch_m) / 2)) + 1
     return nx * ny
+
+
+def _refinement(plate, layout, finger, force_n, level, measured) -> MeasuredError | None:
+    """The grid auto refines ``measured`` to, or None (None too when it is within
+    WARN_ABOVE, or not measured)."""
+    if measured is None or measured.error <= WARN_ABOVE:
+        return None
+    return _measured_within(plate, layout, finger, force_n, level, measured)
 
 
 def _measured_within(plate, layout, finger, force_n, level, measured) -> MeasuredError | None:
