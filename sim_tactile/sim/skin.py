@@ -73,12 +73,30 @@ class WinklerSkin:
         return f"Winkler bed, k {self.k:.4g} Pa/m"
 
 
-class CoupledSkin:
+def _stack_name(st: Stack) -> str:
+    layers = " / ".join(
+        f"{la.thickness_m * 1e3:g} mm E {la.young_pa:.3g} Pa nu {la.poisson:g}" for la in st.layers
+    )
+    return f"layered skin: {layers} on a {st.backing} backing"
+
+
+class _SolvedSkin:
+    """What the coupled skins share: their ``solver`` answers the contact problem."""
+
+    coupled = True
+
+    def solve(self, pen_m: np.ndarray) -> np.ndarray:
+        p, _ = self.solver.solve(pen_m)
+        return p
+
+    def solve_force(self, pen_m: np.ndarray, total_pa: float) -> tuple[np.ndarray, float]:
+        return self.solver.solve_force(pen_m, total_pa)
+
+
+class CoupledSkin(_SolvedSkin):
     """A skin of compliance ``C`` [m/Pa] (N x N) with, optionally, its inverse ``K``, which
     makes large contact sets cheap (:class:`~sim_tactile.sim.contact.ActiveSet`). The solver
     keeps its contact set from one call to the next."""
-
-    coupled = True
 
     def __init__(
         self, C: np.ndarray, K: np.ndarray | None = None, what: str = "", *, symmetric: bool = True
@@ -122,11 +140,7 @@ class CoupledSkin:
         friction's coupling when the skin carries it)."""
         st = finger.stack
         C = layered_compliance_matrix(grid.xy, grid.pitch_m, st, pitch_y_m=grid.pitch_y_m)
-        layers = " / ".join(
-            f"{la.thickness_m * 1e3:g} mm E {la.young_pa:.3g} Pa nu {la.poisson:g}"
-            for la in st.layers
-        )
-        what = f"layered skin: {layers} on a {st.backing} backing"
+        what = _stack_name(st)
         if finger.skin_tractions and finger.friction > 0:
             C, what = cls._with_friction(C, grid, finger, st, slide_dir, what)
             return cls(C, np.linalg.inv(C) if inverse else None, what, symmetric=False)
@@ -144,13 +158,6 @@ class CoupledSkin:
             f"{what}, coupled to sliding friction mu {finger.friction:g}",
         )
 
-    def solve(self, pen_m: np.ndarray) -> np.ndarray:
-        p, _ = self.solver.solve(pen_m)
-        return p
-
-    def solve_force(self, pen_m: np.ndarray, total_pa: float) -> tuple[np.ndarray, float]:
-        return self.solver.solve_force(pen_m, total_pa)
-
     def stiffness(self, p: np.ndarray, area_m2: float) -> float:
         """``area * 1' inv(C_SS) 1`` on the current contact set [N/m]."""
         return area_m2 * self.solver.stiffness_per_area()
@@ -159,12 +166,11 @@ class CoupledSkin:
         return self.what or f"coupled skin of {self.C.shape[0]} nodes"
 
 
-class SpectralSkin:
+class SpectralSkin(_SolvedSkin):
     """A translation-invariant skin (half-space or stack of layers) on a node lattice, its
     contact solved spectrally (:class:`~sim_tactile.sim.contact.spectral.Spectral`). Same
     interface and answers as :class:`CoupledSkin` (tested), without its dense matrices."""
 
-    coupled = True
     symmetric = True
 
     def __init__(self, table: np.ndarray, what: str = "") -> None:
@@ -181,19 +187,8 @@ class SpectralSkin:
             what = f"elastic half-space, E* {finger.e_star_pa:.4g} Pa"
         else:
             table = layered_compliance_table(nx, ny, grid.pitch_m, st, grid.pitch_y_m)
-            layers = " / ".join(
-                f"{la.thickness_m * 1e3:g} mm E {la.young_pa:.3g} Pa nu {la.poisson:g}"
-                for la in st.layers
-            )
-            what = f"layered skin: {layers} on a {st.backing} backing"
+            what = _stack_name(st)
         return cls(table, f"{what}; spectral solve on {nx} x {ny} nodes")
-
-    def solve(self, pen_m: np.ndarray) -> np.ndarray:
-        p, _ = self.solver.solve(pen_m)
-        return p
-
-    def solve_force(self, pen_m: np.ndarray, total_pa: float) -> tuple[np.ndarray, float]:
-        return self.solver.solve_force(pen_m, total_pa)
 
     def stiffness(self, p: np.ndarray, area_m2: float) -> float:
         """``area * 1' inv(C_SS) 1`` on the contact set of ``p`` [N/m]."""
