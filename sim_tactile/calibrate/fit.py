@@ -105,6 +105,14 @@ def _slope_var_per_noise(n: int) -> float:
     return 12.0 / (n * (n * n - 1.0))
 
 
+def trimmed_noise(d: np.ndarray) -> float:
+    """The white noise's standard deviation from first differences ``d``, without their
+    largest NOISE_TRIM share (trimmed: a quantised signal's MAD is 0 below the step; spikes
+    would dominate a plain standard deviation)."""
+    keep = np.abs(d) <= np.quantile(np.abs(d), 1.0 - NOISE_TRIM)
+    return float(d[keep].std() / np.sqrt(2) / TRIM_STD_RATIO)
+
+
 def random_walk_rate(stretches: list[np.ndarray], noise: np.ndarray, rate_hz: float):
     """Per channel, the rate of a random-walk drift (the standard deviation of its change over
     one second) from the least-squares slopes of quiet stretches (each (n, C)) beyond what
@@ -175,10 +183,8 @@ def fit_channels(
         )
     D = np.concatenate(diffs)
     noise = np.empty(C)
-    for c in range(C):  # trimmed: a quantised signal's MAD is 0 below the step; spikes
-        d = D[:, c]  # would dominate a plain standard deviation
-        keep = np.abs(d) <= np.quantile(np.abs(d), 1.0 - NOISE_TRIM)
-        noise[c] = d[keep].std() / np.sqrt(2) / TRIM_STD_RATIO
+    for c in range(C):
+        noise[c] = trimmed_noise(D[:, c])
     drift = random_walk_rate(stretches, noise, rate_hz)
     lengths = np.array([seg.shape[0] / rate_hz for seg in stretches])
     contact = F > quiet_n
@@ -245,9 +251,7 @@ def fit_unforced(
                     f"channel {c}: fewer than 2 quiet recordings (maximum within "
                     f"{QUIET_SIGMAS:g} noise deviations of the floor): no noise floor to fit"
                 )
-            d = np.diff(X[q, :, c], axis=1).ravel()
-            keep = np.abs(d) <= np.quantile(np.abs(d), 1.0 - NOISE_TRIM)
-            rec = d[keep].std() / np.sqrt(2) / TRIM_STD_RATIO
+            rec = trimmed_noise(np.diff(X[q, :, c], axis=1).ravel())
             new = rec / RECTIFIED_DIFF
             if abs(new - sigma) <= 1e-6 * sigma:
                 break

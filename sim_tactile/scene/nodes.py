@@ -49,6 +49,15 @@ class SkinGrid:
         return px * py
 
 
+def lattice_shape(finger: Finger, pitch_m: float, pitch_y_m: float | None = None):
+    """``(nx, ny)``: the nodes :func:`skin_grid` lays along x and y on the finger's patch at
+    these pitches (an odd count per side), without its range checks."""
+    px, py = finger.patch_m
+    nx = 2 * int(np.floor(px / pitch_m / 2)) + 1
+    ny = 2 * int(np.floor(py / (pitch_y_m or pitch_m) / 2)) + 1
+    return nx, ny
+
+
 def skin_grid(finger: Finger, pitch_m: float, pitch_y_m: float | None = None) -> SkinGrid:
     """Nodes at ``pitch_m`` along x and ``pitch_y_m`` (default: the same) along y over the
     finger's patch (an odd count per side, so a node sits at the pad's centre)."""
@@ -57,8 +66,7 @@ def skin_grid(finger: Finger, pitch_m: float, pitch_y_m: float | None = None) ->
         v.in_range("skin pitch_y_m", pitch_y_m, 20e-6, 5e-3, unit="m")
     qy = pitch_y_m or pitch_m
     px, py = finger.patch_m
-    nx = 2 * int(np.floor(px / pitch_m / 2)) + 1
-    ny = 2 * int(np.floor(py / qy / 2)) + 1
+    nx, ny = lattice_shape(finger, pitch_m, pitch_y_m)
     if nx * ny > 20_000:
         raise ConfigError(
             f"skin pitch_m = {pitch_m:g} m (y {qy:g} m) gives {nx * ny} nodes; valid: at most "

@@ -28,7 +28,7 @@ from dataclasses import asdict, dataclass, field
 from .. import _validate as v
 from ..plates import Plate, features
 from ..plates.spec import Roughness
-from ..scene.nodes import skin_grid
+from ..scene.nodes import lattice_shape
 from .measured_errors import WARN_ABOVE, MeasuredError, expected_error, finer_grids
 
 LEVELS = ("L0", "L1", "L2")
@@ -249,11 +249,7 @@ def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnin
 
 
 def _node_count(finger, pitch_m: float, pitch_y_m: float | None) -> int:
-    """The nodes :func:`~sim_tactile.scene.nodes.skin_grid` lays on the finger's patch at
-    these pitches (an odd count per side), without its range checks."""
-    px, py = finger.patch_m
-    nx = 2 * int(math.floor(px / pitch_m / 2)) + 1
-    ny = 2 * int(math.floor(py / (pitch_y_m or pitch_m) / 2)) + 1
+    nx, ny = lattice_shape(finger, pitch_m, pitch_y_m)
     return nx * ny
 
 
@@ -277,7 +273,7 @@ def _measured_within(plate, layout, finger, force_n, level, measured) -> Measure
     for m in reversed(grids):  # finest first
         if m.error > WARN_ABOVE:
             break
-        if skin_grid(finger, m.pitch_m, m.pitch_y_m).n <= MAX_NODES_MEASURED:
+        if _node_count(finger, m.pitch_m, m.pitch_y_m) <= MAX_NODES_MEASURED:
             best = m
     return best
 
@@ -291,7 +287,7 @@ def _far_from_physics(plate, layout, finger, protocol, level, measured, shape) -
     )
     py_m = measured.pitch_y_m
     for m in finer_grids(plate, layout, finger, protocol.force_n, level, measured.pitch_m, py_m):
-        nodes = skin_grid(finger, m.pitch_m, m.pitch_y_m).n
+        nodes = _node_count(finger, m.pitch_m, m.pitch_y_m)
         how = "solved spectrally" if nodes > DENSE_MAX_NODES else "dense solve"
         over = f", over auto's {MAX_NODES_MEASURED}" if nodes > MAX_NODES_MEASURED else ""
         out += f"; {m.grid}: {100 * m.error:.1f}% ({nodes} nodes{over}, {how}; pass pitch_m)"

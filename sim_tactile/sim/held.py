@@ -39,7 +39,7 @@ from ..errors import PhysicsError
 from . import contact
 from .collide import PrimitiveCollider, depths_kernel
 from .contact.kernels import NO_K, force_loop, force_same_set
-from .skin import CoupledSkin, SkinModel
+from .skin import CoupledSkin, SkinModel, SpectralSkin
 
 #: Collision queries one step may take before it gives up (the pad falling through).
 QS_COLLISIONS = 50
@@ -66,8 +66,9 @@ class HeldStep:
         self.p = np.zeros(W.shape[1])  # the pressures [Pa] of the last step
 
     def describe(self) -> str:
-        spectral = getattr(self.skin, "solver", None).__class__.__name__ == "Spectral"
-        return f"full problem, {self.skin.describe()}" if spectral else "full problem"
+        if isinstance(self.skin, SpectralSkin):
+            return f"full problem, {self.skin.describe()}"
+        return "full problem"
 
     def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
         """Move the pad (``qpos[jz]``) to the height where the node pressures sum to ``total``

@@ -121,7 +121,7 @@ class CoupledSkin(_SolvedSkin):
         (with friction's coupling when the skin carries it and is compressible)."""
         C = compliance_matrix(grid.xy, grid.pitch_m, finger.e_star_pa, pitch_y_m=grid.pitch_y_m)
         what = f"elastic half-space, E* {finger.e_star_pa:.4g} Pa"
-        if finger.skin_tractions and finger.friction > 0 and finger.poisson < 0.5:
+        if _friction_coupled(finger):
             stack = Stack.half_space(finger.thickness_m, finger.young_pa, finger.poisson)
             C, what = cls._with_friction(C, grid, finger, stack, slide_dir, what)
             return cls(C, np.linalg.inv(C) if inverse else None, what, symmetric=False)
@@ -141,7 +141,7 @@ class CoupledSkin(_SolvedSkin):
         st = finger.stack
         C = layered_compliance_matrix(grid.xy, grid.pitch_m, st, pitch_y_m=grid.pitch_y_m)
         what = _stack_name(st)
-        if finger.skin_tractions and finger.friction > 0:
+        if _friction_coupled(finger):
             C, what = cls._with_friction(C, grid, finger, st, slide_dir, what)
             return cls(C, np.linalg.inv(C) if inverse else None, what, symmetric=False)
         return cls(C, np.linalg.inv(C) if inverse else None, what)
