@@ -185,8 +185,9 @@ def choose_fidelity(
     py_key = None if aspect == 1.0 else float(pitch_y)
     measured = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key)
     refined = ""
-    better = _refinement(plate, layout, finger, protocol.force_n, level, measured)
-    if fidelity == "auto" and refine and pitch_m is None and better is not None:
+    auto = fidelity == "auto" and refine and pitch_m is None
+    better = _refinement(plate, layout, finger, protocol.force_n, level, measured) if auto else None
+    if better is not None:
         refined = (
             f" (refined from {shape}, measured {100 * measured.error:.0f}% from the physics: "
             "the coarsest measured grid from which every finer one is within "
