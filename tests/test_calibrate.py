@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from sim_tactile.calibrate import calibrate, from_fit
-from sim_tactile.calibrate.fit import RECTIFIED_DIFF, fit_channels, fit_unforced
+from sim_tactile.calibrate.fit import RECTIFIED_DIFF, fit_channels, fit_readout, fit_unforced
 from sim_tactile.cli import main
 from sim_tactile.errors import ConfigError
 from sim_tactile.sensors import get_sensor
@@ -138,6 +138,28 @@ def test_the_file_round_trips_and_bad_files_name_what_is_wrong(tmp_path):
         p.write_text(bad)
         with pytest.raises(ConfigError, match=msg):
             load_calibration(p)
+    # a multiplexed readout round-trips; without one the file has no readout keys
+    assert "readout" not in text
+    mux = _cal(readout_period=6, readout_phase=(0, 3) * 9 + (0,), readout_leak=0.001)
+    again = load_calibration(mux.write(tmp_path / "m.toml"))
+    assert again == mux
+    assert calibrated(get_sensor("biotac19"), again).imperfections.readout_phase[1] == 3
+    mtext = (tmp_path / "m.toml").read_text()
+    for bad, msg in [
+        (
+            mtext.replace("readout_phase = [0, 3,", "readout_phase = [0, 7,"),
+            r"calibration.readout_phase\[1\] = 7 is out of range; valid: \[0, 5\]",
+        ),
+        (
+            mtext.replace("readout_phase = [0, 3,", "readout_phase = ["),
+            "readout_phase has 17 values; valid: none, or one per channel",
+        ),
+        (mtext.replace("readout_period = 6", "readout_period = 0"), "readout_period = 0"),
+    ]:
+        p = tmp_path / "bad.toml"
+        p.write_text(bad)
+        with pytest.raises(ConfigError, match=msg):
+            load_calibration(p)
     with pytest.raises(ConfigError, match="ending in .toml"):
         cal.write(tmp_path / "c.txt")
     with pytest.raises(ConfigError, match="does not exist"):
@@ -193,18 +215,25 @@ def test_the_shipped_biotac_calibration_loads_by_name():
         load_calibration("pvdf2")
 
 
-def _unforced(seed=0, n_rec=600, T=75, rate=50.0):
+def _unforced(seed=0, n_rec=600, T=75, readout=None):
     """Clips of a sensor with no force recorded: each channel rests at 0 with Gaussian noise
     of a known deviation, clipped at 0; in a third of the clips it is in contact at a known
-    steady level (with the same noise)."""
+    steady level (with the same noise). ``readout = (period, phase, leak)``: the level comes
+    through a multiplexed readout, on one sample in ``period`` at ``(shift + phase[c]) %
+    period`` (the shift drawn per clip) and ``leak`` of it between; noise on every sample."""
     rng = np.random.default_rng(seed)
     sigma = np.array([0.6, 1.0, 1.5, 2.2])
     level = np.array([20.0, 45.0, 30.0, 60.0])
     out = []
     for _ in range(n_rec):
         contact = rng.random(4) < 1 / 3
-        x = np.where(contact, level, 0.0) + sigma * rng.standard_normal((T, 4))
-        out.append(np.maximum(x, 0.0))
+        signal = np.broadcast_to(np.where(contact, level, 0.0), (T, 4))
+        if readout is not None:
+            period, phase, leak = readout
+            shift = rng.integers(period)
+            on = (np.arange(T)[:, None] - shift - np.asarray(phase)[None, :]) % period == 0
+            signal = signal * np.where(on, 1.0, leak)
+        out.append(np.maximum(signal + sigma * rng.standard_normal((T, 4)), 0.0))
     return out, sigma, level
 
 
@@ -223,6 +252,58 @@ def test_the_unforced_fit_recovers_noise_and_steady_levels_under_the_assumed_for
         fit_unforced(levels, 50.0, 0.0)
     with pytest.raises(ConfigError, match="fewer than 2 quiet"):
         fit_unforced([x + 100.0 for x in levels[:10]], 50.0, 1.0)
+
+
+@pytest.mark.parametrize("period, phase", [(6, (0, 3, 0, 3)), (4, (1, 0, 2, 1)), (5, (0, 0, 4, 2))])
+def test_the_readout_cycle_of_multiplexed_clips_is_recovered(period, phase):
+    """Period, each channel's phase relative to the most often loaded one, and the leak."""
+    levels, sigma, level = _unforced(seed=1, n_rec=400, readout=(period, phase, 0.02))
+    fit = fit_unforced(levels, 50.0, 1.0)
+    r = fit_readout(levels, fit.noise_std)
+    assert r.period == period
+    ref = int(
+        np.argmax(
+            [sum(x[:, c].max() >= 8 * s for x in levels) for c, s in enumerate(fit.noise_std)]
+        )
+    )
+    assert r.phase == tuple((p - phase[ref]) % period for p in phase)
+    assert r.leak == pytest.approx(0.02, abs=0.005)
+    assert r.contrast > 0.8 * period
+    # the steady level is the loaded phase's
+    np.testing.assert_allclose(fit.counts_per_n, level, rtol=RECOVERY_RTOL)
+
+
+def test_clips_read_on_every_sample_have_no_readout_cycle():
+    levels, _, _ = _unforced()
+    r = fit_readout(levels, fit_unforced(levels, 50.0, 1.0).noise_std)
+    assert r.period == 1 and r.phase == () and r.leak == 0.0
+
+
+def test_the_readout_gate_keeps_one_sample_in_the_period_and_draws_only_when_multiplexed():
+
+    y = np.full((24, 4), 10.0)
+    pos = np.zeros((4, 3))
+    plain = Imperfections(noise_std=0.5)
+    a = plain.apply(y, pos, 50.0, np.random.default_rng(3))
+    b = plain.apply(y, pos, 50.0, np.random.default_rng(3))
+    np.testing.assert_array_equal(a, b)
+    assert "readout_period" not in plain.to_json()  # keys made before the readout stay
+    mux = Imperfections(readout_period=6, readout_phase=(0, 3, 0, 3), readout_leak=0.1)
+    out = mux.apply(y, pos, 50.0, np.random.default_rng(3))
+    on = out == 10.0
+    assert (on.sum(axis=0) == 4).all() and np.allclose(out[~on], 1.0)
+    t0 = np.flatnonzero(on[:, 0])
+    np.testing.assert_array_equal(np.diff(t0), 6)
+    np.testing.assert_array_equal(np.flatnonzero(on[:, 1]), (t0 + 3) % 6 + np.arange(4) * 6)
+    np.testing.assert_array_equal(on[:, 0], on[:, 2])
+    with pytest.raises(
+        ConfigError, match=r"readout_phase\[1\] = 6 is out of range; valid: \[0, 5\]"
+    ):
+        Imperfections(readout_period=6, readout_phase=(0, 6))
+    with pytest.raises(ConfigError, match="readout_phase has 2 values; valid: one per channel"):
+        Imperfections(readout_period=6, readout_phase=(0, 3)).apply(
+            y, pos, 50.0, np.random.default_rng(0)
+        )
 
 
 def test_from_fit_borrows_the_gain_of_channels_the_press_does_not_load():
@@ -296,10 +377,16 @@ def test_calibrate_icub_on_the_real_clips(tmp_path):
     assert all(0.3 < s < 4.0 for s in cal.noise_std)
     assert all(5.0 < c < 100.0 for c in cal.counts_per_n)
     assert "free parameter" in cal.notes[0] and "assumed 1 N" in cal.notes[0]
+    # the clips' readout: a loaded taxel reads on one sample in six, the patches alternate
+    assert cal.readout_period == 6 and cal.readout_leak < 0.01
+    assert set(cal.readout_phase) == {0, 3}
+    assert all(cal.readout_phase[10 * m] == 3 * (m % 2) for m in range(6))
     shipped = load_calibration("icub60")
     np.testing.assert_allclose(shipped.counts_per_n, cal.counts_per_n, rtol=1e-9)
     np.testing.assert_allclose(shipped.gain, cal.gain, rtol=1e-6)
     np.testing.assert_allclose(shipped.noise_std, cal.noise_std, rtol=1e-9)
+    assert shipped.readout_phase == cal.readout_phase
+    assert shipped.readout_period == cal.readout_period
 
 
 def test_calibrate_json_has_the_contract_keys(tmp_path, capsys, monkeypatch):
@@ -343,3 +430,18 @@ def test_a_task_runs_with_a_sensor_config_and_its_slides_are_keyed_by_it(tmp_pat
         with_calibration(get_task("finger7-v1"), cal)
     with pytest.raises(ConfigError, match="suite"):
         with_calibration(get_task("textures20-v1"), cal)
+
+
+def test_the_level_under_clipped_noise_inverts_the_clipped_mean():
+    """Against the mean of max(mu + sigma n, 0) integrated by scipy."""
+    from scipy import integrate, stats
+
+    from sim_tactile.calibrate.fit import clipped_mean_level
+
+    mus, sigmas = np.array([0.0, 0.3, 2.0, 15.0]), np.array([1.0, 0.6, 1.5, 2.0])
+    means = [
+        integrate.quad(lambda x, mu=mu, s=s: max(x, 0.0) * stats.norm.pdf(x, mu, s), -50, 80)[0]
+        for mu, s in zip(mus, sigmas, strict=True)
+    ]
+    np.testing.assert_allclose(clipped_mean_level(np.array(means), sigmas), mus, atol=1e-6)
+    assert clipped_mean_level(np.array([0.1]), np.array([1.0]))[0] == pytest.approx(0.0, abs=1e-9)

@@ -39,7 +39,15 @@ from ..datasets.real import (
 from ..errors import ConfigError
 from ..sensors import Sensor, get_sensor
 from ..sensors.calibration import MIN_SHARE, Calibration
-from .fit import ACTIVE_SIGMAS, QUIET_SIGMAS, ChannelFit, fit_channels, fit_unforced
+from .fit import (
+    ACTIVE_SIGMAS,
+    QUIET_SIGMAS,
+    ChannelFit,
+    Readout,
+    fit_channels,
+    fit_readout,
+    fit_unforced,
+)
 
 #: BioTac static pressure (pdc) counts per newton of normal force (seed 000, section IV-D).
 BIOTAC_PDC_COUNTS_PER_N = 100.0
@@ -101,9 +109,11 @@ def from_fit(
     n: int,
     source: str,
     notes: tuple[str, ...] | None = None,
+    readout: Readout | None = None,
 ) -> Calibration:
     """The calibration of ``sensor`` from a channel fit and the simulated load shares;
-    ``notes``: what the fit assumed (default: the BioTac's, fitted against its force)."""
+    ``notes``: what the fit assumed (default: the BioTac's, fitted against its force);
+    ``readout``: a multiplexed readout found in the data (:func:`fit_readout`)."""
     notes = (
         list(notes)
         if notes is not None
@@ -147,6 +157,9 @@ def from_fit(
         crosstalk=None,
         source=source,
         notes=tuple(notes),
+        readout_period=readout.period if readout else 1,
+        readout_phase=readout.phase if readout and readout.period > 1 else (),
+        readout_leak=round(readout.leak, 6) if readout and readout.period > 1 else 0.0,
     )
 
 
@@ -172,6 +185,7 @@ def _calibrate_icub(sen: Sensor, data: object) -> Calibration:
     ds = load_icub(data)
     levels = list(ds.data.astype(np.float64))
     fit = fit_unforced(levels, ds.rate_hz, ICUB_ASSUMED_FORCE_N, floor=0.0)
+    readout = fit_readout(levels, fit.noise_std, floor=0.0)
     share = force_share(sen, SHARE_PLATE["icub60"], ICUB_ASSUMED_FORCE_N)
     notes = (
         f"free parameter: the normal force, assumed {ICUB_ASSUMED_FORCE_N:g} N (none was "
@@ -186,6 +200,20 @@ def _calibrate_icub(sen: Sensor, data: object) -> Calibration:
         "offset 0 and no ADC step: the compiled data have the rest level subtracted and are "
         "not on a grid of levels",
         "crosstalk: not identifiable without a known load; left to the sensor model",
+        _readout_note(readout),
     )
     source = f"{Path(ds.meta['path']).name}: compiled iCub clips, no force (assumed)"
-    return from_fit(sen, fit, share, len(levels), source, notes)
+    return from_fit(sen, fit, share, len(levels), source, notes, readout)
+
+
+def _readout_note(r: Readout) -> str:
+    if r.period == 1:
+        return f"readout: every sample (no cycle found in {r.n_series} loaded clip-taxels)"
+    groups = sorted(set(r.phase))
+    return (
+        f"readout: a loaded taxel carries its level on one sample in {r.period} (its loaded "
+        f"phase holds {r.contrast:.2f}x its mean level, median of {r.n_series} loaded "
+        f"clip-taxels) and {r.leak:.2g} of it between; the taxels fall in {len(groups)} phase "
+        f"groups {groups} (relative to the most often loaded taxel); where a clip starts in "
+        "the cycle varies from clip to clip, so each simulated slide draws it"
+    )

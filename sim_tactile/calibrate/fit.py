@@ -284,3 +284,92 @@ def fit_unforced(
         int(np.median([len(q) for q in quiet_sets])),
         v_force,
     )
+
+
+#: Longest readout cycle :func:`fit_readout` looks for [samples].
+MAX_READOUT_PERIOD = 16
+#: A cycle is found when its loaded phase holds this many times a channel's mean level
+#: (a channel read on every sample scores 1; one read on one sample in P scores about P).
+MIN_READOUT_CONTRAST = 1.5
+#: Of the cycles whose loaded phase scores within this share of the best, the shortest is
+#: the readout's (a multiple of the period scores as high as the period itself).
+READOUT_TIE = 0.95
+
+
+@dataclass(frozen=True)
+class Readout:
+    """A multiplexed readout: each channel carries its signal on one sample in ``period``, at
+    ``phase`` relative to the others, and ``leak`` of it on the other samples. ``contrast``
+    is the loaded phase's mean over the channel's mean (median over the loaded clips), the
+    statistic that found the period; ``n_series`` how many (clip, channel) pairs it saw."""
+
+    period: int
+    phase: tuple[int, ...]
+    leak: float
+    contrast: float
+    n_series: int
+
+
+def clipped_mean_level(m: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """The level mu >= 0 whose Gaussian noise of deviation ``sigma``, clipped at 0, has mean
+    ``m``: mu Phi(mu / sigma) + sigma phi(mu / sigma) = m (bisection; 0 where ``m`` is at or
+    below the clipped noise's own mean, sigma / sqrt(2 pi))."""
+    from scipy.special import ndtr
+
+    m, sigma = np.asarray(m, dtype=float), np.maximum(np.asarray(sigma, dtype=float), 1e-12)
+    lo, hi = np.zeros_like(m), np.maximum(m, 0.0) + 1e-12
+    for _ in range(60):
+        mu = 0.5 * (lo + hi)
+        z = mu / sigma
+        mean = mu * ndtr(z) + sigma * np.exp(-0.5 * z * z) / np.sqrt(2.0 * np.pi)
+        lo, hi = np.where(mean < m, mu, lo), np.where(mean < m, hi, mu)
+    return 0.5 * (lo + hi)
+
+
+def _phase_means(x: np.ndarray, period: int) -> np.ndarray:
+    """(S, period): each series' mean at each phase of the cycle (whole cycles only)."""
+    n = (x.shape[1] // period) * period
+    return x[:, :n].reshape(x.shape[0], n // period, period).mean(axis=1)
+
+
+def fit_readout(levels: list[np.ndarray], noise: np.ndarray, *, floor: float = 0.0) -> Readout:
+    """The readout cycle of recordings ``levels`` (each (T, C), clipped at ``floor``) whose
+    channels have noise ``noise`` (C,): period 1 when none is found.
+
+    Only loaded series count (a clip and channel rising ACTIVE_SIGMAS noise deviations above
+    the floor). For each candidate period P the statistic is the median, over those series,
+    of the largest phase mean over the series' mean; the period is the shortest P within
+    READOUT_TIE of the best (its multiples tie with it), if it reaches MIN_READOUT_CONTRAST.
+    A channel's phase is the mode, over the clips where both are loaded, of its loaded phase
+    less that of the channel loaded in most clips (the cycle's start in a clip is arbitrary);
+    the leak is the median, over the loaded series, of the level under the other phases
+    (:func:`clipped_mean_level` of their mean) over the loaded phase's mean."""
+    X = np.stack(levels) - floor  # (R, T, C)
+    R, T, C = X.shape
+    loaded = X.max(axis=1) >= ACTIVE_SIGMAS * np.asarray(noise)[None, :]  # (R, C)
+    r_idx, c_idx = np.nonzero(loaded)
+    if r_idx.size == 0:
+        return Readout(1, (), 0.0, 1.0, 0)
+    series = X[r_idx, :, c_idx]  # (S, T)
+    mean = np.maximum(series.mean(axis=1), 1e-12)
+    periods = list(range(2, min(MAX_READOUT_PERIOD, T // 4) + 1))
+    score = {P: float(np.median(_phase_means(series, P).max(axis=1) / mean)) for P in periods}
+    if not score:
+        return Readout(1, (), 0.0, 1.0, int(r_idx.size))
+    best = max(score.values())
+    P = min(p for p in periods if score[p] >= READOUT_TIE * best)
+    if score[P] < MIN_READOUT_CONTRAST:
+        return Readout(1, (), 0.0, score[P], int(r_idx.size))
+    pm = _phase_means(series, P)
+    on_phase = np.full((R, C), -1, dtype=np.int64)
+    on_phase[r_idx, c_idx] = pm.argmax(axis=1)
+    on = pm.max(axis=1)
+    off = clipped_mean_level((pm.sum(axis=1) - on) / (P - 1), np.asarray(noise)[c_idx])
+    leak = float(np.clip(np.median(off / on), 0.0, 1.0))
+    ref = int(np.argmax(loaded.sum(axis=0)))
+    phase = []
+    for c in range(C):
+        both = loaded[:, c] & loaded[:, ref]
+        rel = (on_phase[both, c] - on_phase[both, ref]) % P
+        phase.append(int(np.bincount(rel, minlength=P).argmax()) if rel.size else 0)
+    return Readout(P, tuple(phase), leak, score[P], int(r_idx.size))

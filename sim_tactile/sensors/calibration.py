@@ -60,7 +60,10 @@ class Calibration:
     - ``quant_step``: the ADC step (0: not quantised); ``crosstalk``: None where the data
       cannot separate it from the channels' common response (the reason in ``notes``);
     - ``r2``: the share of each channel's variance that the force explains;
-    - ``force_share`` and ``gain``: see the module's docstring.
+    - ``force_share`` and ``gain``: see the module's docstring;
+    - ``readout_period``, ``readout_phase`` and ``readout_leak``: a multiplexed readout, where
+      each channel delivers its signal on one sample in ``readout_period`` at its own phase
+      (relative to the others) and ``readout_leak`` of it in between (period 1: none).
     """
 
     sensor: str
@@ -79,6 +82,9 @@ class Calibration:
     crosstalk: float | None = None
     source: str = ""
     notes: tuple[str, ...] = field(default=())
+    readout_period: int = 1
+    readout_phase: tuple[int, ...] = ()
+    readout_leak: float = 0.0
 
     def __post_init__(self) -> None:
         n = len(self.channels)
@@ -103,6 +109,15 @@ class Calibration:
         v.positive("calibration.stretch_s", self.stretch_s, unit="s")
         if self.crosstalk is not None:
             v.in_range("calibration.crosstalk", self.crosstalk, 0.0, 0.5)
+        v.integer("calibration.readout_period", self.readout_period, 1, 64)
+        if self.readout_phase and len(self.readout_phase) != n:
+            raise ConfigError(
+                f"calibration.readout_phase has {len(self.readout_phase)} values; valid: none, "
+                f"or one per channel ({n})"
+            )
+        for k, ph in enumerate(self.readout_phase):
+            v.integer(f"calibration.readout_phase[{k}]", ph, 0, self.readout_period - 1)
+        v.in_range("calibration.readout_leak", self.readout_leak, 0.0, 1.0)
 
     @property
     def noise_model(self) -> tuple[float, ...]:
@@ -125,7 +140,7 @@ class Calibration:
             f"format = {FORMAT}",
         ]
         for k, x in self.to_json().items():
-            if x is None:
+            if x is None or (k.startswith("readout_") and self.readout_period == 1):
                 continue
             lines.append(f"{k} = {_toml(x)}")
         return "\n".join(lines) + "\n"
@@ -186,7 +201,7 @@ def load_calibration(path: Path | str) -> Calibration:
     )
     if missing:
         raise ConfigError(f"sensor config {str(path)!r}: missing key(s) {missing}")
-    for k in (*_LISTS, "channels", "notes"):
+    for k in (*_LISTS, "channels", "notes", "readout_phase"):
         if k in d:
             if not isinstance(d[k], list):
                 raise ConfigError(f"sensor config {str(path)!r}: {k} must be a list, got {d[k]!r}")
@@ -235,5 +250,8 @@ def calibrated(sensor, cal: Calibration):
             offset=tuple(float(o) for o in cal.offset),
             offset_max=0.0,
             quant_step=cal.quant_step,
+            readout_period=cal.readout_period,
+            readout_phase=tuple(int(p) for p in cal.readout_phase),
+            readout_leak=cal.readout_leak,
         ),
     )

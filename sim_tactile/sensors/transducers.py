@@ -9,8 +9,8 @@ with seeded imperfections. All act on sampled arrays (T, N) at the sensor's rate
 | :class:`Piezoelectric` | PVDF films (001): charge amplifier, first-order high-pass | volts, averages to zero |
 
 :class:`Imperfections` adds, in this order and from one seeded generator: crosstalk (a share
-of each neighbour's signal), dead taxels (read a constant), drift (a random walk), noise
-(white Gaussian), quantisation. Defaults are chosen so that simulated BioTac and iCub streams
+of each neighbour's signal), a multiplexed readout (a channel's signal on one sample in P),
+dead taxels (read a constant), drift (a random walk), noise (white Gaussian), quantisation. Defaults are chosen so that simulated BioTac and iCub streams
 match the real data in order of magnitude, noise and rate (tested).
 """
 
@@ -135,6 +135,13 @@ class Imperfections:
     ``offset`` a fixed baseline. ``noise_std``, ``drift_std_per_sqrt_s`` and ``offset`` take
     one value or one per channel (a calibration's).
 
+    A multiplexed readout (``readout_period`` P > 1): channel k delivers its signal on one
+    sample in P, at phase ``(shift + readout_phase[k]) % P``, and ``readout_leak`` of it on
+    the others; ``shift`` is drawn once per slide (where the window starts in the readout
+    cycle is arbitrary). Noise, drift and the clip act on every sample, as in the iCub's
+    compiled clips (see ``docs/real_data.md``). P = 1 (the default) draws nothing and leaves the
+    signal as it is.
+
     The baselines and the dead taxels belong to the sensor, not to a slide: they are drawn
     from ``unit_seed`` (which physical unit) and are the same in every recording of that unit;
     noise and drift are drawn anew for every slide from the slide's generator."""
@@ -150,8 +157,15 @@ class Imperfections:
     clip_min: float | None = None
     unit_seed: int = 0
     offset: PerChannel = 0.0
+    readout_period: int = 1
+    readout_phase: tuple[int, ...] = ()
+    readout_leak: float = 0.0
 
     def __post_init__(self) -> None:
+        v.integer("readout_period", self.readout_period, 1, 64)
+        for k, ph in enumerate(self.readout_phase):
+            v.integer(f"readout_phase[{k}]", ph, 0, self.readout_period - 1)
+        v.in_range("readout_leak", self.readout_leak, 0.0, 1.0)
         per_channel("noise_std", self.noise_std, v.non_negative)
         v.non_negative("quant_step", self.quant_step)
         per_channel("drift_std_per_sqrt_s", self.drift_std_per_sqrt_s, v.non_negative)
@@ -177,6 +191,8 @@ class Imperfections:
             d = np.linalg.norm(positions[:, None, :] - positions[None, :, :], axis=-1)
             M = np.eye(N) + self.crosstalk * ((d > 0) & (d <= self.crosstalk_radius_m))
             y = y @ M.T
+        if self.readout_period > 1:
+            y *= self.readout_gate(T, N, rng)
         unit = np.random.default_rng([self.unit_seed, N])  # this sensor unit's own defects
         offsets = unit.uniform(0, self.offset_max, N)
         dead = unit.random(N) < self.dead_fraction
@@ -198,8 +214,27 @@ class Imperfections:
             y = np.maximum(y, self.clip_min)
         return y
 
+    def readout_gate(self, T: int, N: int, rng: np.random.Generator) -> np.ndarray:
+        """(T, N): 1 where a channel's sample carries its signal, ``readout_leak`` elsewhere
+        (one draw from ``rng``: the slide's shift in the readout cycle)."""
+        P = self.readout_period
+        phase = np.zeros(N, dtype=np.int64)
+        if self.readout_phase:
+            if len(self.readout_phase) != N:
+                raise v.ConfigError(
+                    f"imperfections.readout_phase has {len(self.readout_phase)} values; "
+                    f"valid: one per channel ({N})"
+                )
+            phase[:] = self.readout_phase
+        shift = int(rng.integers(P))
+        on = (np.arange(T)[:, None] - shift - phase[None, :]) % P == 0
+        return np.where(on, 1.0, self.readout_leak)
+
     def to_json(self) -> dict:
         d = asdict(self)
         if d["offset"] == 0.0:  # a fixed baseline came later: without one, the definition
             del d["offset"]  # (and every key made from it) stays as it was
+        if d["readout_period"] == 1:  # so did the multiplexed readout
+            for k in ("readout_period", "readout_phase", "readout_leak"):
+                del d[k]
         return d
