@@ -42,7 +42,7 @@ from sim_tactile.sim.fidelity import choose_fidelity
 from sim_tactile.slides import SlideSet
 from sim_tactile.tasks import get_task, task_ids
 
-SLOW = ("textures20-icub60-v1",)
+SLOW = ("textures20-icub60-v1", "textures20-icub60-v2")
 
 
 def measure(task_id: str, n_offsets: int, refine=(1,), plates=None, log=print) -> list[dict]:

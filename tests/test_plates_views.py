@@ -6,6 +6,7 @@ from __future__ import annotations
 import pytest
 
 from sim_tactile.plates import get_plate, preset_names
+from sim_tactile.plates.presets import LONG_FAMILY
 from sim_tactile.plates.verify import compare_views
 
 MM = 1e-3
@@ -58,7 +59,10 @@ EXPECTED_PEAK_MM = {
     "textures20": 0.5,
 }
 FEATURED = list(EXPECTED_FEATURES)
-ROUGH = [n for n in preset_names() if n not in EXPECTED_FEATURES]
+#: The long strips are their short plates extended (``tests/test_textures20_v2.py``); one of
+#: them is built and compared here, the rest would only repeat it at many times the cost.
+LONG = [n for n in preset_names() if n.startswith(LONG_FAMILY)]
+ROUGH = [n for n in preset_names() if n not in EXPECTED_FEATURES and n not in LONG]
 #: The plates the fast lane (``make check``) compares; the others run in ``make test``.
 FAST = ("finger7/ridges-4", "multilayer3/grating-9", "roughness8/ra-50")
 
@@ -77,8 +81,19 @@ def _expected_peak(name: str) -> float:
 
 
 def test_every_preset_is_covered():
-    assert sorted(FEATURED + ROUGH) == sorted(preset_names())
-    assert len(ROUGH) == 10
+    assert sorted(FEATURED + ROUGH + LONG) == sorted(preset_names())
+    assert len(ROUGH) == 10 and len(LONG) == 20
+
+
+@pytest.mark.slow
+def test_three_views_agree_on_a_long_strip(cache):
+    """textures20-long/grating-3.0mm: 52 ridges of the 3 mm grating over 156 mm."""
+    r = compare_views(get_plate(LONG_FAMILY + "grating-3.0mm"), cache=cache)
+    assert r.counts == {"analytic": 52, "stl": 52, "collider": 52}
+    for view, peak in r.peak_m.items():
+        assert peak == pytest.approx(0.5 * MM, abs=VIEW_TOL_M), view
+    for pair, diff in r.max_diff_m.items():
+        assert diff <= VIEW_TOL_M, pair
 
 
 @pytest.mark.parametrize("name", _lanes(FEATURED))

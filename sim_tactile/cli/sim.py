@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..errors import ConfigError
 from ..sim.fidelity import FIDELITIES, PRESS_LEVELS
-from ..sim.protocol import FORCE_CONTROLS
+from ..sim.protocol import FORCE_CONTROLS, STARTS
 from ._common import add_command, emit, log
 
 
@@ -26,6 +26,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         duration_s=args.duration,
         rate_hz=args.rate,
         force_control=args.force_control,
+        start=args.start,
     )
     sensor = args.sensor
     if args.sensor_config is not None:
@@ -197,6 +198,13 @@ def _add_simulate(sub) -> None:
         default="quasi-static",
         choices=FORCE_CONTROLS,
         help="hold the force exactly each step (quasi-static, default) or a damped bone mass",
+    )
+    sm.add_argument(
+        "--start",
+        default="flat",
+        choices=STARTS,
+        help="start on flat ground and cross the texture (default), or start on the "
+        "texture and stay on it for --duration (the textures20-long strips)",
     )
     sm.add_argument("--seed", type=int, default=0)
     sm.add_argument("--ideal", action="store_true", help="record the noise-free normal load [N]")

@@ -19,12 +19,20 @@ Choices where the papers are silent (all plates: base 108 x 36 x 5 mm, textured 
   and heights 0.25-1 mm, drafted and narrow variants, boxes, cylinders and hemispheres at
   three pitches, and two random roughnesses. Hard pairs on purpose: grating periods 2.0 vs
   2.5 mm, boxes vs cylinders at 3 mm pitch, grating duty 0.5 vs 0.25.
+- ``textures20-long/*``: the same 20 textures on a long plate (base 196 x 36 x 5 mm,
+  textured area 156 x 36 mm), for slides that stay on the texture the whole window, as seed
+  000's BioTac slid 20 cm over each material strip. The area is the short one plus 120 mm,
+  a whole even number of every grating period and bump pitch, so each long plate is its
+  short plate extended: the same features at the same places over the short plate's area
+  (tested); the grids of bumps keep their rows and take the most columns of the same parity
+  that fit. The roughness fields are new draws of the same statistics.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 
 from ..errors import UnknownNameError
 from .spec import Bumps, Flat, Grating, Plate, Ridges, Roughness
@@ -116,7 +124,30 @@ def _build_registry() -> dict[str, Callable[[], Plate]]:
         )
     add(g + "rough-ra25", lambda: Roughness(ra_m=25 * UM, corr_length_m=0.5 * MM, seed=2001))
     add(g + "rough-ra100", lambda: Roughness(ra_m=100 * UM, corr_length_m=1.0 * MM, seed=2002))
+    # --- textures20-long: the same textures on a long strip
+    for name in [n for n in reg if n.startswith(g)]:
+        long_name = LONG_FAMILY + name[len(g) :]
+        reg[long_name] = lambda name=name, long_name=long_name: _long(reg[name](), long_name)
     return reg
+
+
+#: The long plates' family, textured area and base length [m] (see the module docstring).
+LONG_FAMILY = "textures20-long/"
+LONG_AREA_M = 0.156
+LONG_PLATE_M = 0.196
+
+
+def _long(short: Plate, name: str) -> Plate:
+    """``short`` on the long plate: its texture over :data:`LONG_AREA_M`, a bump grid with the
+    most columns of its own parity that fit (its features then stay where they were)."""
+    t = short.texture
+    if isinstance(t, Bumps):
+        spacing = t.spacing_m or min(short.area_length_m / t.cols, short.area_width_m / t.rows)
+        cols = math.floor((LONG_AREA_M - t.size_m) / spacing + 1e-9) + 1
+        if (cols - t.cols) % 2:
+            cols -= 1
+        t = replace(t, cols=cols, spacing_m=spacing)
+    return replace(short, texture=t, name=name, length_m=LONG_PLATE_M, area_length_m=LONG_AREA_M)
 
 
 _REGISTRY = _build_registry()

@@ -11,7 +11,7 @@ describe slides with it without loading MuJoCo.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -38,6 +38,16 @@ SPEED_RAMP_S = 0.02
 #:   transients and no step limit from the coupling.
 FORCE_CONTROLS = ("dynamic", "quasi-static")
 
+#: Where a slide starts (``Protocol.start``):
+#:
+#: - ``flat``: on flat ground before the textured area; with no ``duration_s`` the pad
+#:   crosses the whole area and ends on flat ground past it;
+#: - ``texture``: on the textured area, the pad's trailing edge :data:`START_MARGIN_M` inside
+#:   its start, for ``duration_s`` (required); the stroke ends as far inside the area's other
+#:   end, so the pad never leaves the texture (as on the 20 cm strips of seed 000). A slide
+#:   that would run past it rests there, and says so.
+STARTS = ("flat", "texture")
+
 
 @dataclass(frozen=True)
 class Protocol:
@@ -59,6 +69,7 @@ class Protocol:
     force_jitter: float = 0.0
     offset_jitter_m: float = 0.0
     force_control: str = "quasi-static"
+    start: str = "flat"
 
     def __post_init__(self) -> None:
         v.in_range("speed_m_s", self.speed_m_s, 0.0, 1.0, unit="m/s")
@@ -75,6 +86,20 @@ class Protocol:
         v.in_range("force_jitter", self.force_jitter, 0.0, 0.5)
         v.in_range("offset_jitter_m", self.offset_jitter_m, 0.0, 0.01, unit="m")
         v.one_of("force_control", self.force_control, FORCE_CONTROLS)
+        v.one_of("start", self.start, STARTS)
+        if self.start == "texture" and self.duration_s is None:
+            raise ConfigError(
+                "start = 'texture' needs duration_s: the slide stays on the textured area, so "
+                "its window cannot be the area's crossing"
+            )
+
+    def to_json(self) -> dict:
+        """The protocol as JSON data (what slide keys are made from). ``start`` came later:
+        at its default ``flat`` it is left out, so the keys of slides made before it stay."""
+        d = asdict(self)
+        if d["start"] == "flat":
+            del d["start"]
+        return d
 
     def at_rate(self, rate_hz: float) -> Protocol:
         """This protocol with its rate set (the sensor's ``rate_hz`` unless it has its own)."""
@@ -133,7 +158,16 @@ class SlideWindow:
         """The window of ``protocol`` (its rate set) on ``plate`` for a pad this long."""
         if protocol.rate_hz is None:
             raise ConfigError("the slide window needs the protocol's rate; give rate_hz")
-        half = plate.area_length_m / 2 + pad_length_m / 2 + START_MARGIN_M
+        if protocol.start == "texture":
+            half = plate.area_length_m / 2 - pad_length_m / 2 - START_MARGIN_M
+            if half <= 0:
+                raise ConfigError(
+                    f"plate {plate.name or plate.hash}: its textured area "
+                    f"({plate.area_length_m:g} m) is too short for a {pad_length_m:g} m pad to "
+                    f"start on it; valid: area_length_m > {pad_length_m + 2 * START_MARGIN_M:g} m"
+                )
+        else:
+            half = plate.area_length_m / 2 + pad_length_m / 2 + START_MARGIN_M
         x_start = -half
         x_end = -x_start
         if plate.length_m / 2 < x_end + 1e-9:
@@ -141,7 +175,10 @@ class SlideWindow:
                 f"plate {plate.name or plate.hash} ({plate.length_m:g} m long) is too short for a "
                 f"{pad_length_m:g} m pad to enter and leave the textured area on flat ground"
             )
-        x_limit = max(x_end, plate.length_m / 2 - pad_length_m / 2)
+        if protocol.start == "texture":
+            x_limit = x_end
+        else:
+            x_limit = max(x_end, plate.length_m / 2 - pad_length_m / 2)
         strokes = []
         for _ in range(protocol.passes):
             strokes.append((x_start, x_end, 1.0))

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -210,8 +210,8 @@ def _simulate(
         "sensor": sensor.name,
         "channel_names": list(layout.names),
         "finger": finger.to_json(),
-        "protocol": asdict(proto),
-        "protocol_nominal": asdict(nominal),
+        "protocol": proto.to_json(),
+        "protocol_nominal": nominal.to_json(),
         "seed": seed,
         "fidelity": fid.to_json(),
         "skin_problem": runner.describe(),

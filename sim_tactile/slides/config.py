@@ -13,8 +13,9 @@
 
     [protocol]                   # sim.protocol.Protocol: speed_m_s, force_n, duration_s,
     speed_m_s = 0.06             # rate_hz, press_s, settle_s, passes, return_stroke,
-    force_n = 1.0                # offset_y_m, force_control (duration_s absent: cross
-                                 # the texture; rate_hz absent: the sensor's)
+    force_n = 1.0                # offset_y_m, force_control, start ("flat" or "texture";
+                                 # duration_s absent: cross the texture; rate_hz absent:
+                                 # the sensor's)
     [randomise]                  # per-slide variation (one SD)
     speed_jitter = 0.05          # relative, [0, 0.5]
     force_jitter = 0.1           # relative, [0, 0.5]
@@ -155,7 +156,7 @@ def _protocol(proto_t: dict, rand_t: dict) -> Protocol:
         )
     for sect, t in (("protocol", proto_t), ("randomise", rand_t)):
         for k, val in t.items():
-            if k == "force_control":
+            if k in ("force_control", "start"):
                 ok, kind = isinstance(val, str), "string"
             elif k == "return_stroke":
                 ok, kind = isinstance(val, bool), "boolean"

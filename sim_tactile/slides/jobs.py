@@ -10,7 +10,7 @@ served after any of it, or any code that makes a slide, has changed.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -64,7 +64,7 @@ class SlideJob:
             "kind": "slide",
             "plate": self.plate.params(),
             "sensor": self.sensor.to_json(),
-            "protocol": asdict(self.protocol),
+            "protocol": self.protocol.to_json(),
             "seed": int(self.seed),
             "fidelity": self.fidelity,
             "ideal": bool(self.ideal),

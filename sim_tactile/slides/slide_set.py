@@ -11,7 +11,7 @@ is cached under its job's content key (:meth:`~.jobs.SlideJob.key`): a second ru
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -116,7 +116,7 @@ class SlideSet:
             "plate_params": [get_plate(p).params() for p in self.plates],
             "sensor": self.sensor,
             "sensor_definition": self.sensor_def().to_json(),
-            "protocol": asdict(self.window_protocol()),
+            "protocol": self.window_protocol().to_json(),
             "slides": self.slides,
             "quick_slides": self.quick_slides,
             "quick_plates": None if self.quick_plates is None else list(self.quick_plates),
