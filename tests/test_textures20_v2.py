@@ -21,6 +21,8 @@ from sim_tactile.tasks.defs import textures20 as t20
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "datasets" / "biotac_slide_20_50"
 LONG = [n for n in preset_names() if n.startswith(LONG_FAMILY)]
+#: the long plates the fast lane checks; the others run in ``make test``
+FAST = (LONG_FAMILY + "grating-3.0mm", LONG_FAMILY + "boxes-3.0mm")
 
 
 def test_a_texture_start_keeps_the_pad_on_the_strip():
@@ -54,7 +56,9 @@ def test_slide_keys_made_before_the_start_field_are_unchanged():
     assert Protocol(duration_s=1.0, start="texture").to_json()["start"] == "texture"
 
 
-@pytest.mark.parametrize("name", LONG)
+@pytest.mark.parametrize(
+    "name", [n if n in FAST else pytest.param(n, marks=pytest.mark.slow) for n in LONG]
+)
 def test_each_long_plate_is_its_short_plate_extended(name):
     """Over the short plate's textured area the heights are the same (sampled off the
     feature edges); past it the long plate is still textured."""
