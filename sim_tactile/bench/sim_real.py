@@ -1,8 +1,9 @@
 """Simulated against real streams of the same sensor: ``sim-tactile bench sim-real``.
 
 For each sensor with real recordings (the public BioTac and iCub slides of seed 000), the
-real slides and the simulated slides of the task that reproduces them in simulation
-(``textures20-biotac19-v1``, ``textures20-icub60-v1``) are reduced to the same statistics,
+real slides and the simulated slides of the task that reproduces their protocol in
+simulation (``textures20-biotac19-v2``, ``textures20-icub60-v2``: windows as long as the real
+ones, all on texture) are reduced to the same statistics,
 and their distributions over slides are set side by side:
 
 - per slide, averaged over channels: the **mean** level, the **maximum**, the **temporal
@@ -36,8 +37,8 @@ SLOPE_BAND_HZ = (1.0, 20.0)
 FACTOR = 2.0
 #: The sensors with real data, the task that simulates each, and its real-data loader.
 SENSORS = {
-    "biotac19": ("textures20-biotac19-v1", load_biotac),
-    "icub60": ("textures20-icub60-v1", load_icub),
+    "biotac19": ("textures20-biotac19-v2", load_biotac),
+    "icub60": ("textures20-icub60-v2", load_icub),
 }
 STATS = ("mean", "max", "temporal_std", "noise", "spectral_slope", "channel_correlation")
 
