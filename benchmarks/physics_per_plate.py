@@ -38,6 +38,7 @@ from sim_tactile.bench import physics
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim import measured_errors
+from sim_tactile.sim.clipped import has_walls
 from sim_tactile.sim.fidelity import choose_fidelity
 from sim_tactile.slides import SlideSet
 from sim_tactile.tasks import get_task, task_ids
@@ -45,7 +46,9 @@ from sim_tactile.tasks import get_task, task_ids
 SLOW = ("textures20-icub60-v1", "textures20-icub60-v2")
 
 
-def measure(task_id: str, n_offsets: int, refine=(1,), plates=None, log=print) -> list[dict]:
+def measure(
+    task_id: str, n_offsets: int, refine=(1,), plates=None, log=print, clipped=False
+) -> list[dict]:
     ss = get_task(task_id).get_data
     sensor = get_sensor(ss.sensor)
     proto = ss.protocol.at_rate(sensor.layout.rate_hz)
@@ -54,6 +57,8 @@ def measure(task_id: str, n_offsets: int, refine=(1,), plates=None, log=print) -
         if plates and name not in plates:
             continue
         plate = get_plate(name)
+        if clipped and not has_walls(plate):
+            continue
         # the grid that resolves the features, before auto refines it from this table
         fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto", refine=False)
         t0 = time.perf_counter()
@@ -62,7 +67,7 @@ def measure(task_id: str, n_offsets: int, refine=(1,), plates=None, log=print) -
             py = None if fid.pitch_y_m is None else fid.pitch_y_m / f
             t1 = time.perf_counter()
             loads = physics.configuration_loads(
-                ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m / f, py
+                ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m / f, py, clipped
             )
             norm, worst = ref.error(loads)
             r = {
@@ -75,8 +80,9 @@ def measure(task_id: str, n_offsets: int, refine=(1,), plates=None, log=print) -
                 "pitch_m": fid.pitch_m / f,
                 "pitch_y_m": py,
                 "key": measured_errors.grid_key(
-                    plate, sensor.layout, sensor.finger, fid.level, fid.pitch_m / f, py
+                    plate, sensor.layout, sensor.finger, fid.level, fid.pitch_m / f, py, clipped
                 ),
+                "clipped": clipped,
                 "error_vs_physics": norm,
                 "largest_taxel": worst,
                 "ref_change": ref.ref_change,
@@ -92,7 +98,8 @@ def measure(task_id: str, n_offsets: int, refine=(1,), plates=None, log=print) -
 
 def _grid(r: dict) -> str:
     x = r["pitch_m"] * 1e3
-    return f"{x:.3g} mm" if r["pitch_y_m"] is None else f"{x:.3g} x {r['pitch_y_m'] * 1e3:.3g} mm"
+    g = f"{x:.3g} mm" if r["pitch_y_m"] is None else f"{x:.3g} x {r['pitch_y_m'] * 1e3:.3g} mm"
+    return g + (" clip" if r.get("clipped") else "")
 
 
 def main() -> int:
@@ -104,6 +111,12 @@ def main() -> int:
         "--refine", default="1", help="comma-separated divisors of auto's node pitch (default 1)"
     )
     ap.add_argument("--json", action="store_true")
+    ap.add_argument(
+        "--clipped",
+        action="store_true",
+        help="measure the grids with patches clipped at the walls and taxel edges (plates with "
+        "box walls only)",
+    )
     ap.add_argument(
         "--write-table", action="store_true", help="store the rows where auto finds them"
     )
@@ -119,7 +132,7 @@ def main() -> int:
         print(f"{'task':24s} {'plate':34s} {'nodes':>14s}  error  largest  ref   wall")
     refine = tuple(int(x) for x in args.refine.split(","))
     plates = args.plates.split(",") if args.plates else None
-    rows = [r for t in tasks for r in measure(t, args.offsets, refine, plates, log)]
+    rows = [r for t in tasks for r in measure(t, args.offsets, refine, plates, log, args.clipped)]
     if args.json:
         print(json.dumps(rows, indent=1))
     if args.write_table:
@@ -142,12 +155,15 @@ def write_table(rows: list[dict], path: Path, at: str | None = None) -> None:
     """Store ``rows`` in ``path``, replacing the rows of the same task, plate and grid."""
     at = at or commit()
     old = json.loads(path.read_text())["rows"] if path.is_file() else []
-    new = [{**{k: r[k] for k in KEEP}, "commit": at} for r in rows]
+    new = [
+        {**{k: r[k] for k in KEEP}, **({"clipped": True} if r.get("clipped") else {}), "commit": at}
+        for r in rows
+    ]
     keys = {r["key"] for r in new}
     merged = [r for r in old if r["key"] not in keys] + new
-    merged.sort(key=lambda r: (r["task"], r["plate"], -r["pitch_m"]))
+    merged.sort(key=lambda r: (r["task"], r["plate"], r.get("clipped", False), -r["pitch_m"]))
     doc = {
-        "about": "error of the taxel loads against Tamaas (0.0625 mm), static presses at "
+        "about": "error of the taxel loads against Tamaas (0.0625 mm, cell faces on the grid), static presses at "
         "4 pad offsets; written by benchmarks/physics_per_plate.py --write-table",
         "rows": merged,
     }

@@ -145,6 +145,12 @@ def _library_version(dist: str) -> str:
         return "absent"
 
 
+def file_digest(path: Path) -> str:
+    """The sha256 of a file's bytes ("absent" when it does not exist)."""
+    path = Path(path)
+    return hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else "absent"
+
+
 @lru_cache(maxsize=64)
 def code_version(*roots: str, libraries: tuple[str, ...] = ()) -> str:
     """A 16-hex-digit hash of the source of :func:`import_closure` of ``roots`` and of the

@@ -43,6 +43,7 @@ def test_every_stored_row_is_the_measurement_of_todays_preset():
             r["level"],
             r["pitch_m"],
             r["pitch_y_m"],
+            r.get("clipped", False),
         )
         assert key == r["key"], f"stale row: {r['task']} {r['plate']} at {r['pitch_m']}"
         assert 0 <= r["error_vs_physics"] and 0 <= r["largest_taxel"] and r["commit"], r
@@ -78,8 +79,10 @@ def test_ridges_4_says_its_error_and_a_changed_scene_finds_none():
     ss, sensor, proto = _scene("finger7-v1")
     plate = get_plate("finger7/ridges-4")
     fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
-    assert fid.expected_error == pytest.approx(0.096, abs=0.01)
-    assert "elastic half-space" in fid.reason
+    # measured: 0.25 x 2 mm 13.5%, refined to 0.125 x 1 mm 8.2% (every finer grid within 10%)
+    assert fid.expected_error == pytest.approx(0.082, abs=0.01)
+    assert fid.pitch_m == pytest.approx(0.125e-3) and not fid.clipped
+    assert "elastic half-space" in fid.reason and "refined from 0.25 x 2 mm" in fid.reason
     # another finger, another grid, another force: not this measurement
     thicker = replace(sensor.finger, thickness_m=6e-3)
     other = choose_fidelity(plate, sensor.layout, thicker, proto, "auto")
@@ -96,16 +99,23 @@ def test_ridges_4_says_its_error_and_a_changed_scene_finds_none():
     assert light.expected_error == fid.expected_error  # a drawn force near the measured one
 
 
-def test_auto_warns_where_its_grid_is_far_from_the_physics_and_names_finer_grids():
+def _whole_patches_only(monkeypatch, keep=lambda r: True):
+    """The table without its clipped rows (and only the rows ``keep`` takes)."""
+    rows = {k: [r for r in v if not r.get("clipped") and keep(r)] for k, v in me._table().items()}
+    monkeypatch.setattr(me, "_table", lambda: {k: v for k, v in rows.items() if v})
+
+
+def test_auto_warns_where_its_grid_is_far_from_the_physics_and_names_finer_grids(monkeypatch):
+    _whole_patches_only(monkeypatch)
     ss, sensor, proto = _scene("finger7-v1")
     fid = choose_fidelity(
         get_plate("finger7/bumps-4x4"), sensor.layout, sensor.finger, proto, "auto"
     )
-    assert fid.expected_error > me.WARN_ABOVE
+    assert fid.expected_error > me.WARN_ABOVE and not fid.clipped
     warn = [w for w in fid.warnings if "from the physics" in w]
     assert len(warn) == 1 and "0.5 mm:" in warn[0], fid.warnings
-    # the finer grids say how they are solved, and which lie beyond what auto takes
-    assert "0.125 mm: 4.8% (16641 nodes, over auto's 5000, solved spectrally" in warn[0]
+    # the finer grids say how they are solved
+    assert "0.333 mm: 14.7% (2401 nodes, dense solve; pass pitch_m)" in warn[0], warn[0]
     flat = choose_fidelity(
         get_plate("finger7/ridges-2"), sensor.layout, sensor.finger, proto, "auto"
     )
@@ -115,32 +125,50 @@ def test_auto_warns_where_its_grid_is_far_from_the_physics_and_names_finer_grids
 
 def test_auto_refines_to_the_coarsest_grid_from_which_every_finer_one_is_within_the_target():
     ss, sensor, proto = _scene("finger7-v1")
-    plate = get_plate("finger7/bumps-6x6")
+    plate = get_plate("finger7/ridges-4")
     args = (plate, sensor.layout, sensor.finger, proto, "auto")
     base = choose_fidelity(*args, refine=False)
     fid = choose_fidelity(*args)
-    assert base.pitch_m == pytest.approx(1e-3) and base.expected_error > me.WARN_ABOVE
-    # measured: 1 mm 25.5%, 0.5 mm 16.7%, then 0.333 mm 5.1%, 0.25 8.1%, 0.2 5.1%, ...
-    assert fid.pitch_m == pytest.approx(1e-3 / 3) and fid.expected_error <= me.WARN_ABOVE
-    assert "refined from 1 mm" in fid.reason and "2401 nodes, dense solve" in fid.reason
+    assert base.pitch_m == pytest.approx(0.25e-3) and base.expected_error > me.WARN_ABOVE
+    # measured: 0.25 x 2 mm 13.5%, then 0.125 x 1 mm 8.2%, 0.083 x 0.67 6.3%, 0.0625 x 0.5 5.6%
+    assert fid.pitch_m == pytest.approx(0.125e-3) and fid.expected_error <= me.WARN_ABOVE
+    assert "refined from 0.25 x 2 mm" in fid.reason and "2193 nodes, dense solve" in fid.reason
     assert not [w for w in fid.warnings if "from the physics" in w]
-    # bumps-3x3: 0.25 mm is 6.1% but 0.167 mm 12.5% (an alignment of nodes and edges that a
-    # slide does not keep); every grid from 0.125 mm is within, beyond auto's node count
-    b3 = choose_fidelity(get_plate("finger7/bumps-3x3"), *args[1:])
-    assert b3.pitch_m == pytest.approx(1e-3) and b3.expected_error > me.WARN_ABOVE
     # a forced level, a forced pitch: no refinement
     l1 = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "L1")
-    assert l1.pitch_m == pytest.approx(1e-3)
+    assert l1.pitch_m == pytest.approx(0.25e-3)
+
+
+@pytest.mark.parametrize("plate", ["finger7/bumps-3x3", "finger7/bumps-4x4", "finger7/bumps-6x6"])
+def test_auto_clips_the_patches_where_no_finer_grid_is_within_the_target(plate, monkeypatch):
+    """The bumps: whole patches are 22-100% off at 1 mm and no finer measured grid keeps
+    within 10% (0.25 mm: 10.6%, 23.7%, 11.6%); clipped at the walls and taxel edges the 1 mm
+    grid is 1.1%, 2.7%, 4.9% from the physics."""
+    ss, sensor, proto = _scene("finger7-v1")
+    args = (get_plate(plate), sensor.layout, sensor.finger, proto, "auto")
+    fid = choose_fidelity(*args)
+    assert fid.clipped and fid.pitch_m == pytest.approx(1e-3)
+    assert fid.expected_error <= 0.05
+    assert "clipped at the walls and taxel edges" in fid.reason
+    assert not [w for w in fid.warnings if "from the physics" in w]
+    assert fid.to_json()["clipped"] is True
+    # forced levels, dynamic force control, a layered skin: whole patches
+    assert not choose_fidelity(*args[:-1], "L1").clipped
+    dyn = replace(proto, force_control="dynamic")
+    assert not choose_fidelity(args[0], sensor.layout, sensor.finger, dyn, "auto").clipped
+    # without the clipped rows the choice is whole patches, and it warns
+    _whole_patches_only(monkeypatch)
+    whole = choose_fidelity(*args)
+    assert not whole.clipped and whole.expected_error > me.WARN_ABOVE
 
 
 def test_the_refined_choice_follows_the_table(monkeypatch):
     """Without the finer rows auto keeps its grid: the choice comes from the measurements."""
+    _whole_patches_only(monkeypatch, keep=lambda r: r["pitch_m"] > 0.2e-3)
     ss, sensor, proto = _scene("finger7-v1")
-    plate = get_plate("finger7/bumps-6x6")
-    coarse = {k: v for k, v in me._table().items() if all(r["pitch_m"] > 0.6e-3 for r in v)}
-    monkeypatch.setattr(me, "_table", lambda: coarse)
+    plate = get_plate("finger7/ridges-4")
     fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
-    assert fid.pitch_m == pytest.approx(1e-3) and fid.expected_error > me.WARN_ABOVE
+    assert fid.pitch_m == pytest.approx(0.25e-3) and fid.expected_error > me.WARN_ABOVE
 
 
 @pytest.mark.slow

@@ -143,6 +143,25 @@ def test_the_slide_code_is_the_simulations_import_closure():
         assert not any(c.startswith(f"sim_tactile.{m}") for c in closure), m
 
 
+def test_the_slide_key_follows_the_measured_errors_table(tmp_path, monkeypatch):
+    """auto picks its node grid from the measured errors: a table that changes changes every
+    slide's key, so no slide made under the old table is served."""
+    from sim_tactile.slides import jobs
+
+    table = tmp_path / "measured_errors.json"
+    table.write_text('{"rows": []}')
+    monkeypatch.setattr(jobs, "SLIDE_DATA", (table,))
+    v1 = jobs.slide_code_version()
+    assert v1 == jobs.slide_code_version()
+    table.write_text('{"rows": [{"key": "x"}]}')
+    assert jobs.slide_code_version() != v1
+    table.unlink()
+    assert jobs.slide_code_version() not in (v1,)
+    assert jobs.SLIDE_DATA != (jobs.measured_errors.TABLE,)  # the patch took
+    monkeypatch.undo()
+    assert jobs.SLIDE_DATA == (jobs.measured_errors.TABLE,)
+
+
 _SCRIPT = """
 import json, sys
 from sim_tactile.sim.protocol import Protocol

@@ -11,7 +11,13 @@ the plate with the scene's force, statically. Two solutions of that press are co
 - the reference: Tamaas's FFT boundary-element solve of the elastic half-space (Polonsky and
   Keer's conjugate gradient), on a grid of :data:`REF_SPACING_M` over a periodic cell
   :data:`CELL_PADS` times the pad's larger side; each cell's pressure is read by the same
-  taxels. It reproduces Hertz to 0.2% (``tests/test_ref_tamaas.py``).
+  taxels. It reproduces Hertz to 0.2% (``tests/test_ref_tamaas.py``). Its cells' *faces*,
+  not their centres, sit on the multiples of the spacing (:data:`CELL_FACES_ON_GRID`): the
+  edges of the taxels and of the plates' features lie on round coordinates, and a row of
+  cell centres on an edge would put the whole row on one side of it by the plate's ``<=``;
+  where the pressure is singular at that edge (a rigid box under the skin), the row carries
+  the edge's load (on ``finger7/bumps-4x4`` the taxel loads move by 7.9% between the two
+  placements, see ``docs/physics.md``).
 
 Both read the same taxels, so the difference is the skin model's discretisation against
 the physics. It is a static measure: the time step's error shows in the error against L2.
@@ -34,6 +40,7 @@ from ..plates import Plate, height_at
 from ..scene.elastic import subsurface_weights
 from ..scene.nodes import skin_grid
 from ..sensors import Sensor
+from ..sim.clipped import ClippedPatches
 from ..sim.fidelity import texture_period
 from ..sim.skin import make_skin
 
@@ -45,6 +52,10 @@ REF_SPACING_M = 0.0625e-3
 CELL_PADS = 2.5
 #: Polonsky-Keer's tolerance on the relative gap
 TOLERANCE = 1e-12
+#: The reference's cells have their faces on the multiples of the spacing (their centres half
+#: a cell off), so that edges at round coordinates fall between cells, never through a row of
+#: centres. Part of every measured row's key (:mod:`~sim_tactile.sim.measured_errors`).
+CELL_FACES_ON_GRID = True
 
 
 def tamaas_missing() -> str | None:
@@ -58,12 +69,27 @@ def tamaas_missing() -> str | None:
     return None
 
 
+#: The pad offsets are multiples of this [m] (twice the reference's spacing) plus
+#: :data:`OFFSET_NUDGE_M`: walls at round coordinates then lie on the faces of the
+#: reference's cells at both of its spacings, never through a column of them.
+OFFSET_STEP_M = 2 * REF_SPACING_M
+#: ... and off them by this [m], so that no wall lies exactly on a node centre of a
+#: configuration (where the plate's ``<=`` would decide the node).
+OFFSET_NUDGE_M = 1e-7
+
+
 def offsets_m(plate: Plate, n: int) -> tuple[float, ...]:
     """``n`` pad offsets along the slide [m], spread over the texture's period (or 4 mm
-    where it has none) and off the node lattice, so that a node centre seldom sits on an
-    edge."""
+    where it has none), each on the reference's cell faces (:data:`OFFSET_STEP_M`); every
+    other one a step further, so that the walls meet a node grid's centres and its faces
+    alike (a period that is a multiple of the node pitch would otherwise put every wall at
+    the same place on the nodes, and a slide passes them all)."""
     period = texture_period(plate) or 4e-3
-    return tuple(round(period * (k + 0.137) / n, 9) for k in range(n))
+    step = OFFSET_STEP_M
+    return tuple(
+        round((round(period * (k + 0.137) / n / step) + k % 2) * step + OFFSET_NUDGE_M, 10)
+        for k in range(n)
+    )
 
 
 def gap_m(plate: Plate, finger, x, y, offset: float) -> np.ndarray:
@@ -73,6 +99,12 @@ def gap_m(plate: Plate, finger, x, y, offset: float) -> np.ndarray:
     px, py = finger.patch_m
     inside = (np.abs(x) <= px / 2) & (np.abs(y) <= py / 2)
     return np.where(inside & np.isfinite(z), z, -1.0)
+
+
+def reference_axis(n: int, spacing: float) -> np.ndarray:
+    """The ``n`` cell centres [m] along one axis of the reference's cell: faces on the
+    multiples of ``spacing`` (:data:`CELL_FACES_ON_GRID`)."""
+    return (np.arange(n) - n // 2 + (0.5 if CELL_FACES_ON_GRID else 0.0)) * spacing
 
 
 def tamaas_press(plate: Plate, finger, force_n: float, offset: float, spacing: float):
@@ -86,7 +118,7 @@ def tamaas_press(plate: Plate, finger, force_n: float, offset: float, spacing: f
     cell = n * spacing
     model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [cell, cell], [n, n])
     model.E, model.nu = finger.young_pa, finger.poisson
-    x = (np.arange(n) - n // 2) * spacing
+    x = reference_axis(n, spacing)
     X, Y = np.meshgrid(x, x, indexing="ij")
     gap = gap_m(plate, finger, X, Y, offset)
     solver = tm.PolonskyKeerRey(
@@ -159,10 +191,28 @@ def reference(plate: Plate, sensor: Sensor, force_n: float, n_offsets: int) -> P
     return PhysicsReference(offs, fine_a, change, REF_SPACING_M)
 
 
+def clipped_press(plate, sensor, force_n, offset, pitch_m, pitch_y_m=None) -> np.ndarray:
+    """The taxel loads [N] of the node grid's patches clipped at the plate's walls and the
+    taxels' edges (:mod:`~sim_tactile.sim.clipped`), held at ``force_n``."""
+    grid = skin_grid(sensor.finger, pitch_m, pitch_y_m)
+    cp = ClippedPatches(grid, sensor.finger, sensor.layout, plate, 0.0)
+    z_top = float(np.nanmax(height_at(plate, grid.xy[:, 0] + offset, grid.xy[:, 1])))
+    (_, _, hx, hy, cell, _), cand, p, _ = cp.solve(offset, z_top + 1e-3, force_n)
+    return cp.taxel_loads(cell[cand], p * 4 * hx[cand] * hy[cand])
+
+
 def configuration_loads(
-    ref: PhysicsReference, plate, sensor, force_n, level, pitch_m, pitch_y_m
+    ref: PhysicsReference, plate, sensor, force_n, level, pitch_m, pitch_y_m, clipped=False
 ) -> np.ndarray:
-    """A configuration's taxel loads at the reference's offsets."""
+    """A configuration's taxel loads at the reference's offsets (``clipped``: its patches
+    clipped at the walls and taxel edges)."""
+    if clipped:
+        return np.array(
+            [
+                clipped_press(plate, sensor, force_n, off, pitch_m, pitch_y_m)
+                for off in ref.offsets_m
+            ]
+        )
     return np.array(
         [
             taxel_loads(

@@ -26,9 +26,11 @@ import math
 from dataclasses import asdict, dataclass, field
 
 from .. import _validate as v
+from ..errors import ConfigError
 from ..plates import Plate, features
 from ..plates.spec import Roughness
 from ..scene.nodes import lattice_shape
+from .clipped import check_clippable, has_walls
 from .measured_errors import WARN_ABOVE, MeasuredError, expected_error, finer_grids
 
 LEVELS = ("L0", "L1", "L2")
@@ -95,6 +97,9 @@ class Fidelity:
     #: the taxel loads' measured error against physics at this node grid on this scene
     #: (relative norm over pad offsets x taxels; None: not measured)
     expected_error: float | None = None
+    #: whether the node patches are clipped at the plate's walls and the taxels' edges
+    #: (:mod:`~sim_tactile.sim.clipped`; the held step of the half-space skin)
+    clipped: bool = False
 
     @property
     def coupled(self) -> bool:
@@ -105,6 +110,8 @@ class Fidelity:
         d = asdict(self)
         d["coupled"] = self.coupled
         d["warnings"] = list(self.warnings)
+        if not self.clipped:
+            del d["clipped"]  # whole patches keep the description they had
         return d
 
 
@@ -186,7 +193,22 @@ def choose_fidelity(
     measured = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key)
     refined = ""
     auto = fidelity == "auto" and refine and pitch_m is None
+    # where the grid is far from the physics: a finer grid measured within the target, else
+    # the same grid with its patches clipped at the walls (measured so); a finer grid first,
+    # because the whole-patch step is compiled and reduced (ridges: columns and a mirror
+    # half), while the clipped step assembles and factors its moving patches each step
     better = _refinement(plate, layout, finger, protocol.force_n, level, measured) if auto else None
+    clip = None
+    if auto and better is None and measured is not None and measured.error > WARN_ABOVE:
+        clip = _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key)
+    if clip is not None:
+        refined = (
+            f" (whole patches measured {100 * measured.error:.0f}% from the physics and no "
+            "finer grid within "
+            f"{100 * WARN_ABOVE:.0f}%: patches clipped at the walls and taxel edges instead)"
+        )
+        measured = clip
+        shape += ", patches clipped at the walls and taxel edges"
     if better is not None:
         refined = (
             f" (refined from {shape}, measured {100 * measured.error:.0f}% from the physics: "
@@ -218,7 +240,22 @@ def choose_fidelity(
         tuple(warnings),
         py_key,
         None if measured is None else measured.error,
+        clipped=clip is not None,
     )
+
+
+def _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key):
+    """The measured error of this grid with its patches clipped at the plate's walls and the
+    taxels' edges (:mod:`~sim_tactile.sim.clipped`), where that serves the scene and was
+    measured within :data:`WARN_ABOVE`; else None."""
+    if not has_walls(plate) or protocol.force_control != "quasi-static":
+        return None
+    try:
+        check_clippable(level, finger)
+    except ConfigError:
+        return None
+    m = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key, clipped=True)
+    return m if m is not None and m.error <= WARN_ABOVE else None
 
 
 def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnings):

@@ -33,6 +33,12 @@ TABLE = Path(__file__).with_name("measured_errors.json")
 FORCE_SPAN = 0.5
 #: Error against physics above which auto warns (the target of issue 16's defaults).
 WARN_ABOVE = 0.10
+#: The reference the rows are measured against, part of every row's key: Tamaas on a
+#: 0.0625 mm grid whose cell faces (not centres) lie on the multiples of the spacing
+#: (:data:`sim_tactile.bench.physics.CELL_FACES_ON_GRID`), at pad offsets that put the walls
+#: on cell faces too (:data:`sim_tactile.bench.physics.OFFSET_STEP_M`). Rows measured
+#: against another reference are not found.
+REFERENCE = "tamaas-0.0625mm-faces-on-grid"
 
 
 @dataclass(frozen=True)
@@ -51,13 +57,13 @@ class MeasuredError:
     commit: str
     task: str
     plate: str
+    clipped: bool = False
 
     @property
     def grid(self) -> str:
         x = self.pitch_m * 1e3
-        return (
-            f"{x:.3g} mm" if self.pitch_y_m is None else f"{x:.3g} x {self.pitch_y_m * 1e3:.3g} mm"
-        )
+        g = f"{x:.3g} mm" if self.pitch_y_m is None else f"{x:.3g} x {self.pitch_y_m * 1e3:.3g} mm"
+        return g + (", clipped" if self.clipped else "")
 
     def describe(self) -> str:
         return (
@@ -66,19 +72,30 @@ class MeasuredError:
         )
 
 
-def grid_key(plate, layout, finger, level: str, pitch_m: float, pitch_y_m: float | None) -> str:
+def grid_key(
+    plate,
+    layout,
+    finger,
+    level: str,
+    pitch_m: float,
+    pitch_y_m: float | None,
+    clipped: bool = False,
+) -> str:
     """The key of a node grid on a scene: everything the static press's error depends on but
-    the force (node pitches rounded to 0.1 um)."""
-    return content_hash(
-        {
-            "plate": plate.hash,
-            "layout": layout.to_json(),
-            "finger": finger.to_json(),
-            "level": level,
-            "pitch_um": round(pitch_m * 1e6, 1),
-            "pitch_y_um": None if pitch_y_m is None else round(pitch_y_m * 1e6, 1),
-        }
-    )
+    the force (node pitches rounded to 0.1 um), whether its patches are clipped at the walls
+    and taxel edges (:mod:`~sim_tactile.sim.clipped`), and the reference."""
+    d = {
+        "plate": plate.hash,
+        "layout": layout.to_json(),
+        "finger": finger.to_json(),
+        "level": level,
+        "pitch_um": round(pitch_m * 1e6, 1),
+        "pitch_y_um": None if pitch_y_m is None else round(pitch_y_m * 1e6, 1),
+        "reference": REFERENCE,
+    }
+    if clipped:
+        d["clipped"] = True
+    return content_hash(d)
 
 
 @lru_cache(maxsize=1)
@@ -103,15 +120,24 @@ def _row(r: dict) -> MeasuredError:
         str(r["commit"]),
         str(r["task"]),
         str(r["plate"]),
+        bool(r.get("clipped", False)),
     )
 
 
 def expected_error(
-    plate, layout, finger, force_n: float, level: str, pitch_m: float, pitch_y_m: float | None
+    plate,
+    layout,
+    finger,
+    force_n: float,
+    level: str,
+    pitch_m: float,
+    pitch_y_m: float | None,
+    clipped: bool = False,
 ) -> MeasuredError | None:
-    """The measured error of this node grid on this scene, or None if it was not measured
-    (or only at a force more than :data:`FORCE_SPAN` away)."""
-    rows = _table().get(grid_key(plate, layout, finger, level, pitch_m, pitch_y_m), [])
+    """The measured error of this node grid (``clipped``: its patches clipped at the walls
+    and taxel edges) on this scene, or None if it was not measured (or only at a force more
+    than :data:`FORCE_SPAN` away)."""
+    rows = _table().get(grid_key(plate, layout, finger, level, pitch_m, pitch_y_m, clipped), [])
     near = [r for r in rows if abs(force_n / r["force_n"] - 1) <= FORCE_SPAN]
     if not near:
         return None

@@ -70,6 +70,7 @@ class Runner:
         plate: Plate,
         quasi_static: bool,
         options: StepOptions = StepOptions(),
+        clipped=None,
     ):
         self.s, self.skin, self.fid, self.finger = scene, skin, fid, finger
         self.quasi_static = quasi_static
@@ -83,7 +84,9 @@ class Runner:
             raise ConfigError("quasi-static force control needs skin nodes with a collider margin")
         self._area = scene.grid.area_m2
         self.hold = None
-        if quasi_static:
+        if quasi_static and clipped is not None:
+            self.hold = clipped  # patches clipped at the walls (sim.clipped)
+        elif quasi_static:
             dense = not isinstance(skin, SpectralSkin)  # the compiled step is dense
             if self.collider.compiled and options.compiled_hold and dense:
                 self.hold = CompiledHeldStep(

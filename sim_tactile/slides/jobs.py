@@ -16,22 +16,32 @@ import numpy as np
 
 from ..cache import ArtefactCache
 from ..errors import SimTactileError
-from ..hashing import code_version, content_hash
+from ..hashing import code_version, content_hash, file_digest
 from ..plates import Plate
 from ..records import Recording
 from ..sensors import Finger, Sensor
+from ..sim import measured_errors
 from ..sim.protocol import Protocol, SlideWindow
 
 #: The module whose import closure makes a slide (with this one, which calls it), and the
 #: libraries whose versions change what it computes.
 SLIDE_MODULES = ("sim_tactile.sim.simulate", "sim_tactile.slides.jobs")
 SLIDE_LIBRARIES = ("mujoco", "numba", "numpy", "scipy")
+#: Data files the slide's code reads and whose content changes a slide: the measured errors
+#: from which ``auto`` picks its node grid.
+SLIDE_DATA = (measured_errors.TABLE,)
 
 
 def slide_code_version() -> str:
     """The version of the code that makes a slide (:func:`~sim_tactile.hashing.code_version`
-    of :data:`SLIDE_MODULES`): the source of every module they import, and the libraries."""
-    return code_version(*SLIDE_MODULES, libraries=SLIDE_LIBRARIES)
+    of :data:`SLIDE_MODULES`): the source of every module they import, the libraries, and
+    the data files of :data:`SLIDE_DATA`."""
+    return content_hash(
+        {
+            "code": code_version(*SLIDE_MODULES, libraries=SLIDE_LIBRARIES),
+            "data": [file_digest(p) for p in SLIDE_DATA],
+        }
+    )[:16]
 
 
 @dataclass(frozen=True)
