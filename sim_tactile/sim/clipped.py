@@ -80,6 +80,29 @@ def has_walls(plate: Plate) -> bool:
     return xs.size > 0
 
 
+def static_lines(grid: SkinGrid, layout, plate: Plate, y0_m: float):
+    """The static column and row lines [m] in the pad's frame: the lattice's own, the taxels'
+    edges, and (rows) the walls along the slide with the pad centred at ``y0_m`` on the
+    plate."""
+    px, py = grid.pitch_xy
+    xs, ys = np.unique(grid.xy[:, 0]), np.unique(grid.xy[:, 1])
+    bx = np.append(xs - px / 2, xs[-1] + px / 2)
+    by = np.append(ys - py / 2, ys[-1] + py / 2)
+    pos, size = layout.positions[:, :2], layout.sizes
+    tx = np.concatenate([pos[:, 0] - size[:, 0] / 2, pos[:, 0] + size[:, 0] / 2])
+    ty = np.concatenate([pos[:, 1] - size[:, 1] / 2, pos[:, 1] + size[:, 1] / 2])
+    _, walls_y = wall_lines(plate)
+    return _merge(bx, tx, bx[0], bx[-1]), _merge(
+        by, np.concatenate([ty, walls_y - y0_m]), by[0], by[-1]
+    )
+
+
+def static_cells(grid: SkinGrid, layout, plate: Plate, y0_m: float) -> int:
+    """How many static cells the clipped grid has (:func:`static_lines`)."""
+    sx, sy = static_lines(grid, layout, plate, y0_m)
+    return (sx.size - 1) * (sy.size - 1)
+
+
 def _merge(base: np.ndarray, extra, lo: float, hi: float) -> np.ndarray:
     """``base`` (sorted) with the lines of ``extra`` strictly inside (lo, hi) that are not
     within :data:`MERGE_M` of a line already there."""
@@ -203,16 +226,10 @@ class ClippedPatches:
     the pad centre's y on the plate [m]."""
 
     def __init__(self, grid: SkinGrid, finger, layout, plate: Plate, y0_m: float):
-        px, py = grid.pitch_xy
-        xs, ys = np.unique(grid.xy[:, 0]), np.unique(grid.xy[:, 1])
-        bx = np.append(xs - px / 2, xs[-1] + px / 2)
-        by = np.append(ys - py / 2, ys[-1] + py / 2)
+        self.sx, self.sy = static_lines(grid, layout, plate, y0_m)
+        self.walls_x, _ = wall_lines(plate)
         pos, size = layout.positions[:, :2], layout.sizes
-        tx = np.concatenate([pos[:, 0] - size[:, 0] / 2, pos[:, 0] + size[:, 0] / 2])
-        ty = np.concatenate([pos[:, 1] - size[:, 1] / 2, pos[:, 1] + size[:, 1] / 2])
-        self.walls_x, walls_y = wall_lines(plate)
-        self.sx = _merge(bx, tx, bx[0], bx[-1])
-        self.sy = _merge(by, np.concatenate([ty, walls_y - y0_m]), by[0], by[-1])
+        bx = self.sx
         self.lo, self.hi = bx[0], bx[-1]
         self.half_x = max(-bx[0], bx[-1])
         fs = features(plate) if plate.texture.kind != "roughness" else None

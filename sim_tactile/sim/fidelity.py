@@ -29,8 +29,8 @@ from .. import _validate as v
 from ..errors import ConfigError
 from ..plates import Plate, features
 from ..plates.spec import Roughness
-from ..scene.nodes import lattice_shape
-from .clipped import check_clippable, has_walls
+from ..scene.nodes import lattice_shape, skin_grid
+from .clipped import check_clippable, has_walls, static_cells
 from .measured_errors import WARN_ABOVE, MeasuredError, expected_error, finer_grids
 
 LEVELS = ("L0", "L1", "L2")
@@ -194,20 +194,23 @@ def choose_fidelity(
     refined = ""
     auto = fidelity == "auto" and refine and pitch_m is None
     # where the grid is far from the physics: the same grid with its patches clipped at the
-    # walls, or a finer grid, whichever was measured within the target. Over ridges along y
-    # a finer grid first: its step reduces to columns and a mirror half (compiled), while
-    # the clipped step assembles and factors the patches along every moving wall (measured
-    # on finger7/ridges-4: 0.125 x 1 mm whole 2.8x real time in the loop, 0.25 x 2 mm
-    # clipped 0.9x); elsewhere the clipped grid first (bumps: 1 mm clipped 4.6x, 0.333 mm
-    # whole 0.33x), benchmarks/bench_clipped.py.
+    # walls, or a finer grid, whichever was measured within the target. The clipped grid
+    # first where its static cells are within L1's node cap: its step assembles and factors
+    # the patches along every moving wall, which pays on a small pad (finger7's bumps, 437
+    # cells: 1 mm clipped 4.6x real time in the loop, 0.333 mm whole 0.33x) and not on a
+    # large contact (finger7/ridges-4 at 0.25 x 2 mm, 923 cells: 0.9x, against 0.125 x 1 mm
+    # whole 2.8x; the BioTac's boxes, 2009 cells: 0.55x against 0.355 mm whole 3.7x), where
+    # a finer whole grid comes first (benchmarks/bench_clipped.py)
     far = auto and measured is not None and measured.error > WARN_ABOVE
-    ridges = _varies_along_x_only(plate, finger)
     clip = better = None
-    if far and not ridges:
+    small = (
+        far and _clipped_cells(plate, layout, finger, protocol, pitch, py_key) <= MAX_NODES[level]
+    )
+    if far and small:
         clip = _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key)
     if far and clip is None:
         better = _refinement(plate, layout, finger, protocol.force_n, level, measured)
-    if far and ridges and better is None:
+    if far and not small and better is None:
         clip = _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key)
     if clip is not None:
         refined = (
@@ -249,6 +252,13 @@ def choose_fidelity(
         None if measured is None else measured.error,
         clipped=clip is not None,
     )
+
+
+def _clipped_cells(plate, layout, finger, protocol, pitch, py_key) -> int:
+    """The static cells of this grid clipped on this scene (0 where the plate has no walls)."""
+    if not has_walls(plate):
+        return 0
+    return static_cells(skin_grid(finger, pitch, py_key), layout, plate, protocol.offset_y_m)
 
 
 def _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key):
