@@ -162,6 +162,22 @@ def test_auto_clips_the_patches_on_the_bumps(plate, monkeypatch):
     assert not whole.clipped and whole.expected_error > fid.expected_error
 
 
+def test_a_large_clipped_grid_comes_after_a_finer_whole_one():
+    """The BioTac's boxes: whole patches 18.6% off at 0.709 mm, clipped 2.3%, but the clipped
+    grid has 2009 static cells (over L1's cap of 700: its step refactors a large contact each
+    step), so auto takes the finer whole grid measured within 10% (0.355 mm, 7.9%)."""
+    ss, sensor, proto = _scene("textures20-biotac19-v1")
+    plate = get_plate("textures20/boxes-3.0mm")
+    base = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto", refine=False)
+    clipped = me.expected_error(
+        plate, sensor.layout, sensor.finger, proto.force_n, "L1", base.pitch_m, None, True
+    )
+    assert clipped is not None and clipped.error < me.WARN_ABOVE < base.expected_error
+    fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
+    assert not fid.clipped and fid.pitch_m == pytest.approx(base.pitch_m / 2)
+    assert fid.expected_error < me.WARN_ABOVE
+
+
 def test_the_refined_choice_follows_the_table(monkeypatch):
     """Without the finer rows auto keeps its grid: the choice comes from the measurements."""
     _whole_patches_only(monkeypatch, keep=lambda r: r["pitch_m"] > 0.2e-3)

@@ -193,39 +193,14 @@ def choose_fidelity(
     measured = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key)
     refined = ""
     auto = fidelity == "auto" and refine and pitch_m is None
-    # where the grid is far from the physics: the same grid with its patches clipped at the
-    # walls, or a finer grid, whichever was measured within the target. The clipped grid
-    # first where its static cells are within L1's node cap: its step assembles and factors
-    # the patches along every moving wall, which pays on a small pad (finger7's bumps, 437
-    # cells: 1 mm clipped 4.6x real time in the loop, 0.333 mm whole 0.33x) and not on a
-    # large contact (finger7/ridges-4 at 0.25 x 2 mm, 923 cells: 0.9x, against 0.125 x 1 mm
-    # whole 2.8x; the BioTac's boxes, 2009 cells: 0.55x against 0.355 mm whole 3.7x), where
-    # a finer whole grid comes first (benchmarks/bench_clipped.py)
     far = auto and measured is not None and measured.error > WARN_ABOVE
-    clip = better = None
-    small = (
-        far and _clipped_cells(plate, layout, finger, protocol, pitch, py_key) <= MAX_NODES[level]
+    clip, better = (
+        _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
+        if far
+        else (None, None)
     )
-    if far and small:
-        clip = _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key)
-    if far and clip is None:
-        better = _refinement(plate, layout, finger, protocol.force_n, level, measured)
-    if far and not small and better is None:
-        clip = _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key)
-    if clip is not None:
-        refined = (
-            f" (whole patches measured {100 * measured.error:.0f}% from the physics: "
-            "patches clipped at the walls and taxel edges instead)"
-        )
-        measured = clip
-        shape += ", patches clipped at the walls and taxel edges"
-    if better is not None:
-        refined = (
-            f" (refined from {shape}, measured {100 * measured.error:.0f}% from the physics: "
-            "the coarsest measured grid from which every finer one is within "
-            f"{100 * WARN_ABOVE:.0f}%)"
-        )
-        measured, pitch, py_key, shape = better, better.pitch_m, better.pitch_y_m, better.grid
+    if clip is not None or better is not None:
+        measured, pitch, py_key, shape, refined = _adopt(measured, clip, better, shape)
     nodes = _node_count(finger, pitch, py_key)
     reason = (
         f"{level}: {_skin_name(finger, level)}, node pitch {shape}{refined}, {nodes} nodes, "
@@ -252,6 +227,45 @@ def choose_fidelity(
         None if measured is None else measured.error,
         clipped=clip is not None,
     )
+
+
+def _adopt(measured, clip, better, shape):
+    """``(measured, pitch, pitch_y, shape, why)`` of the grid auto takes instead of one
+    measured too far from the physics: ``clip`` (the same grid, clipped) or ``better``."""
+    if clip is not None:
+        why = (
+            f" (whole patches measured {100 * measured.error:.0f}% from the physics: "
+            "patches clipped at the walls and taxel edges instead)"
+        )
+        shape += ", patches clipped at the walls and taxel edges"
+        return clip, clip.pitch_m, clip.pitch_y_m, shape, why
+    why = (
+        f" (refined from {shape}, measured {100 * measured.error:.0f}% from the physics: "
+        f"the coarsest measured grid from which every finer one is within {100 * WARN_ABOVE:.0f}%)"
+    )
+    return better, better.pitch_m, better.pitch_y_m, better.grid, why
+
+
+def _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured):
+    """``(clipped, finer)``: what auto takes for a grid measured more than WARN_ABOVE from
+    the physics: the same grid with its patches clipped at the walls, or a finer grid,
+    whichever was measured within the target (at most one is not None).
+
+    The clipped grid first where its static cells are within L1's node cap: its step
+    assembles and factors the patches along every moving wall, which pays on a small pad
+    (finger7's bumps, 437 cells: 1 mm clipped 4.6x real time in the loop, 0.333 mm whole
+    0.33x) and not over a large contact (finger7/ridges-4 at 0.25 x 2 mm, 923 cells: 0.9x,
+    against 0.125 x 1 mm whole 2.8x; the BioTac's boxes, 2009 cells: 0.55x against 0.355 mm
+    whole 3.7x), where a finer whole grid comes first (benchmarks/bench_clipped.py)."""
+    small = _clipped_cells(plate, layout, finger, protocol, pitch, py_key) <= MAX_NODES[level]
+    if small:
+        clip = _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key)
+        if clip is not None:
+            return clip, None
+    better = _refinement(plate, layout, finger, protocol.force_n, level, measured)
+    if better is None and not small:
+        return _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key), None
+    return None, better
 
 
 def _clipped_cells(plate, layout, finger, protocol, pitch, py_key) -> int:
