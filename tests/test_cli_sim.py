@@ -101,7 +101,8 @@ def test_simulate_bad_sensor_is_one_line(cli, tmp_path):
 
 def test_simulate_force_control_flag(cli, tmp_path):
     args = ["simulate", "--plate", "finger7/ridges-4", "--sensor", "grid3x3", "--speed", "0.06"]
-    args += ["--force", "1", "--duration", "0.4", "--ideal", "--json"]
+    # L1 at the grid that resolves the ridges (auto refines ridges-4 to 2193 nodes)
+    args += ["--force", "1", "--duration", "0.4", "--ideal", "--json", "--fidelity", "L1"]
     forces = {}
     for fc in ("quasi-static", "dynamic"):
         out = tmp_path / f"{fc}.npz"

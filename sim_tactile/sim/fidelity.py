@@ -13,6 +13,11 @@ skin-bone coupling's stability limit. It warns when the taxels are coarser than 
 when a forced pitch or time step is too coarse, and when the plate's roughness lies below what
 any node grid resolves (the micro-roughness model of the sensors handles that).
 
+Where that grid was measured more than 10% from the physics, auto takes the same grid with
+its patches clipped at the plate's walls and the taxels' edges (:mod:`~sim_tactile.sim.clipped`:
+``Fidelity.clipped``) or a finer grid, whichever was measured within 10%; the clipped grid
+first where it has at most L1's node cap of static cells (:func:`_far_choice`).
+
 The skin is the finger's own: its stack of layers on their backing when it has one (the cost
 in the loop is the same), otherwise the elastic half-space. The reason names it and, where the
 scene's node grid was measured against an independent half-space solver
