@@ -29,7 +29,7 @@ from sim_tactile.tasks import get_task
 GRIDS = {
     "bumps": [
         (1e-3, None, False),
-        (0.333e-3, None, False),
+        (1e-3 / 3, None, False),
         (1e-3, None, True),
         (0.5e-3, None, True),
     ],

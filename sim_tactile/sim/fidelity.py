@@ -258,10 +258,11 @@ def _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
 
     The clipped grid first where its static cells are within L1's node cap: its step
     assembles and factors the patches along every moving wall, which pays on a small pad
-    (finger7's bumps, 437 cells: 1 mm clipped 4.6x real time in the loop, 0.333 mm whole
-    0.33x) and not over a large contact (finger7/ridges-4 at 0.25 x 2 mm, 923 cells: 0.9x,
-    against 0.125 x 1 mm whole 2.8x; the BioTac's boxes, 2009 cells: 0.55x against 0.355 mm
-    whole 3.7x), where a finer whole grid comes first (benchmarks/bench_clipped.py)."""
+    (finger7's bumps, 437 cells: 1 mm clipped 4.0-6.3x real time in the slide loop, 0.333 mm
+    whole 0.2-0.4x, benchmarks/bench_clipped.py at aa8c226) and not over a large contact,
+    where a finer whole grid comes first (finger7/ridges-4 at 0.25 x 2 mm, 923 cells: 1.3x,
+    against 0.125 x 1 mm whole 5.8x; the BioTac's boxes, 2009 cells: 0.55x against 0.355 mm
+    whole 3.7x)."""
     small = _clipped_cells(plate, layout, finger, protocol, pitch, py_key) <= MAX_NODES[level]
     if small:
         clip = _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key)
