@@ -27,10 +27,13 @@ HERTZ_RTOL = 5e-3
 HERTZ_CELL_M, HERTZ_CELL_N = 32e-3, 512
 #: the project's half-space solve against Tamaas where a ridge lies under the taxel column
 #: (pad offset 2.25 mm on finger7/ridges-4), in % of the largest taxel load: at the default
-#: nodes and at 0.25 mm (measured: 1.7% and 1.1% at the surface)
-RESOLVED_ATOL = 0.03
-#: at 1 mm, 0.25 mm nodes against Tamaas (measured 3.8%)
-DEEP_FINE_ATOL = 0.05
+#: nodes and at 0.25 mm (measured: 4.2% and 6.3% at the surface against the reference with
+#: its cell faces on the grid, since 0dbeee0; 1.7% and 1.1% before, when a row of cell
+#: centres ran along the ridge's wall, which here is also the taxel's edge, and split the
+#: wall's singular strip between the taxels)
+RESOLVED_ATOL = 0.07
+#: at 1 mm, 0.25 mm nodes against Tamaas (measured 4.9%; 3.8% before 0dbeee0)
+DEEP_FINE_ATOL = 0.06
 
 
 @pytest.mark.slow
@@ -79,9 +82,10 @@ def resolved_ridge():
 def test_the_half_space_solve_agrees_with_tamaas_where_the_grid_resolves_the_ridge(
     resolved_ridge,
 ):
-    """At the surface both grids read the ridge's load within 3%. At 1 mm the taxel beside
-    the ridge feels the pressure concentrated at the ridge's edge, which the default nodes
-    smear (measured: 8.9% off); 0.25 mm nodes come within 5%."""
+    """At the surface both grids read the ridge's load within 7% (its walls lie on the
+    taxels' edges, the worst place for whole patches). At 1 mm the taxel beside the ridge
+    feels the pressure concentrated at the ridge's edge, which the default nodes smear
+    (measured: 10.0% off); 0.25 mm nodes come within 6% (4.9%)."""
     want, got = resolved_ridge
     scale = want[0.0].max()
     for grid in ref.NODE_GRIDS:
