@@ -12,7 +12,7 @@ the plate with the scene's force, statically. Two solutions of that press are co
   Keer's conjugate gradient), on a grid of :data:`REF_SPACING_M` over a periodic cell
   :data:`CELL_PADS` times the pad's larger side; each cell's pressure is read by the same
   taxels. It reproduces Hertz to 0.2% (``tests/test_ref_tamaas.py``). Its cells' *faces*,
-  not their centres, sit on the multiples of the spacing (:data:`CELL_FACES_ON_GRID`): the
+  not their centres, sit on the multiples of the spacing (:func:`reference_axis`): the
   edges of the taxels and of the plates' features lie on round coordinates, and a row of
   cell centres on an edge would put the whole row on one side of it by the plate's ``<=``;
   where the pressure is singular at that edge (a rigid box under the skin), the row carries
@@ -52,10 +52,6 @@ REF_SPACING_M = 0.0625e-3
 CELL_PADS = 2.5
 #: Polonsky-Keer's tolerance on the relative gap
 TOLERANCE = 1e-12
-#: The reference's cells have their faces on the multiples of the spacing (their centres half
-#: a cell off), so that edges at round coordinates fall between cells, never through a row of
-#: centres. Part of every measured row's key (:mod:`~sim_tactile.sim.measured_errors`).
-CELL_FACES_ON_GRID = True
 
 
 def tamaas_missing() -> str | None:
@@ -102,9 +98,11 @@ def gap_m(plate: Plate, finger, x, y, offset: float) -> np.ndarray:
 
 
 def reference_axis(n: int, spacing: float) -> np.ndarray:
-    """The ``n`` cell centres [m] along one axis of the reference's cell: faces on the
-    multiples of ``spacing`` (:data:`CELL_FACES_ON_GRID`)."""
-    return (np.arange(n) - n // 2 + (0.5 if CELL_FACES_ON_GRID else 0.0)) * spacing
+    """The ``n`` cell centres [m] along one axis of the reference's cell: their faces on the
+    multiples of ``spacing`` (the centres half a cell off), so that edges at round
+    coordinates fall between cells, never through a row of centres (the reference named in
+    every measured row's key, :data:`~sim_tactile.sim.measured_errors.REFERENCE`)."""
+    return (np.arange(n) - n // 2 + 0.5) * spacing
 
 
 def tamaas_press(plate: Plate, finger, force_n: float, offset: float, spacing: float):
@@ -191,11 +189,10 @@ def reference(plate: Plate, sensor: Sensor, force_n: float, n_offsets: int) -> P
     return PhysicsReference(offs, fine_a, change, REF_SPACING_M)
 
 
-def clipped_press(plate, sensor, force_n, offset, pitch_m, pitch_y_m=None) -> np.ndarray:
+def clipped_press(cp: ClippedPatches, grid, plate, force_n, offset) -> np.ndarray:
     """The taxel loads [N] of the node grid's patches clipped at the plate's walls and the
-    taxels' edges (:mod:`~sim_tactile.sim.clipped`), held at ``force_n``."""
-    grid = skin_grid(sensor.finger, pitch_m, pitch_y_m)
-    cp = ClippedPatches(grid, sensor.finger, sensor.layout, plate, 0.0)
+    taxels' edges (``cp``, :mod:`~sim_tactile.sim.clipped`) with the pad at ``offset``, held
+    at ``force_n``."""
     z_top = float(np.nanmax(height_at(plate, grid.xy[:, 0] + offset, grid.xy[:, 1])))
     (_, _, hx, hy, cell, _), cand, p, _ = cp.solve(offset, z_top + 1e-3, force_n)
     return cp.taxel_loads(cell[cand], p * 4 * hx[cand] * hy[cand])
@@ -206,13 +203,10 @@ def configuration_loads(
 ) -> np.ndarray:
     """A configuration's taxel loads at the reference's offsets (``clipped``: its patches
     clipped at the walls and taxel edges)."""
-    if clipped:
-        return np.array(
-            [
-                clipped_press(plate, sensor, force_n, off, pitch_m, pitch_y_m)
-                for off in ref.offsets_m
-            ]
-        )
+    if clipped:  # the static cells and their weights serve every offset
+        grid = skin_grid(sensor.finger, pitch_m, pitch_y_m)
+        cp = ClippedPatches(grid, sensor.finger, sensor.layout, plate, 0.0)
+        return np.array([clipped_press(cp, grid, plate, force_n, off) for off in ref.offsets_m])
     return np.array(
         [
             taxel_loads(

@@ -67,7 +67,7 @@ def wall_lines(plate: Plate) -> tuple[np.ndarray, np.ndarray]:
     """The plate frame's x positions of the vertical walls across the slide, and y positions
     of those along it [m]: the faces of its boxes (ridges, bumps, grating bars)."""
     xs, ys = set(), set()
-    for f in features(plate) if plate.texture.kind != "roughness" else ():
+    for f in features(plate):  # none on a rough plate
         if f.kind == "box":
             xs.update((round(f.x - f.hx, 12), round(f.x + f.hx, 12)))
             ys.update((round(f.y - f.hy, 12), round(f.y + f.hy, 12)))
@@ -317,7 +317,6 @@ class ClippedPatches:
         reach = REACH_M
         for _ in range(MAX_REACHES):
             c = np.flatnonzero(g > min(-reach, float(g.max()) - reach))
-            cand = c
             # the same patches as the last solve: the same compliance and factorisations
             key = (c.size, cx[c].tobytes(), cy[c].tobytes(), hx[c].tobytes(), hy[c].tobytes())
             if key != self._last:
@@ -328,10 +327,10 @@ class ClippedPatches:
             gc = g[c]
             p, d, _ = hold_force(gc, area[c], self._C, force_n, gc > 0, self._factors)
             out = np.ones(g.size, bool)
-            out[cand] = False
+            out[c] = False
             if not (g[out] + d > 0).any():  # no patch left out would touch at the new height
                 self.deepest = float(gc.max()) + d
-                return pt, cand, p, d
+                return pt, c, p, d
             reach = max(2 * reach, d + REACH_M)
         raise PhysicsError(f"clipped contact: no height of the pad carries {force_n:g} N")
 
@@ -353,8 +352,6 @@ class ClippedHeldStep:
         self.c = patches
         self.area = base_area_m2
         self.x0, self.z0, self.jx = x0, z0, jx
-        self.n_patches = 0
-        self.p = np.zeros(0)
 
     def describe(self) -> str:
         return (
@@ -368,7 +365,6 @@ class ClippedHeldStep:
         (cx, cy, hx, hy, cell, _), cand, p, d = self.c.solve(x_pad, z_low, total * self.area)
         qpos[jz] -= d
         loads = p * (4 * hx[cand] * hy[cand])
-        self.n_patches = cx.size
         self.c.taxel_loads(cell[cand], loads, out=taxel_out)
         return float(loads.sum()), self.c.deepest
 

@@ -263,36 +263,30 @@ def _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
     where a finer whole grid comes first (finger7/ridges-4 at 0.25 x 2 mm, 923 cells: 1.3x,
     against 0.125 x 1 mm whole 5.8x; the BioTac's boxes, 2009 cells: 0.55x against 0.355 mm
     whole 3.7x)."""
-    small = _clipped_cells(plate, layout, finger, protocol, pitch, py_key) <= MAX_NODES[level]
-    if small:
-        clip = _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key)
-        if clip is not None:
-            return clip, None
+    if not _clippable(plate, finger, protocol, level):
+        return None, _refinement(plate, layout, finger, protocol.force_n, level, measured)
+    grid = skin_grid(finger, pitch, py_key)
+    small = static_cells(grid, layout, plate, protocol.offset_y_m) <= MAX_NODES[level]
+    clip = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key, True)
+    clip = clip if clip is not None and clip.error <= WARN_ABOVE else None
+    if small and clip is not None:
+        return clip, None
     better = _refinement(plate, layout, finger, protocol.force_n, level, measured)
     if better is None and not small:
-        return _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key), None
+        return clip, None
     return None, better
 
 
-def _clipped_cells(plate, layout, finger, protocol, pitch, py_key) -> int:
-    """The static cells of this grid clipped on this scene (0 where the plate has no walls)."""
-    if not has_walls(plate):
-        return 0
-    return static_cells(skin_grid(finger, pitch, py_key), layout, plate, protocol.offset_y_m)
-
-
-def _clipped_instead(plate, layout, finger, protocol, level, pitch, py_key):
-    """The measured error of this grid with its patches clipped at the plate's walls and the
-    taxels' edges (:mod:`~sim_tactile.sim.clipped`), where that serves the scene and was
-    measured within :data:`WARN_ABOVE`; else None."""
+def _clippable(plate, finger, protocol, level) -> bool:
+    """Whether clipped patches serve this scene: a plate with box walls, the held force, and
+    a skin they serve (:func:`~sim_tactile.sim.clipped.check_clippable`)."""
     if not has_walls(plate) or protocol.force_control != "quasi-static":
-        return None
+        return False
     try:
         check_clippable(level, finger)
     except ConfigError:
-        return None
-    m = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key, clipped=True)
-    return m if m is not None and m.error <= WARN_ABOVE else None
+        return False
+    return True
 
 
 def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnings):

@@ -35,7 +35,7 @@ FORCE_SPAN = 0.5
 WARN_ABOVE = 0.10
 #: The reference the rows are measured against, part of every row's key: Tamaas on a
 #: 0.0625 mm grid whose cell faces (not centres) lie on the multiples of the spacing
-#: (:data:`sim_tactile.bench.physics.CELL_FACES_ON_GRID`), at pad offsets that put the walls
+#: (:func:`sim_tactile.bench.physics.reference_axis`), at pad offsets that put the walls
 #: on cell faces too (:data:`sim_tactile.bench.physics.OFFSET_STEP_M`). Rows measured
 #: against another reference are not found.
 REFERENCE = "tamaas-0.0625mm-faces-on-grid"
