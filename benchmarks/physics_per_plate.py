@@ -38,6 +38,8 @@ from sim_tactile.bench import physics
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim import measured_errors
+from sim_tactile.errors import ConfigError
+from sim_tactile.sim.anchored import check_anchorable
 from sim_tactile.sim.clipped import has_walls
 from sim_tactile.sim.fidelity import choose_fidelity
 from sim_tactile.slides import SlideSet
@@ -47,8 +49,11 @@ SLOW = ("textures20-icub60-v1", "textures20-icub60-v2")
 
 
 def measure(
-    task_id: str, n_offsets: int, refine=(1,), plates=None, log=print, clipped=False
+    task_id: str, n_offsets: int, refine=(1,), plates=None, log=print, clipped=False, anchored=()
 ) -> list[dict]:
+    """The rows of one task: auto's resolving grid at 1/f of its pitch for f in ``refine``
+    (``clipped``: its patches clipped), or, with ``anchored`` ((wall, x, y) in m), the
+    lattices anchored to the walls, on the plates they serve."""
     ss = get_task(task_id).get_data
     sensor = get_sensor(ss.sensor)
     proto = ss.protocol.at_rate(sensor.layout.rate_hz)
@@ -59,15 +64,24 @@ def measure(
         plate = get_plate(name)
         if clipped and not has_walls(plate):
             continue
+        if anchored and not anchorable(plate, sensor.layout, sensor.finger):
+            continue
         # the grid that resolves the features, before auto refines it from this table
         fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto", refine=False)
         t0 = time.perf_counter()
         ref = physics.reference(plate, sensor, proto.force_n, n_offsets)
-        for f in refine:
-            py = None if fid.pitch_y_m is None else fid.pitch_y_m / f
+        grids = (
+            [(w, px, py, None) for w, px, py in anchored]
+            if anchored
+            else [
+                (None, fid.pitch_m / f, None if fid.pitch_y_m is None else fid.pitch_y_m / f, f)
+                for f in refine
+            ]
+        )
+        for k, (wall, px, py, f) in enumerate(grids):
             t1 = time.perf_counter()
             loads = physics.configuration_loads(
-                ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m / f, py, clipped
+                ref, plate, sensor, proto.force_n, fid.level, px, py, clipped, wall
             )
             norm, worst = ref.error(loads)
             r = {
@@ -77,16 +91,17 @@ def measure(
                 "level": fid.level,
                 "force_n": proto.force_n,
                 "refine": f,
-                "pitch_m": fid.pitch_m / f,
+                "pitch_m": px,
                 "pitch_y_m": py,
                 "key": measured_errors.grid_key(
-                    plate, sensor.layout, sensor.finger, fid.level, fid.pitch_m / f, py, clipped
+                    plate, sensor.layout, sensor.finger, fid.level, px, py, clipped, wall
                 ),
                 "clipped": clipped,
+                "wall_m": wall,
                 "error_vs_physics": norm,
                 "largest_taxel": worst,
                 "ref_change": ref.ref_change,
-                "wall_s": time.perf_counter() - (t0 if f == refine[0] else t1),
+                "wall_s": time.perf_counter() - (t0 if k == 0 else t1),
             }
             rows.append(r)
             log(
@@ -99,7 +114,18 @@ def measure(
 def _grid(r: dict) -> str:
     x = r["pitch_m"] * 1e3
     g = f"{x:.3g} mm" if r["pitch_y_m"] is None else f"{x:.3g} x {r['pitch_y_m'] * 1e3:.3g} mm"
+    if r.get("wall_m") is not None:
+        return f"{r['wall_m'] * 1e3:.3g}/" + g + " anch"
     return g + (" clip" if r.get("clipped") else "")
+
+
+def anchorable(plate, layout, finger) -> bool:
+    """Whether the lattice anchored to the walls serves this scene."""
+    try:
+        check_anchorable(plate, layout, "L1", finger)
+    except ConfigError:
+        return False
+    return True
 
 
 def main() -> int:
@@ -118,6 +144,12 @@ def main() -> int:
         "box walls only)",
     )
     ap.add_argument(
+        "--anchored",
+        default=None,
+        help="measure lattices anchored to the walls instead: comma-separated "
+        "wall:x:y cell sizes in mm (e.g. 0.5:2:2; box plates and surface taxels only)",
+    )
+    ap.add_argument(
         "--write-table", action="store_true", help="store the rows where auto finds them"
     )
     args = ap.parse_args()
@@ -132,7 +164,14 @@ def main() -> int:
         print(f"{'task':24s} {'plate':34s} {'nodes':>14s}  error  largest  ref   wall")
     refine = tuple(int(x) for x in args.refine.split(","))
     plates = args.plates.split(",") if args.plates else None
-    rows = [r for t in tasks for r in measure(t, args.offsets, refine, plates, log, args.clipped)]
+    anchored = tuple(
+        tuple(float(v) * 1e-3 for v in c.split(":")) for c in (args.anchored or "").split(",") if c
+    )
+    rows = [
+        r
+        for t in tasks
+        for r in measure(t, args.offsets, refine, plates, log, args.clipped, anchored)
+    ]
     if args.json:
         print(json.dumps(rows, indent=1))
     if args.write_table:
@@ -156,12 +195,26 @@ def write_table(rows: list[dict], path: Path, at: str | None = None) -> None:
     at = at or commit()
     old = json.loads(path.read_text())["rows"] if path.is_file() else []
     new = [
-        {**{k: r[k] for k in KEEP}, **({"clipped": True} if r.get("clipped") else {}), "commit": at}
+        {
+            **{k: r[k] for k in KEEP},
+            **({"clipped": True} if r.get("clipped") else {}),
+            **({"wall_m": r["wall_m"]} if r.get("wall_m") is not None else {}),
+            "commit": at,
+        }
         for r in rows
     ]
     keys = {r["key"] for r in new}
     merged = [r for r in old if r["key"] not in keys] + new
-    merged.sort(key=lambda r: (r["task"], r["plate"], r.get("clipped", False), -r["pitch_m"]))
+    merged.sort(
+        key=lambda r: (
+            r["task"],
+            r["plate"],
+            r.get("clipped", False),
+            r.get("wall_m") is not None,
+            -(r.get("wall_m") or 0.0),
+            -r["pitch_m"],
+        )
+    )
     doc = {
         "about": "error of the taxel loads against Tamaas (0.0625 mm, cell faces on the grid), static presses at "
         "4 pad offsets; written by benchmarks/physics_per_plate.py --write-table",

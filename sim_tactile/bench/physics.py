@@ -40,6 +40,7 @@ from ..plates import Plate, height_at
 from ..scene.elastic import subsurface_weights
 from ..scene.nodes import skin_grid
 from ..sensors import Sensor
+from ..sim.anchored import AnchoredLattice
 from ..sim.clipped import ClippedPatches
 from ..sim.fidelity import texture_period
 from ..sim.skin import make_skin
@@ -198,11 +199,31 @@ def clipped_press(cp: ClippedPatches, grid, plate, force_n, offset) -> np.ndarra
     return cp.taxel_loads(cell[cand], p * 4 * hx[cand] * hy[cand])
 
 
+def anchored_press(lat: AnchoredLattice, plate, force_n, offset) -> np.ndarray:
+    """The taxel loads [N] of the lattice anchored to the plate's walls (``lat``,
+    :mod:`~sim_tactile.sim.anchored`) with the pad at ``offset``, held at ``force_n``."""
+    x = np.linspace(-lat.half_x, lat.half_x, 257)
+    top = float(np.nanmax(height_at(plate, x[:, None] + offset, x[None, :] + lat.y0)))
+    _, off = lat.solve(offset, top + 1e-3, force_n)
+    return lat.taxel_loads(off, np.zeros(lat.taxel_x.size))
+
+
 def configuration_loads(
-    ref: PhysicsReference, plate, sensor, force_n, level, pitch_m, pitch_y_m, clipped=False
+    ref: PhysicsReference,
+    plate,
+    sensor,
+    force_n,
+    level,
+    pitch_m,
+    pitch_y_m,
+    clipped=False,
+    wall_m=None,
 ) -> np.ndarray:
     """A configuration's taxel loads at the reference's offsets (``clipped``: its patches
-    clipped at the walls and taxel edges)."""
+    clipped at the walls and taxel edges; ``wall_m``: the lattice anchored to the walls)."""
+    if wall_m is not None:  # one lattice (and compliance) serves every offset
+        lat = AnchoredLattice(sensor.finger, sensor.layout, plate, 0.0, pitch_m, pitch_y_m, wall_m)
+        return np.array([anchored_press(lat, plate, force_n, off) for off in ref.offsets_m])
     if clipped:  # the static cells and their weights serve every offset
         grid = skin_grid(sensor.finger, pitch_m, pitch_y_m)
         cp = ClippedPatches(grid, sensor.finger, sensor.layout, plate, 0.0)

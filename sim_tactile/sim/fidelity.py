@@ -105,6 +105,10 @@ class Fidelity:
     #: whether the node patches are clipped at the plate's walls and the taxels' edges
     #: (:mod:`~sim_tactile.sim.clipped`; the held step of the half-space skin)
     clipped: bool = False
+    #: the cells at the plate's walls [m] of a lattice anchored to the plate (its walls on
+    #: the lines, cells up to ``pitch_m`` by ``pitch_y_m``; :mod:`~sim_tactile.sim.anchored`);
+    #: None: the pad's own node lattice
+    wall_m: float | None = None
 
     @property
     def coupled(self) -> bool:
@@ -117,6 +121,8 @@ class Fidelity:
         d["warnings"] = list(self.warnings)
         if not self.clipped:
             del d["clipped"]  # whole patches keep the description they had
+        if self.wall_m is None:
+            del d["wall_m"]  # likewise the pad's own lattice
         return d
 
 

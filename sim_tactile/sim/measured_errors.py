@@ -58,11 +58,18 @@ class MeasuredError:
     task: str
     plate: str
     clipped: bool = False
+    #: the anchored lattice's cells at the walls [m] (:mod:`~sim_tactile.sim.anchored`; its
+    #: cells up to pitch_m by pitch_y_m); None: the pad's own node lattice
+    wall_m: float | None = None
 
     @property
     def grid(self) -> str:
         x = self.pitch_m * 1e3
         g = f"{x:.3g} mm" if self.pitch_y_m is None else f"{x:.3g} x {self.pitch_y_m * 1e3:.3g} mm"
+        if self.wall_m is not None:
+            return (
+                f"lattice anchored to the walls, {self.wall_m * 1e3:.3g} mm at the walls, up to {g}"
+            )
         return g + (", clipped" if self.clipped else "")
 
     def describe(self) -> str:
@@ -80,10 +87,12 @@ def grid_key(
     pitch_m: float,
     pitch_y_m: float | None,
     clipped: bool = False,
+    wall_m: float | None = None,
 ) -> str:
     """The key of a node grid on a scene: everything the static press's error depends on but
     the force (node pitches rounded to 0.1 um), whether its patches are clipped at the walls
-    and taxel edges (:mod:`~sim_tactile.sim.clipped`), and the reference."""
+    and taxel edges (:mod:`~sim_tactile.sim.clipped`), the anchored lattice's cells at the
+    walls (:mod:`~sim_tactile.sim.anchored`), and the reference."""
     d = {
         "plate": plate.hash,
         "layout": layout.to_json(),
@@ -95,6 +104,8 @@ def grid_key(
     }
     if clipped:
         d["clipped"] = True
+    if wall_m is not None:
+        d["anchored_wall_um"] = round(wall_m * 1e6, 1)
     return content_hash(d)
 
 
@@ -121,6 +132,7 @@ def _row(r: dict) -> MeasuredError:
         str(r["task"]),
         str(r["plate"]),
         bool(r.get("clipped", False)),
+        None if r.get("wall_m") is None else float(r["wall_m"]),
     )
 
 
@@ -133,11 +145,13 @@ def expected_error(
     pitch_m: float,
     pitch_y_m: float | None,
     clipped: bool = False,
+    wall_m: float | None = None,
 ) -> MeasuredError | None:
     """The measured error of this node grid (``clipped``: its patches clipped at the walls
-    and taxel edges) on this scene, or None if it was not measured (or only at a force more
-    than :data:`FORCE_SPAN` away)."""
-    rows = _table().get(grid_key(plate, layout, finger, level, pitch_m, pitch_y_m, clipped), [])
+    and taxel edges; ``wall_m``: the lattice anchored to the walls) on this scene, or None if
+    it was not measured (or only at a force more than :data:`FORCE_SPAN` away)."""
+    key = grid_key(plate, layout, finger, level, pitch_m, pitch_y_m, clipped, wall_m)
+    rows = _table().get(key, [])
     near = [r for r in rows if abs(force_n / r["force_n"] - 1) <= FORCE_SPAN]
     if not near:
         return None

@@ -70,7 +70,7 @@ class Runner:
         plate: Plate,
         quasi_static: bool,
         options: StepOptions = StepOptions(),
-        clipped=None,
+        hold=None,
     ):
         self.s, self.skin, self.fid, self.finger = scene, skin, fid, finger
         self.quasi_static = quasi_static
@@ -84,8 +84,8 @@ class Runner:
             raise ConfigError("quasi-static force control needs skin nodes with a collider margin")
         self._area = scene.grid.area_m2
         self.hold = None
-        if quasi_static and clipped is not None:
-            self.hold = clipped  # patches clipped at the walls (sim.clipped)
+        if quasi_static and hold is not None:
+            self.hold = hold  # clipped patches or the anchored lattice (sim.clipped, .anchored)
         elif quasi_static:
             dense = not isinstance(skin, SpectralSkin)  # the compiled step is dense
             if self.collider.compiled and options.compiled_hold and dense:

@@ -25,6 +25,7 @@ from ..records import Recording
 from ..scene.model import build_scene
 from ..scene.nodes import SkinGrid, skin_grid
 from ..sensors import Finger, Layout, Sensor, check_pad, resolve_sensor
+from .anchored import AnchoredHeldStep, AnchoredLattice, check_anchorable
 from .clipped import ClippedHeldStep, ClippedPatches, check_clippable
 from .collide import node_margin_m
 from .fidelity import Fidelity, choose_fidelity, flat_stiffness
@@ -271,10 +272,16 @@ def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
         solver=options.skin_solver,
         cache=cache,
     )
-    clipped = None
-    if fid.clipped:
+    hold = None
+    if fid.wall_m is not None:
+        check_anchorable(plate, layout, fid.level, finger, quasi_static)
+        lattice = AnchoredLattice(
+            finger, layout, plate, proto.offset_y_m, fid.pitch_m, fid.pitch_y_m, fid.wall_m
+        )
+        hold = AnchoredHeldStep(lattice, grid.area_m2, x0=window.x_start_m, z0=z0, jx=scene.jx)
+    elif fid.clipped:
         check_clippable(fid.level, finger, quasi_static)
-        clipped = ClippedHeldStep(
+        hold = ClippedHeldStep(
             ClippedPatches(grid, finger, layout, plate, proto.offset_y_m),
             grid.area_m2,
             x0=window.x_start_m,
@@ -291,7 +298,7 @@ def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
         plate=plate,
         quasi_static=quasi_static,
         options=options,
-        clipped=clipped,
+        hold=hold,
     )
 
 
