@@ -1,4 +1,5 @@
-"""Whole patches against patches clipped at the walls, on finger7's box plates: speed and error.
+"""Whole patches, patches clipped at the walls and lattices anchored to them, on finger7's box
+plates: speed and error.
 
     python benchmarks/bench_clipped.py [--plates finger7/bumps-4x4,...] [--rounds 3] [--json]
 
@@ -25,15 +26,23 @@ from sim_tactile.sim.fidelity import choose_fidelity
 from sim_tactile.sim.simulate import simulate
 from sim_tactile.tasks import get_task
 
-#: (x pitch [m], y pitch [m] or None, clipped) per plate kind
+#: (x pitch [m], y pitch [m] or None, clipped, anchored lattice's wall cells [m] or None)
+#: per plate kind
 GRIDS = {
     "bumps": [
-        (1e-3, None, False),
-        (1e-3 / 3, None, False),
-        (1e-3, None, True),
-        (0.5e-3, None, True),
+        (1e-3, None, False, None),
+        (1e-3 / 3, None, False, None),
+        (1e-3, None, True, None),
+        (2e-3, 2e-3, False, 0.5e-3),
+        (2e-3, 2e-3, False, 0.25e-3),
     ],
-    "ridges": [(0.25e-3, 2e-3, False), (0.125e-3, 1e-3, False), (0.25e-3, 2e-3, True)],
+    "ridges": [
+        (0.25e-3, 2e-3, False, None),
+        (0.125e-3, 1e-3, False, None),
+        (0.25e-3, 2e-3, True, None),
+        (2e-3, 2e-3, False, 0.5e-3),
+        (2e-3, 2e-3, False, 0.25e-3),
+    ],
 }
 
 
@@ -53,7 +62,9 @@ def main() -> int:
         plate = get_plate(name)
         base = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "L1")
         grids = GRIDS["ridges" if "ridges" in name else "bumps"]
-        fids = [replace(base, pitch_m=px, pitch_y_m=py, clipped=c) for px, py, c in grids]
+        fids = [
+            replace(base, pitch_m=px, pitch_y_m=py, clipped=c, wall_m=w) for px, py, c, w in grids
+        ]
         loop = {k: [] for k in range(len(fids))}
         whole = {k: [] for k in range(len(fids))}
         for _ in range(args.rounds):
@@ -62,14 +73,16 @@ def main() -> int:
                 r = simulate(plate, sensor, protocol=proto, fidelity=fid, ideal=True)
                 whole[k].append(r.sim_s / (time.perf_counter() - t))
                 loop[k].append(r.sim_s / r.recording.meta["slide_wall_s"])
-        for k, (px, py, c) in enumerate(grids):
+        for k, (px, py, c, w) in enumerate(grids):
             m = measured_errors.expected_error(
-                plate, sensor.layout, sensor.finger, proto.force_n, "L1", px, py, c
+                plate, sensor.layout, sensor.finger, proto.force_n, "L1", px, py, c, w
             )
+            grid = f"{px * 1e3:.3g}" + ("" if py is None else f" x {py * 1e3:.3g}") + " mm"
             row = {
                 "plate": name,
-                "grid": f"{px * 1e3:.3g}" + ("" if py is None else f" x {py * 1e3:.3g}") + " mm",
+                "grid": grid if w is None else f"{w * 1e3:.3g}/{grid}",
                 "clipped": c,
+                "anchored": w is not None,
                 "error_vs_physics": None if m is None else m.error,
                 "loop_rtf": statistics.median(loop[k]),
                 "slide_rtf": statistics.median(whole[k]),
@@ -78,7 +91,8 @@ def main() -> int:
             if not args.json:
                 err = "-" if m is None else f"{100 * m.error:.1f}%"
                 print(
-                    f"{name:22s} {row['grid']:>12s} {'clipped' if c else 'whole':8s} "
+                    f"{name:22s} {row['grid']:>16s} "
+                    f"{'anchored' if w is not None else 'clipped' if c else 'whole':8s} "
                     f"{err:>7s}  loop {row['loop_rtf']:6.1f}x  slide {row['slide_rtf']:6.2f}x",
                     flush=True,
                 )

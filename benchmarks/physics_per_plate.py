@@ -35,11 +35,11 @@ import time
 from pathlib import Path
 
 from sim_tactile.bench import physics
+from sim_tactile.errors import ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim import measured_errors
-from sim_tactile.errors import ConfigError
-from sim_tactile.sim.anchored import check_anchorable
+from sim_tactile.sim.anchored_lines import check_anchorable
 from sim_tactile.sim.clipped import has_walls
 from sim_tactile.sim.fidelity import choose_fidelity
 from sim_tactile.slides import SlideSet

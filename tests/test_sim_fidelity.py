@@ -45,7 +45,9 @@ def test_ridges_under_a_flat_pad_get_nodes_along_the_slide():
 
 @pytest.mark.parametrize("plate", ["finger7/bumps-4x4", "finger7/flat"])
 def test_two_dimensional_textures_keep_square_nodes(plate):
-    fid, _ = _auto(plate)
+    # the grid that resolves them (bumps-4x4's is far from the physics, and auto takes the
+    # lattice anchored to its walls, tests/test_sim_anchored.py)
+    fid, _ = _auto(plate, refine=False)
     assert fid.pitch_y_m is None
 
 

@@ -44,6 +44,7 @@ def test_every_stored_row_is_the_measurement_of_todays_preset():
             r["pitch_m"],
             r["pitch_y_m"],
             r.get("clipped", False),
+            r.get("wall_m"),
         )
         assert key == r["key"], f"stale row: {r['task']} {r['plate']} at {r['pitch_m']}"
         assert 0 <= r["error_vs_physics"] and 0 <= r["largest_taxel"] and r["commit"], r
@@ -79,10 +80,11 @@ def test_ridges_4_says_its_error_and_a_changed_scene_finds_none():
     ss, sensor, proto = _scene("finger7-v1")
     plate = get_plate("finger7/ridges-4")
     fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
-    # measured: 0.25 x 2 mm 13.5%, refined to 0.125 x 1 mm 8.2% (every finer grid within 10%)
-    assert fid.expected_error == pytest.approx(0.082, abs=0.01)
-    assert fid.pitch_m == pytest.approx(0.125e-3) and not fid.clipped
-    assert "elastic half-space" in fid.reason and "refined from 0.25 x 2 mm" in fid.reason
+    # measured: the pad's 0.25 x 2 mm lattice 13.5%; anchored to the walls (0.5 mm there,
+    # up to 2 x 2 mm) 6.6%
+    assert fid.expected_error == pytest.approx(0.066, abs=0.01)
+    assert fid.wall_m == pytest.approx(0.5e-3) and not fid.clipped
+    assert "elastic half-space" in fid.reason and "anchored to the walls" in fid.reason
     # another finger, another grid, another force: not this measurement
     thicker = replace(sensor.finger, thickness_m=6e-3)
     other = choose_fidelity(plate, sensor.layout, thicker, proto, "auto")
@@ -100,8 +102,21 @@ def test_ridges_4_says_its_error_and_a_changed_scene_finds_none():
 
 
 def _whole_patches_only(monkeypatch, keep=lambda r: True):
-    """The table without its clipped rows (and only the rows ``keep`` takes)."""
-    rows = {k: [r for r in v if not r.get("clipped") and keep(r)] for k, v in me._table().items()}
+    """The table without its clipped and anchored rows (and only the rows ``keep`` takes)."""
+    _rows_only(monkeypatch, lambda r: not r.get("clipped") and keep(r))
+
+
+def _without_anchored(monkeypatch):
+    """The table without the anchored lattices' rows: auto's choice before them (the clipped
+    patches and finer grids it falls back to where the anchored lattice is not measured or
+    does not serve)."""
+    _rows_only(monkeypatch, lambda r: True)
+
+
+def _rows_only(monkeypatch, keep):
+    rows = {
+        k: [r for r in v if r.get("wall_m") is None and keep(r)] for k, v in me._table().items()
+    }
     monkeypatch.setattr(me, "_table", lambda: {k: v for k, v in rows.items() if v})
 
 
@@ -123,7 +138,10 @@ def test_auto_warns_where_its_grid_is_far_from_the_physics_and_names_finer_grids
     assert not [w for w in flat.warnings if "from the physics" in w]
 
 
-def test_auto_refines_to_the_coarsest_grid_from_which_every_finer_one_is_within_the_target():
+def test_auto_refines_to_the_coarsest_grid_from_which_every_finer_one_is_within_the_target(
+    monkeypatch,
+):
+    _without_anchored(monkeypatch)
     ss, sensor, proto = _scene("finger7-v1")
     plate = get_plate("finger7/ridges-4")
     args = (plate, sensor.layout, sensor.finger, proto, "auto")
@@ -144,6 +162,7 @@ def test_auto_clips_the_patches_on_the_bumps(plate, monkeypatch):
     """The bumps: whole patches are 22-100% off at 1 mm; clipped at the walls and taxel
     edges the 1 mm grid is 1.1%, 2.7%, 4.9% from the physics. Off ridges the clipped grid
     comes before a finer one (bumps-6x6 whole is within 10% from 0.333 mm, 2401 nodes)."""
+    _without_anchored(monkeypatch)
     ss, sensor, proto = _scene("finger7-v1")
     args = (get_plate(plate), sensor.layout, sensor.finger, proto, "auto")
     fid = choose_fidelity(*args)
@@ -199,11 +218,27 @@ def test_a_stored_row_is_what_the_benchmark_measures_today():
     ref = physics.reference(plate, sensor, proto.force_n, 4)
     norm, worst = ref.error(
         physics.configuration_loads(
-            ref, plate, sensor, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m
+            ref,
+            plate,
+            sensor,
+            proto.force_n,
+            fid.level,
+            fid.pitch_m,
+            fid.pitch_y_m,
+            fid.clipped,
+            fid.wall_m,
         )
     )
     m = me.expected_error(
-        plate, sensor.layout, sensor.finger, proto.force_n, fid.level, fid.pitch_m, fid.pitch_y_m
+        plate,
+        sensor.layout,
+        sensor.finger,
+        proto.force_n,
+        fid.level,
+        fid.pitch_m,
+        fid.pitch_y_m,
+        fid.clipped,
+        fid.wall_m,
     )
     assert norm == pytest.approx(m.error, abs=REMEASURE_ATOL)
     assert worst == pytest.approx(m.largest_taxel, abs=REMEASURE_ATOL)

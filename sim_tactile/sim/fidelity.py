@@ -13,10 +13,15 @@ skin-bone coupling's stability limit. It warns when the taxels are coarser than 
 when a forced pitch or time step is too coarse, and when the plate's roughness lies below what
 any node grid resolves (the micro-roughness model of the sensors handles that).
 
-Where that grid was measured more than 10% from the physics, auto takes the same grid with
-its patches clipped at the plate's walls and the taxels' edges (:mod:`~sim_tactile.sim.clipped`:
-``Fidelity.clipped``) or a finer grid, whichever was measured within 10%; the clipped grid
-first where it has at most L1's node cap of static cells (:func:`_far_choice`).
+Where that grid was measured more than 10% from the physics, auto takes, in this order, the
+first of these measured within 10%:
+
+- a lattice anchored to the plate's walls (:mod:`~sim_tactile.sim.anchored`:
+  ``Fidelity.wall_m``; plates of boxes, taxels at the surface), the cheapest of
+  :data:`ANCHORED_GRIDS`;
+- the same grid with its patches clipped at the plate's walls and the taxels' edges
+  (:mod:`~sim_tactile.sim.clipped`: ``Fidelity.clipped``) or a finer grid; the clipped grid
+  first where it has at most L1's node cap of static cells (:func:`_far_choice`).
 
 The skin is the finger's own: its stack of layers on their backing when it has one (the cost
 in the loop is the same), otherwise the elastic half-space. The reason names it and, where the
@@ -35,6 +40,7 @@ from ..errors import ConfigError
 from ..plates import Plate, features
 from ..plates.spec import Roughness
 from ..scene.nodes import lattice_shape, skin_grid
+from .anchored_lines import anchored_cells, check_anchorable
 from .clipped import check_clippable, has_walls, static_cells
 from .measured_errors import WARN_ABOVE, MeasuredError, expected_error, finer_grids
 
@@ -73,6 +79,12 @@ PITCH_MAX_Y_M = 2.0e-3
 #: the y pitch hardly counts (0.25 x 1 mm: 7.0%). The nodes double, and the slide loop stays
 #: near 40x real time.
 RIDGE_NODES_PER_FEATURE = 10
+#: The lattices anchored to the plate's walls auto may take ((cells at the walls, largest
+#: cell along the slide, across it) [m]), cheapest first, where the pad's own lattice was
+#: measured more than WARN_ABOVE from the physics: on finger7's ridges and bumps, 0.5 / 2 / 2
+#: mm is 2.9-9.7% from the physics at 28-61x real time in the slide loop, 0.25 / 2 / 2 mm
+#: 0.8-8.4% at 16-39x (see :mod:`~sim_tactile.sim.anchored`).
+ANCHORED_GRIDS = ((0.5e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 1e-3))
 #: Steps to cross the smallest feature, at least.
 STEPS_PER_FEATURE = 20
 #: Longest time step auto may pick [s].
@@ -205,16 +217,32 @@ def choose_fidelity(
     refined = ""
     auto = fidelity == "auto" and refine and pitch_m is None
     far = auto and measured is not None and measured.error > WARN_ABOVE
+    anch = _anchored_choice(plate, layout, finger, protocol, level) if far else None
     clip, better = (
         _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
-        if far
+        if far and anch is None
         else (None, None)
     )
-    if clip is not None or better is not None:
+    if anch is not None:
+        why = (
+            f" (the pad's lattice {shape} measured {100 * measured.error:.0f}% from the "
+            f"physics: the lattice anchored to the walls instead)"
+        )
+        measured, pitch, py_key, shape, refined = anch, anch.pitch_m, anch.pitch_y_m, anch.grid, why
+    elif clip is not None or better is not None:
         measured, pitch, py_key, shape, refined = _adopt(measured, clip, better, shape)
     nodes = _node_count(finger, pitch, py_key)
+    if anch is not None:
+        nodes = anchored_cells(
+            finger, layout, plate, protocol.offset_y_m, pitch, py_key, anch.wall_m
+        )
+    grid_text = (
+        f"node pitch {shape}{refined}, {nodes} nodes"
+        if anch is None
+        else f"a node {shape}{refined}, about {nodes} cells under the pad"
+    )
     reason = (
-        f"{level}: {_skin_name(finger, level)}, node pitch {shape}{refined}, {nodes} nodes, "
+        f"{level}: {_skin_name(finger, level)}, {grid_text}, "
         f"{'solved spectrally' if nodes > DENSE_MAX_NODES else 'dense solve'} (smallest feature "
         f"{'-' if scale is None else f'{scale * 1e3:.3g} mm'}, taxel {taxel * 1e3:.3g} mm), "
         f"dt {dt * 1e3:.3g} ms ({n_sub} steps per {sample * 1e3:.3g} ms sample); expected error: "
@@ -237,6 +265,7 @@ def choose_fidelity(
         py_key,
         None if measured is None else measured.error,
         clipped=clip is not None,
+        wall_m=None if anch is None else anch.wall_m,
     )
 
 
@@ -281,6 +310,22 @@ def _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
     if better is None and not small:
         return clip, None
     return None, better
+
+
+def _anchored_choice(plate, layout, finger, protocol, level) -> MeasuredError | None:
+    """The first lattice of :data:`ANCHORED_GRIDS` measured within :data:`WARN_ABOVE` of the
+    physics on this scene, where the anchored lattice serves it, or None."""
+    if protocol.force_control != "quasi-static":
+        return None
+    try:
+        check_anchorable(plate, layout, level, finger)
+    except ConfigError:
+        return None
+    for wall, px, py in ANCHORED_GRIDS:
+        m = expected_error(plate, layout, finger, protocol.force_n, level, px, py, wall_m=wall)
+        if m is not None and m.error <= WARN_ABOVE:
+            return m
+    return None
 
 
 def _clippable(plate, finger, protocol, level) -> bool:

@@ -67,9 +67,7 @@ class MeasuredError:
         x = self.pitch_m * 1e3
         g = f"{x:.3g} mm" if self.pitch_y_m is None else f"{x:.3g} x {self.pitch_y_m * 1e3:.3g} mm"
         if self.wall_m is not None:
-            return (
-                f"lattice anchored to the walls, {self.wall_m * 1e3:.3g} mm at the walls, up to {g}"
-            )
+            return f"lattice anchored to the walls ({self.wall_m * 1e3:.3g} mm at the walls, up to {g})"
         return g + (", clipped" if self.clipped else "")
 
     def describe(self) -> str:

@@ -25,7 +25,8 @@ from ..records import Recording
 from ..scene.model import build_scene
 from ..scene.nodes import SkinGrid, skin_grid
 from ..sensors import Finger, Layout, Sensor, check_pad, resolve_sensor
-from .anchored import AnchoredHeldStep, AnchoredLattice, check_anchorable
+from .anchored import AnchoredHeldStep, AnchoredLattice
+from .anchored_lines import check_anchorable
 from .clipped import ClippedHeldStep, ClippedPatches, check_clippable
 from .collide import node_margin_m
 from .fidelity import Fidelity, choose_fidelity, flat_stiffness
