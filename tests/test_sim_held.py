@@ -140,10 +140,13 @@ def test_mirror_symmetry_check_rejects_an_asymmetric_compliance(cache):
 
 @pytest.mark.parametrize("plate", ["finger7/ridges-4", "finger7/bumps-4x4"])
 def test_a_slide_with_the_reduced_skin_equals_the_full_one(plate, cache):
+    # L1: the pad's own lattice at the grid that resolves the plate (auto anchors these two
+    # plates' lattices to their walls, tests/test_sim_anchored.py)
     def run(reduce: bool):
         return simulate(
             plate,
             "grid3x3",
+            fidelity="L1",
             protocol=Protocol(duration_s=0.5, offset_jitter_m=1e-3),
             ideal=True,
             seed=5,

@@ -214,32 +214,13 @@ def choose_fidelity(
     )
     py_key = None if aspect == 1.0 else float(pitch_y)
     measured = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key)
-    refined = ""
     auto = fidelity == "auto" and refine and pitch_m is None
     far = auto and measured is not None and measured.error > WARN_ABOVE
-    anch = _anchored_choice(plate, layout, finger, protocol, level) if far else None
-    clip, better = (
-        _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
-        if far and anch is None
-        else (None, None)
+    measured, pitch, py_key, shape, refined, clip, anch = _far_resolution(
+        plate, layout, finger, protocol, level, pitch, py_key, measured, shape, far
     )
-    if anch is not None:
-        why = (
-            f" (the pad's lattice {shape} measured {100 * measured.error:.0f}% from the "
-            f"physics: the lattice anchored to the walls instead)"
-        )
-        measured, pitch, py_key, shape, refined = anch, anch.pitch_m, anch.pitch_y_m, anch.grid, why
-    elif clip is not None or better is not None:
-        measured, pitch, py_key, shape, refined = _adopt(measured, clip, better, shape)
-    nodes = _node_count(finger, pitch, py_key)
-    if anch is not None:
-        nodes = anchored_cells(
-            finger, layout, plate, protocol.offset_y_m, pitch, py_key, anch.wall_m
-        )
-    grid_text = (
-        f"node pitch {shape}{refined}, {nodes} nodes"
-        if anch is None
-        else f"a node {shape}{refined}, about {nodes} cells under the pad"
+    nodes, grid_text = _grid_text(
+        finger, layout, plate, protocol, pitch, py_key, shape, refined, anch
     )
     reason = (
         f"{level}: {_skin_name(finger, level)}, {grid_text}, "
@@ -267,6 +248,37 @@ def choose_fidelity(
         clipped=clip is not None,
         wall_m=None if anch is None else anch.wall_m,
     )
+
+
+def _grid_text(finger, layout, plate, protocol, pitch, py_key, shape, refined, anch):
+    """``(nodes, text)``: the node (or anchored lattice's cell) count and how the reason
+    names the grid."""
+    if anch is None:
+        nodes = _node_count(finger, pitch, py_key)
+        return nodes, f"node pitch {shape}{refined}, {nodes} nodes"
+    cells = anchored_cells(finger, layout, plate, protocol.offset_y_m, pitch, py_key, anch.wall_m)
+    return cells, f"a node {shape}{refined}, about {cells} cells under the pad"
+
+
+def _far_resolution(plate, layout, finger, protocol, level, pitch, py_key, measured, shape, far):
+    """``(measured, pitch, pitch_y, shape, why, clipped, anchored)``: the grid auto takes when
+    its own (``pitch``, ``py_key``) was measured ``far`` from the physics: the anchored
+    lattice, the clipped patches or a finer grid (see the module docstring), else its own."""
+    anch = _anchored_choice(plate, layout, finger, protocol, level) if far else None
+    clip, better = (
+        _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
+        if far and anch is None
+        else (None, None)
+    )
+    if anch is not None:
+        why = (
+            f" (the pad's lattice {shape} measured {100 * measured.error:.0f}% from the "
+            f"physics: the lattice anchored to the walls instead)"
+        )
+        return anch, anch.pitch_m, anch.pitch_y_m, anch.grid, why, None, anch
+    if clip is not None or better is not None:
+        return (*_adopt(measured, clip, better, shape), clip, None)
+    return measured, pitch, py_key, shape, "", None, None
 
 
 def _adopt(measured, clip, better, shape):
