@@ -196,11 +196,15 @@ def test_weighted_winkler_bed_equals_the_expanded_one():
 )
 def test_the_compiled_held_step_equals_the_plain_loop(fidelity, reference, cache):
     """The compiled held step on the reduced problem against the plain loop on the full one,
-    over the compiled collider and over MuJoCo's (the path of plates MuJoCo must collide)."""
+    over the compiled collider and over MuJoCo's (the path of plates MuJoCo must collide).
+    MuJoCo's collider reads a node inside a box to its nearest face, the compiled one the
+    height map's depth below the top (tests/test_sim_collide.py): against it, flat ground,
+    where the two agree."""
+    plate = "finger7/flat" if reference.primitive_collider is False else "finger7/ridges-4"
 
     def run(options):
         return simulate(
-            "finger7/ridges-4",
+            plate,
             "grid3x3",
             protocol=Protocol(duration_s=0.5),
             fidelity=fidelity,
@@ -213,5 +217,5 @@ def test_the_compiled_held_step_equals_the_plain_loop(fidelity, reference, cache
     fast, slow = run(StepOptions()), run(reference)
     assert "mirror-halved" in fast.meta["skin_problem"]
     assert slow.meta["skin_problem"] == "full problem"
-    assert fast.data.max() > 0.05
+    assert fast.data.max() > (0.005 if plate == "finger7/flat" else 0.05)
     np.testing.assert_allclose(fast.data, slow.data, rtol=SLIDE_RTOL, atol=SLIDE_ATOL_N)

@@ -156,3 +156,26 @@ def test_a_warm_start_that_cycles_gives_way_to_a_fresh_one():
     p1, dz1 = ActiveSet(C, np.linalg.inv(C)).solve_force(pen, total)
     assert np.abs(p - p1).max() < AGREE * p1.max()
     assert dz == pytest.approx(dz1, rel=AGREE)
+
+
+def test_a_one_node_warm_start_lets_the_overlapping_nodes_join():
+    """A pad that touched one node (a feature's corner) and then, one step on, overlaps the
+    plate with its whole face: the warm start is one node, whose gap has no gradient, so the
+    iteration has no direction on its set at once. It must not stop there: the nodes off the
+    set that overlap the plate join (that stop returned the one-node answer, the pad's shift
+    0 against the dense solve's 1.9 mm, when the collider first read boxes as the height
+    map does)."""
+    n, pitch = 9, 1e-3
+    sp = Spectral(compliance_table(n, n, pitch, E))
+    C = compliance_matrix(_lattice(n, n, pitch, pitch), pitch, E)
+    one = np.full(n * n, -1e-3)
+    one[40] = 1e-4
+    sp.solve_force(one, 1e4)
+    assert (sp.p > 0).sum() == 1  # the warm start: one node
+    rng = np.random.default_rng(3)
+    face = 2e-3 + 1e-4 * rng.random(n * n)  # every node deep in the plate
+    p, dz = sp.solve_force(face, 1e5)
+    p1, dz1 = ActiveSet(C, np.linalg.inv(C)).solve_force(face, 1e5)
+    assert (p1 > 0).sum() > 1
+    assert np.abs(p - p1).max() < AGREE * p1.max()
+    assert dz == pytest.approx(dz1, rel=AGREE)

@@ -9,7 +9,13 @@ margin), and is any node that close. :func:`make_collider` chooses one, in one p
   few hundred skin nodes, a third of a whole L1 step, although the plate never moves and
   every node is a sphere on the one bone; this computes the same map in one numba loop (the
   signed distance of each probe sphere to each plate box, in the box's frame, and sphere; the
-  deepest per node). Tested equal to MuJoCo's map on every plate it accepts, at random poses.
+  deepest per node). Over an upright box's footprint a node's depth is the depth below the
+  box's top face, as the plate's height map (and the skin model, and the reference it is
+  measured against) has it: MuJoCo measures a node inside a box to its nearest face, so a
+  node that a slide carries into a box's side, deeper than half the box is wide, reads a
+  depth that falls as the pad sinks, and the held force then let the pad pass through the
+  box onto the base (finger7/bumps-4x4 at 0.5 mm nodes read as flat). Tested equal to
+  MuJoCo's map everywhere else, on every plate it accepts, at random poses.
 - :class:`MujocoCollider`: MuJoCo's own collider on the scene's collision model, for any
   geometry (meshes of drafted ridges, cylinders, height fields): the reference.
 """
@@ -308,21 +314,28 @@ def depths_kernel(
             if kind[g] == _SPHERE:
                 dist = math.sqrt(dx * dx + dy * dy + dz * dz) - size[g, 0] - r
             else:  # box: the centre in the box's frame, then the box's signed distance
+                lz = mat[g, 0, 2] * dx + mat[g, 1, 2] * dy + mat[g, 2, 2] * dz
                 qx = abs(mat[g, 0, 0] * dx + mat[g, 1, 0] * dy + mat[g, 2, 0] * dz) - size[g, 0]
                 qy = abs(mat[g, 0, 1] * dx + mat[g, 1, 1] * dy + mat[g, 2, 1] * dz) - size[g, 1]
-                qz = abs(mat[g, 0, 2] * dx + mat[g, 1, 2] * dy + mat[g, 2, 2] * dz) - size[g, 2]
-                ox = qx if qx > 0.0 else 0.0
-                oy = qy if qy > 0.0 else 0.0
-                oz = qz if qz > 0.0 else 0.0
-                inside = qx
-                if qy > inside:
-                    inside = qy
-                if qz > inside:
-                    inside = qz
-                if inside > 0.0:
-                    dist = math.sqrt(ox * ox + oy * oy + oz * oz) - r
+                qz = abs(lz) - size[g, 2]
+                if qx <= 0.0 and qy <= 0.0 and abs(mat[g, 2, 2] - 1.0) < 1e-12:
+                    # over an upright box's footprint: the depth below its top face, as the
+                    # plate's height map has it (a node inside the box is not measured to a
+                    # nearer side or bottom face, as MuJoCo's collider would)
+                    dist = (lz - size[g, 2]) - r
                 else:
-                    dist = inside - r
+                    ox = qx if qx > 0.0 else 0.0
+                    oy = qy if qy > 0.0 else 0.0
+                    oz = qz if qz > 0.0 else 0.0
+                    inside = qx
+                    if qy > inside:
+                        inside = qy
+                    if qz > inside:
+                        inside = qz
+                    if inside > 0.0:
+                        dist = math.sqrt(ox * ox + oy * oy + oz * oz) - r
+                    else:
+                        dist = inside - r
             if -dist > best:
                 best = -dist
         if best >= -margin[i]:

@@ -105,10 +105,12 @@ class Runner:
         self.drag_sum = 0.0
         self.n_slide_steps = 0
         self.max_pen_allowed = finger.thickness_m
-        # The pad's lowest point starts at z0 (qpos 0); the plate's base surface is at 0. A
-        # node pressed into a feature narrower than the skin is thick, or deeper than half the
-        # base box, is measured to the nearest other face, so its depth is no longer read
-        # right; the pad's own depth below the base is checked against both limits.
+        # The pad's lowest point starts at z0 (qpos 0); the plate's base surface is at 0. Where
+        # MuJoCo collides (meshes, cylinders, height fields), a node pressed into a feature
+        # narrower than the skin is thick, or deeper than half the base box, is measured to the
+        # nearest other face, so its depth is no longer read right (the compiled collider reads
+        # boxes as the height map does); the pad's own depth below the base is checked against
+        # both limits.
         self.z0 = z0_m
         self.max_depth = finger.thickness_m
         self.depth_limit = "the skin thickness"

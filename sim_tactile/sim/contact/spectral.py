@@ -154,6 +154,7 @@ class Spectral:
         g_old, delta = 1.0, 0.0
         scale = total if total is not None else None
         change = np.inf
+        gap_tol = 1e-9 * max(float(np.abs(pen_ok).max()), 1e-12)
         for it in range(1, budget + 1):
             on = p > 0
             if not on.any():  # every node let go (the pad at its place above the plate)
@@ -168,8 +169,20 @@ class Spectral:
             if total is not None:
                 r -= r[on].mean()
             rt = float(r[on] @ t[on])
-            if not rt > 0:  # converged to round-off: no direction left
-                return p, it, 0.0
+            if not rt > 0:  # no direction left on the set: solved, unless a node off it
+                # overlaps the plate (a set whose gaps are all equal, e.g. one node, has no
+                # gradient; returning then kept a one-node warm start where the whole face
+                # touched). Those nodes join with the pressure that would lift them alone.
+                join = (p == 0) & (g < -gap_tol) & ok
+                if not join.any():
+                    return p, it, 0.0
+                p = p.copy()
+                p[join] = -g[join] / self.diag
+                if total is not None:
+                    p *= total / p.sum()
+                t = np.zeros(self.n)
+                delta = 0.0
+                continue
             tau = float(g[on] @ t[on]) / rt
             p_old = p
             p = np.maximum(p - tau * t, 0.0)
