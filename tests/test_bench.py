@@ -203,7 +203,9 @@ def test_speed_error_tiny_sweep(tmp_path, cache):
         ("L2", "reference"),
         ("L0", "auto"),
         ("L1", "auto"),
+        ("auto", "default"),  # ridges-4's default: the lattice anchored to its walls
     ]
+    assert rows[3]["wall_m"] == 0.5e-3 and "anchored" in rows[3]["grid"]
     for r in rows:
         assert r["outcome"] == "ok", r
         assert r["rtf"] > 0 and math.isfinite(r["rtf"])

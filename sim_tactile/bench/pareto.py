@@ -146,14 +146,14 @@ def pareto_front(errors: Sequence[float], costs: Sequence[float]) -> list[int]:
     return front
 
 
-_MARKERS = {"L0": "o", "L1": "s", "L2": "*"}
-_COLOURS = {"L0": "tab:orange", "L1": "tab:blue", "L2": "tab:green"}
+_MARKERS = {"L0": "o", "L1": "s", "L2": "*", "auto": "D"}
+_COLOURS = {"L0": "tab:orange", "L1": "tab:blue", "L2": "tab:green", "auto": "tab:red"}
 
 
 def _scatter_levels(ax, points: list[tuple[float, float, str]], hollow: bool = False) -> None:
     """(error, cost, level) points, one marker series per level: filled against L2, hollow
     against physics."""
-    for level in LEVELS:
+    for level in (*LEVELS, "auto"):  # auto: the default where it is not L1's own grid
         pts = [(e, c) for e, c, lv in points if lv == level]
         if not pts:
             continue

@@ -52,6 +52,7 @@ from ..plates import Plate, get_plate
 from ..records import Recording
 from ..scene.nodes import skin_grid
 from ..sensors import Finger, get_sensor
+from ..sim.anchored_lines import anchored_cells
 from ..sim.fidelity import choose_fidelity, steps_per_sample
 from ..sim.press import hertz, press
 from ..sim.protocol import Protocol
@@ -112,6 +113,17 @@ def _configs(plate, layout, finger, proto, sweep: Sweep) -> list[_Config]:
                 out.append(_Config(level, f"pitch x{g:g}", p, None, p, fid.dt_s))
         for c in out[n0:]:
             c.aspect = (fid.pitch_y_m or fid.pitch_m) / fid.pitch_m
+    if "L1" in sweep.levels:  # what a slide takes by default, where it is not L1's own grid
+        fa = choose_fidelity(plate, layout, finger, proto, "auto")
+        f1 = choose_fidelity(plate, layout, finger, proto, "L1")
+        if (fa.pitch_m, fa.pitch_y_m, fa.clipped, fa.wall_m) != (
+            f1.pitch_m,
+            f1.pitch_y_m,
+            f1.clipped,
+            f1.wall_m,
+        ):
+            out.append(_Config("auto", "default", None, None, fa.pitch_m, fa.dt_s))
+            out[-1].aspect = (fa.pitch_y_m or fa.pitch_m) / fa.pitch_m
     # different factors can round to the same step (a whole number of steps per sample, at
     # most one sample period): run each setting once, named "auto" if auto is among them
     groups: dict[tuple, list[_Config]] = {}
@@ -216,12 +228,20 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
         if cfg.setting == "reference":
             ref_rec = rec
         rtf = rec.meta["sim_s"] / rec.meta["slide_wall_s"]
+        fid = res.fidelity
         row = {
             **base,
-            "dt_s": res.fidelity.dt_s,
-            "pitch_m": res.fidelity.pitch_m,
-            "pitch_y_m": res.fidelity.pitch_y_m,
-            "n_nodes": skin_grid(finger, res.fidelity.pitch_m, res.fidelity.pitch_y_m).n,
+            "dt_s": fid.dt_s,
+            "pitch_m": fid.pitch_m,
+            "pitch_y_m": fid.pitch_y_m,
+            "clipped": fid.clipped,
+            "wall_m": fid.wall_m,
+            "grid": rec.meta["skin_problem"],
+            "n_nodes": skin_grid(finger, fid.pitch_m, fid.pitch_y_m).n
+            if fid.wall_m is None
+            else anchored_cells(
+                finger, layout, plate, proto.offset_y_m, fid.pitch_m, fid.pitch_y_m, fid.wall_m
+            ),
             "outcome": "ok",
             "rtf": rtf,
             "cost_s_per_s": 1.0 / rtf,
@@ -272,10 +292,12 @@ def _physics_errors(rows, plate, sensor, force_n: float, n_offsets: int, log) ->
     )
     done: dict[tuple, tuple[float, float]] = {}
     for r in ok:
-        key = (r["fidelity"], r["pitch_m"], r["pitch_y_m"])
+        clipped, wall = r.get("clipped", False), r.get("wall_m")
+        level = "L1" if r["fidelity"] == "auto" else r["fidelity"]
+        key = (level, r["pitch_m"], r["pitch_y_m"], clipped, wall)
         if key not in done:
             loads = physics.configuration_loads(
-                ref, plate, sensor, force_n, r["fidelity"], r["pitch_m"], r["pitch_y_m"]
+                ref, plate, sensor, force_n, level, r["pitch_m"], r["pitch_y_m"], clipped, wall
             )
             done[key] = ref.error(loads)
             log(
