@@ -82,8 +82,8 @@ RIDGE_NODES_PER_FEATURE = 10
 #: The lattices anchored to the plate's walls auto may take ((cells at the walls, largest
 #: cell along the slide, across it) [m]), cheapest first, where the pad's own lattice was
 #: measured more than WARN_ABOVE from the physics: on finger7's ridges and bumps, 0.5 / 2 / 2
-#: mm is 2.9-9.7% from the physics at 28-61x real time in the slide loop, 0.25 / 2 / 2 mm
-#: 0.8-8.4% at 16-39x (see :mod:`~sim_tactile.sim.anchored`).
+#: mm is 2.9-9.7% from the physics at 28-63x real time in the slide loop, 0.25 / 2 / 2 mm
+#: 0.8-8.4% at 16-36x (bench_clipped at d9cbe58) (see :mod:`~sim_tactile.sim.anchored`).
 ANCHORED_GRIDS = ((0.5e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 1e-3))
 #: Steps to cross the smallest feature, at least.
 STEPS_PER_FEATURE = 20
