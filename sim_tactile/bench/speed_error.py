@@ -228,20 +228,9 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
         if cfg.setting == "reference":
             ref_rec = rec
         rtf = rec.meta["sim_s"] / rec.meta["slide_wall_s"]
-        fid = res.fidelity
         row = {
             **base,
-            "dt_s": fid.dt_s,
-            "pitch_m": fid.pitch_m,
-            "pitch_y_m": fid.pitch_y_m,
-            "clipped": fid.clipped,
-            "wall_m": fid.wall_m,
-            "grid": rec.meta["skin_problem"],
-            "n_nodes": skin_grid(finger, fid.pitch_m, fid.pitch_y_m).n
-            if fid.wall_m is None
-            else anchored_cells(
-                finger, layout, plate, proto.offset_y_m, fid.pitch_m, fid.pitch_y_m, fid.wall_m
-            ),
+            **_grid_of(res.fidelity, rec, finger, layout, plate, proto),
             "outcome": "ok",
             "rtf": rtf,
             "cost_s_per_s": 1.0 / rtf,
@@ -266,6 +255,26 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
     if sweep.physics:
         _physics_errors(rows, plate, sensor, scene.force_n, sweep.physics_offsets, log)
     return rows
+
+
+def _grid_of(fid, rec, finger, layout, plate, proto) -> dict:
+    """The grid a slide ran on: step, pitches, clipped or anchored, and its node (or anchored
+    cell) count."""
+    if fid.wall_m is None:
+        n = skin_grid(finger, fid.pitch_m, fid.pitch_y_m).n
+    else:
+        n = anchored_cells(
+            finger, layout, plate, proto.offset_y_m, fid.pitch_m, fid.pitch_y_m, fid.wall_m
+        )
+    return {
+        "dt_s": fid.dt_s,
+        "pitch_m": fid.pitch_m,
+        "pitch_y_m": fid.pitch_y_m,
+        "clipped": fid.clipped,
+        "wall_m": fid.wall_m,
+        "grid": rec.meta["skin_problem"],
+        "n_nodes": n,
+    }
 
 
 def _physics_errors(rows, plate, sensor, force_n: float, n_offsets: int, log) -> None:
