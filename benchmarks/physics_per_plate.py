@@ -35,11 +35,10 @@ import time
 from pathlib import Path
 
 from sim_tactile.bench import physics
-from sim_tactile.errors import ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim import measured_errors
-from sim_tactile.sim.anchored_lines import check_anchorable
+from sim_tactile.sim.anchored_lines import anchor_refusals
 from sim_tactile.sim.clipped import has_walls
 from sim_tactile.sim.fidelity import choose_fidelity
 from sim_tactile.slides import SlideSet
@@ -64,7 +63,7 @@ def measure(
         plate = get_plate(name)
         if clipped and not has_walls(plate):
             continue
-        if anchored and not anchorable(plate, sensor.layout, sensor.finger):
+        if anchored and anchor_refusals(plate, sensor.layout, "L1", sensor.finger):
             continue
         # the grid that resolves the features, before auto refines it from this table
         fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto", refine=False)
@@ -117,15 +116,6 @@ def _grid(r: dict) -> str:
     if r.get("wall_m") is not None:
         return f"{r['wall_m'] * 1e3:.3g}/" + g + " anch"
     return g + (" clip" if r.get("clipped") else "")
-
-
-def anchorable(plate, layout, finger) -> bool:
-    """Whether the lattice anchored to the walls serves this scene."""
-    try:
-        check_anchorable(plate, layout, "L1", finger)
-    except ConfigError:
-        return False
-    return True
 
 
 def main() -> int:

@@ -10,9 +10,9 @@ import pytest
 from sim_tactile.bench import physics
 from sim_tactile.errors import ConfigError
 from sim_tactile.plates import get_plate
-from sim_tactile.sensors import get_sensor
+from sim_tactile.sensors import Finger, get_sensor
 from sim_tactile.sim import measured_errors as me
-from sim_tactile.sim.anchored import AnchoredLattice, lattice_compliance
+from sim_tactile.sim.anchored import AnchoredLattice, _surface, lattice_compliance
 from sim_tactile.sim.anchored_lines import check_anchorable, period_lines
 from sim_tactile.sim.clipped import hold_force, rect_compliance, wall_lines
 from sim_tactile.sim.fidelity import choose_fidelity
@@ -175,3 +175,21 @@ def test_the_anchored_lattice_against_tamaas_reproduces_the_table():
         row = me.expected_error(plate, s.layout, s.finger, 1.0, "L1", 2e-3, 2e-3, wall_m=0.5e-3)
         assert row is not None and row.wall_m == 0.5e-3
         assert err == pytest.approx(row.error, abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    "finger",
+    [
+        Finger(shape="flat", size_m=(0.012, 0.012), edge_radius_m=0.002),
+        Finger(shape="flat", size_m=(0.012, 0.012), edge_radius_m=0.0),
+        Finger(shape="sphere", radius_m=0.008, size_m=(0.014, 0.014)),
+        Finger(shape="ellipsoid", radii_m=(0.011, 0.008, 0.006), size_m=(0.022, 0.016)),
+    ],
+)
+def test_the_kernels_pad_surface_is_the_fingers(finger):
+    """The depth kernel's own surface of the pad (compiled) against Finger.surface."""
+    pad = AnchoredLattice.pad_of(finger)
+    rng = np.random.default_rng(4)
+    for x, y in rng.uniform(-1, 1, (300, 2)) * np.array(finger.patch_m) / 2:
+        got = _surface(int(pad[0]), x, y, *pad[3:])
+        assert got == pytest.approx(float(finger.surface(x, y)), rel=1e-12, abs=1e-15)

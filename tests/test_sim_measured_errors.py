@@ -216,29 +216,8 @@ def test_a_stored_row_is_what_the_benchmark_measures_today():
     plate = get_plate("finger7/ridges-4")
     fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto")
     ref = physics.reference(plate, sensor, proto.force_n, 4)
-    norm, worst = ref.error(
-        physics.configuration_loads(
-            ref,
-            plate,
-            sensor,
-            proto.force_n,
-            fid.level,
-            fid.pitch_m,
-            fid.pitch_y_m,
-            fid.clipped,
-            fid.wall_m,
-        )
-    )
-    m = me.expected_error(
-        plate,
-        sensor.layout,
-        sensor.finger,
-        proto.force_n,
-        fid.level,
-        fid.pitch_m,
-        fid.pitch_y_m,
-        fid.clipped,
-        fid.wall_m,
-    )
+    grid = (fid.level, fid.pitch_m, fid.pitch_y_m, fid.clipped, fid.wall_m)
+    norm, worst = ref.error(physics.configuration_loads(ref, plate, sensor, proto.force_n, *grid))
+    m = me.expected_error(plate, sensor.layout, sensor.finger, proto.force_n, *grid)
     assert norm == pytest.approx(m.error, abs=REMEASURE_ATOL)
     assert worst == pytest.approx(m.largest_taxel, abs=REMEASURE_ATOL)

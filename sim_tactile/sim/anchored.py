@@ -32,8 +32,9 @@ depths, the same-set check, a block update where cells join or leave.
 A cell is in contact or not as a whole, by its centre, and no wall runs through one; the
 taxels' edges across the slide move over the cells, and a taxel at the surface reads its
 exact overlap with each cell (the cell's load spread over the cell). Against Tamaas on
-finger7's ridges and bumps (grid3x3, 1 N, four offsets) the taxel loads of the 0.125 mm /
-1 mm / 1 mm lattice are 1-4% from the reference (``docs/physics.md``).
+finger7's ridges and bumps (grid3x3, 1 N, four offsets) the taxel loads of the 0.5 mm /
+2 x 2 mm lattice (auto's there) are 2.9-9.7% from the reference, of the 0.25 mm / 2 x 1 mm
+lattice 1.2-4.0% (``docs/physics.md``).
 
 It serves the elastic half-space (L1) under the held force, plates of boxes (ridges, bumps,
 gratings of bars), and taxels at the surface (a buried taxel's weights would move with the
@@ -50,13 +51,10 @@ import numpy as np
 from ..errors import PhysicsError
 from ..plates import Plate, features
 from .anchored_lines import _SHAPES, check_anchorable, period_lines, row_lines
-from .clipped import _entry
-from .contact import TOL_REL
+from .clipped import PlateHeldStep, _entry
+from .contact import REFRESH, TOL_REL
 from .contact.kernels import NO_K, force_loop, force_same_set
 from .contact.reference import MAX_ITER
-
-#: Block updates of the contact set's inverse before it is rebuilt (as ActiveSet's).
-REFRESH = 100
 
 
 @numba.njit(cache=True)
@@ -182,7 +180,7 @@ class AnchoredLattice:
         self.m = base.size
         ends = np.append(base, self.P)
         cxb, wxb = 0.5 * (ends[:-1] + ends[1:]), np.diff(ends)
-        ex, ey = finger.patch_m
+        ex = finger.patch_m[0]
         self.half_x = ex / 2
         #: periods in the window: the pad's extent starts within the first one
         self.n_periods = 1 + math.ceil(ex / self.P - 1e-12)
@@ -200,19 +198,7 @@ class AnchoredLattice:
             [[f.x, f.hx, f.y, f.hy, f.height_m] for f in features(plate) if f.kind == "box"]
         ).reshape(-1, 5)
         self.plate_half = np.array([plate.length_m / 2, plate.width_m / 2])
-        self.pad = np.array(
-            [
-                _SHAPES[finger.shape],
-                ex / 2,
-                ey / 2,
-                finger.size_m[0] / 2,
-                finger.size_m[1] / 2,
-                finger.edge_radius_m,
-                finger.radius_m,
-                *finger.radii_m,
-            ],
-            dtype=np.float64,
-        )
+        self.pad = self.pad_of(finger)
         self.y0 = y0_m
         pos, size = layout.positions, layout.sizes
         self.taxel_x = np.ascontiguousarray(pos[:, 0])
@@ -227,16 +213,28 @@ class AnchoredLattice:
         self.S = np.zeros(0, np.int64)
         self.in_set = np.zeros(self.n, bool)
         self.updates = 0
-        self.rebuilds = 0
         self.pen = np.empty(self.n)
         self.f = np.zeros(self.n)
         self._rowsum, self._rowsum_of = np.zeros(0), None
 
-    @property
-    def cells_under_pad(self) -> int:
-        """Cells whose centre the pad's extent covers, about (one period of the window is
-        outside it)."""
-        return round(self.n * 2 * self.half_x / (self.n_periods * self.P))
+    @staticmethod
+    def pad_of(finger) -> np.ndarray:
+        """The pad as :func:`depths` reads it: (shape, half patch x, half patch y, half flat
+        x, half flat y, edge radius, R, rx, ry, rz)."""
+        ex, ey = finger.patch_m
+        return np.array(
+            [
+                _SHAPES[finger.shape],
+                ex / 2,
+                ey / 2,
+                finger.size_m[0] / 2,
+                finger.size_m[1] / 2,
+                finger.edge_radius_m,
+                finger.radius_m,
+                *finger.radii_m,
+            ],
+            dtype=np.float64,
+        )
 
     def _move_window(self, k: int) -> None:
         """Renumber the contact set for the window starting at period ``k``."""
@@ -289,7 +287,7 @@ class AnchoredLattice:
                 self.M, self.S, pen, self.C, self.in_set, TOL_REL, force_n, f, self._rowsum, 0.0
             )
         if dz != dz:
-            st, dz, M, S, updates, rb = force_loop(
+            st, dz, M, S, updates, _ = force_loop(
                 self.M,
                 self.S,
                 self.in_set,
@@ -314,7 +312,6 @@ class AnchoredLattice:
                     f"iterations (target {force_n:.4g} N)"
                 )
             self.M, self.S, self.updates = M, S, updates
-            self.rebuilds += rb
         pen += dz
         return float(dz), off
 
@@ -326,17 +323,8 @@ class AnchoredLattice:
         return out
 
 
-class AnchoredHeldStep:
-    """The held step (``step(qpos, jz, total, taxel_out) -> (force, deepest)``, as
-    :class:`~sim_tactile.sim.held.HeldStep`) on the anchored lattice: the pad's position on
-    the plate is ``x0 + qpos[jx]``, its lowest point ``z0 + qpos[jz]`` above the base."""
-
-    def __init__(
-        self, lattice: AnchoredLattice, base_area_m2: float, x0: float, z0: float, jx: int
-    ):
-        self.c = lattice
-        self.area = base_area_m2
-        self.x0, self.z0, self.jx = x0, z0, jx
+class AnchoredHeldStep(PlateHeldStep):
+    """The held step on the anchored lattice (:class:`AnchoredLattice`)."""
 
     def describe(self) -> str:
         c = self.c
@@ -346,8 +334,7 @@ class AnchoredHeldStep:
         )
 
     def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
-        x_pad = self.x0 + float(qpos[self.jx])
-        z_low = self.z0 + float(qpos[jz])
+        x_pad, z_low = self.pose(qpos, jz)
         dz, off = self.c.solve(x_pad, z_low, total * self.area)
         qpos[jz] -= dz
         self.c.taxel_loads(off, taxel_out)

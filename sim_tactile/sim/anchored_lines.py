@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..plates import Plate, features
-from .clipped import _merge, wall_lines
+from .clipped import _merge, skin_refusals, wall_lines
 
 #: Lines closer than this to a wall's residue are one line [m].
 RESIDUE_M = 1e-9
@@ -82,25 +82,25 @@ def anchored_cells(finger, layout, plate, y0_m, pitch_m, pitch_y_m, wall_m) -> i
     return round(base.size / P * finger.patch_m[0] * rows)
 
 
-def check_anchorable(plate: Plate, layout, level: str = "L1", finger=None, quasi_static=True):
-    """Raise unless the anchored lattice serves this scene: a plate of boxes, taxels at the
-    surface, the elastic half-space of L1 under quasi-static force control."""
+def anchor_refusals(plate: Plate, layout, level="L1", finger=None, quasi_static=True) -> list[str]:
+    """What keeps the anchored lattice from serving this scene (empty when it serves it): a
+    plate that is not all boxes, taxels below the surface, a pad shape the depth kernel does
+    not know, and the skin's refusals (:func:`~sim_tactile.sim.clipped.skin_refusals`)."""
     why = []
     fs = features(plate) if plate.texture.kind != "roughness" else []
     if not fs or any(f.kind != "box" for f in fs):
         why.append("a plate that is not all boxes (valid: ridges, bumps and bars of boxes)")
     if (layout.depth_m > 0).any():
         why.append(f"taxels below the surface (depth up to {layout.depth_m.max():g} m; valid: 0)")
-    if level != "L1":
-        why.append(f"level {level!r} (valid: 'L1')")
-    if finger is not None and finger.stack is not None:
-        why.append("a layered stack")
-    if finger is not None and finger.skin_tractions and finger.friction > 0:
-        why.append("the skin's sliding tractions (skin_tractions)")
     if finger is not None and finger.shape not in _SHAPES:
         why.append(f"pad shape {finger.shape!r}")
-    if not quasi_static:
-        why.append("dynamic force control (valid: 'quasi-static')")
+    return why + skin_refusals(level, finger, quasi_static)
+
+
+def check_anchorable(plate: Plate, layout, level: str = "L1", finger=None, quasi_static=True):
+    """Raise unless the anchored lattice serves this scene: a plate of boxes, taxels at the
+    surface, the elastic half-space of L1 under quasi-static force control."""
+    why = anchor_refusals(plate, layout, level, finger, quasi_static)
     if why:
         raise ConfigError(
             "the anchored lattice serves box plates, surface taxels and the half-space skin "

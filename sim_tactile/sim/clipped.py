@@ -343,15 +343,26 @@ def _centres(lines: np.ndarray) -> np.ndarray:
     return 0.5 * (lines[:-1] + lines[1:])
 
 
-class ClippedHeldStep:
-    """The held step (``step(qpos, jz, total, taxel_out) -> (force, deepest)``, as
-    :class:`~sim_tactile.sim.held.HeldStep`) on clipped patches: the pad's position on the
-    plate is ``x0 + qpos[jx]``, its lowest point ``z0 + qpos[jz]`` above the base."""
+class PlateHeldStep:
+    """The frame of a held step (``step(qpos, jz, total, taxel_out) -> (force, deepest)``, as
+    :class:`~sim_tactile.sim.held.HeldStep`) that solves on cells of the plate's own: the
+    pad's position on the plate is ``x0 + qpos[jx]``, its lowest point ``z0 + qpos[jz]``
+    above the base; ``c`` the cells' solver, ``area`` the pad lattice's node area (the
+    total it is given is a pressure summed over those nodes)."""
 
-    def __init__(self, patches: ClippedPatches, base_area_m2: float, x0: float, z0: float, jx: int):
-        self.c = patches
+    def __init__(self, cells, base_area_m2: float, x0: float, z0: float, jx: int):
+        self.c = cells
         self.area = base_area_m2
         self.x0, self.z0, self.jx = x0, z0, jx
+
+    def pose(self, qpos, jz) -> tuple[float, float]:
+        """``(x_pad, z_low)``: the pad centre's x on the plate and its lowest point's height
+        above the base [m]."""
+        return self.x0 + float(qpos[self.jx]), self.z0 + float(qpos[jz])
+
+
+class ClippedHeldStep(PlateHeldStep):
+    """The held step on clipped patches (:class:`ClippedPatches`)."""
 
     def describe(self) -> str:
         return (
@@ -360,8 +371,7 @@ class ClippedHeldStep:
         )
 
     def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
-        x_pad = self.x0 + float(qpos[self.jx])
-        z_low = self.z0 + float(qpos[jz])
+        x_pad, z_low = self.pose(qpos, jz)
         (cx, cy, hx, hy, cell, _), cand, p, d = self.c.solve(x_pad, z_low, total * self.area)
         qpos[jz] -= d
         loads = p * (4 * hx[cand] * hy[cand])
@@ -369,19 +379,28 @@ class ClippedHeldStep:
         return float(loads.sum()), self.c.deepest
 
 
+def skin_refusals(level: str, finger=None, quasi_static: bool = True) -> list[str]:
+    """What keeps a held step on the plate's own cells (clipped patches, the anchored lattice)
+    from serving this skin: a level other than L1, a layered stack, friction coupled into the
+    normal problem, dynamic force control. Empty when it serves it; ``finger`` None skips the
+    finger's checks."""
+    why = []
+    if level != "L1":
+        why.append(f"level {level!r} (valid: 'L1')")
+    if finger is not None and finger.stack is not None:
+        why.append("a layered stack")
+    if finger is not None and finger.skin_tractions and finger.friction > 0:
+        why.append("the skin's sliding tractions (skin_tractions)")
+    if not quasi_static:
+        why.append("dynamic force control (valid: 'quasi-static')")
+    return why
+
+
 def check_clippable(level: str, finger, quasi_static: bool = True) -> None:
     """Raise unless clipped patches serve this skin: the elastic half-space of L1, without a
     layered stack or friction coupled into the normal problem, under quasi-static force
     control (the held step)."""
-    why = []
-    if level != "L1":
-        why.append(f"level {level!r} (valid: 'L1')")
-    if finger.stack is not None:
-        why.append("a layered stack")
-    if finger.skin_tractions and finger.friction > 0:
-        why.append("the skin's sliding tractions (skin_tractions)")
-    if not quasi_static:
-        why.append("dynamic force control (valid: 'quasi-static')")
+    why = skin_refusals(level, finger, quasi_static)
     if why:
         raise ConfigError(
             "clipped patches serve the half-space skin of L1 under quasi-static force control; "

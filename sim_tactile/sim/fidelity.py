@@ -36,12 +36,11 @@ import math
 from dataclasses import asdict, dataclass, field
 
 from .. import _validate as v
-from ..errors import ConfigError
 from ..plates import Plate, features
 from ..plates.spec import Roughness
 from ..scene.nodes import lattice_shape, skin_grid
-from .anchored_lines import anchored_cells, check_anchorable
-from .clipped import check_clippable, has_walls, static_cells
+from .anchored_lines import anchor_refusals, anchored_cells
+from .clipped import has_walls, skin_refusals, static_cells
 from .measured_errors import WARN_ABOVE, MeasuredError, expected_error, finer_grids
 
 LEVELS = ("L0", "L1", "L2")
@@ -327,11 +326,7 @@ def _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
 def _anchored_choice(plate, layout, finger, protocol, level) -> MeasuredError | None:
     """The first lattice of :data:`ANCHORED_GRIDS` measured within :data:`WARN_ABOVE` of the
     physics on this scene, where the anchored lattice serves it, or None."""
-    if protocol.force_control != "quasi-static":
-        return None
-    try:
-        check_anchorable(plate, layout, level, finger)
-    except ConfigError:
+    if anchor_refusals(plate, layout, level, finger, protocol.force_control == "quasi-static"):
         return None
     for wall, px, py in ANCHORED_GRIDS:
         m = expected_error(plate, layout, finger, protocol.force_n, level, px, py, wall_m=wall)
@@ -342,14 +337,9 @@ def _anchored_choice(plate, layout, finger, protocol, level) -> MeasuredError | 
 
 def _clippable(plate, finger, protocol, level) -> bool:
     """Whether clipped patches serve this scene: a plate with box walls, the held force, and
-    a skin they serve (:func:`~sim_tactile.sim.clipped.check_clippable`)."""
-    if not has_walls(plate) or protocol.force_control != "quasi-static":
-        return False
-    try:
-        check_clippable(level, finger)
-    except ConfigError:
-        return False
-    return True
+    a skin they serve (:func:`~sim_tactile.sim.clipped.skin_refusals`)."""
+    quasi_static = protocol.force_control == "quasi-static"
+    return has_walls(plate) and not skin_refusals(level, finger, quasi_static)
 
 
 def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnings):
