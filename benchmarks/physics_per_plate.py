@@ -1,7 +1,7 @@
 """The default fidelity's error against physics on every plate of every simulated task.
 
     python benchmarks/physics_per_plate.py [--tasks finger7-v1,...] [--plates P,...]
-        [--offsets 4] [--refine 1,2,4] [--json]
+        [--offsets 4] [--refine 1,2,4] [--json] [--ref-cache DIR]
 
 ``bench speed-error`` measures one plate per task (its bench scene) at every level; this
 measures the level each task actually runs (``auto``: its node grid as ``choose_fidelity``
@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 
 from sim_tactile.bench import physics
+from sim_tactile.cache import default_root
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim import measured_errors
@@ -48,7 +49,14 @@ SLOW = ("textures20-icub60-v1", "textures20-icub60-v2")
 
 
 def measure(
-    task_id: str, n_offsets: int, refine=(1,), plates=None, log=print, clipped=False, anchored=()
+    task_id: str,
+    n_offsets: int,
+    refine=(1,),
+    plates=None,
+    log=print,
+    clipped=False,
+    anchored=(),
+    ref_cache=None,
 ) -> list[dict]:
     """The rows of one task: auto's resolving grid at 1/f of its pitch for f in ``refine``
     (``clipped``: its patches clipped), or, with ``anchored`` ((wall, x, y) in m), the
@@ -68,7 +76,7 @@ def measure(
         # the grid that resolves the features, before auto refines it from this table
         fid = choose_fidelity(plate, sensor.layout, sensor.finger, proto, "auto", refine=False)
         t0 = time.perf_counter()
-        ref = physics.reference(plate, sensor, proto.force_n, n_offsets)
+        ref = physics.reference(plate, sensor, proto.force_n, n_offsets, ref_cache)
         grids = (
             [(w, px, py, None) for w, px, py in anchored]
             if anchored
@@ -142,6 +150,12 @@ def main() -> int:
     ap.add_argument(
         "--write-table", action="store_true", help="store the rows where auto finds them"
     )
+    ap.add_argument(
+        "--ref-cache",
+        default=str(default_root() / "physics-ref"),
+        help="where the references are kept between runs, keyed by their content and code "
+        "(default: the package's cache; 'none' to compute them each time)",
+    )
     args = ap.parse_args()
     missing = physics.tamaas_missing()
     if missing:
@@ -157,10 +171,11 @@ def main() -> int:
     anchored = tuple(
         tuple(float(v) * 1e-3 for v in c.split(":")) for c in (args.anchored or "").split(",") if c
     )
+    ref_cache = None if args.ref_cache == "none" else Path(args.ref_cache)
     rows = [
         r
         for t in tasks
-        for r in measure(t, args.offsets, refine, plates, log, args.clipped, anchored)
+        for r in measure(t, args.offsets, refine, plates, log, args.clipped, anchored, ref_cache)
     ]
     if args.json:
         print(json.dumps(rows, indent=1))

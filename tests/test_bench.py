@@ -270,3 +270,29 @@ def test_sweep_rejects_bad_settings():
         Sweep(l2_dt_factors=(0.5,))
     with pytest.raises(ConfigError, match="duration_s"):
         Sweep(duration_s=0.0)
+
+
+def test_the_physics_reference_is_kept_by_its_content(tmp_path, monkeypatch):
+    """A reference is read back from the cache only for the same scene and force: a stored
+    one returns the same loads without solving, another force solves again."""
+    pytest.importorskip("tamaas")
+    plate, sensor = get_plate("finger7/ridges-4"), get_sensor("grid3x3")
+    calls = []
+
+    def fake(plate_, finger, force_n, offset, spacing):  # a uniform pressure under the pad
+        calls.append(offset)
+        x = physics.reference_axis(16, 1e-3)
+        X, Y = np.meshgrid(x, x, indexing="ij")
+        p = np.full(X.size, force_n * (1 + offset) / (X.size * 1e-6))
+        return np.column_stack([X.ravel(), Y.ravel()]), p, 1e-3, None
+
+    monkeypatch.setattr(physics, "tamaas_press", fake)
+    first = physics.reference(plate, sensor, 1.0, 2, tmp_path)
+    assert len(calls) == 4 and len(list(tmp_path.glob("physics-ref-*.npz"))) == 1
+    again = physics.reference(plate, sensor, 1.0, 2, tmp_path)
+    assert len(calls) == 4  # read back, not solved
+    np.testing.assert_array_equal(again.loads, first.loads)
+    assert again.offsets_m == first.offsets_m and again.ref_change == first.ref_change
+    other = physics.reference(plate, sensor, 2.0, 2, tmp_path)
+    assert len(calls) == 8 and len(list(tmp_path.glob("physics-ref-*.npz"))) == 2
+    np.testing.assert_allclose(other.loads, 2 * first.loads)

@@ -31,11 +31,15 @@ error against physics is left out and every row says why.
 
 from __future__ import annotations
 
+import io
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from ..cache import atomic_write
+from ..hashing import code_version, content_hash, file_digest
 from ..plates import Plate, height_at
 from ..scene.elastic import subsurface_weights
 from ..scene.nodes import skin_grid
@@ -170,8 +174,60 @@ class PhysicsReference:
         )
 
 
-def reference(plate: Plate, sensor: Sensor, force_n: float, n_offsets: int) -> PhysicsReference:
-    """The scene's reference taxel loads at ``n_offsets`` offsets."""
+def reference_key(plate: Plate, sensor: Sensor, force_n: float, n_offsets: int) -> str:
+    """The key of a scene's reference: the plate, the pad and its taxels, the force, the
+    offsets, the reference's settings, Tamaas's version, and the code that computes it (this
+    module and what the plate's heights and the taxels' weights are computed with)."""
+    import tamaas as tm
+
+    return content_hash(
+        {
+            "plate": plate.hash,
+            "layout": sensor.layout.to_json(),
+            "finger": sensor.finger.to_json(),
+            "force_n": float(force_n),
+            "offsets_m": list(offsets_m(plate, n_offsets)),
+            "spacing_m": REF_SPACING_M,
+            "cell_pads": CELL_PADS,
+            "tolerance": TOLERANCE,
+            "tamaas": tm.__version__,
+            "this": file_digest(Path(__file__)),
+            "code": code_version(
+                "sim_tactile.plates", "sim_tactile.sensors", "sim_tactile.scene.elastic"
+            ),
+        }
+    )
+
+
+def reference(
+    plate: Plate, sensor: Sensor, force_n: float, n_offsets: int, cache_dir: Path | None = None
+) -> PhysicsReference:
+    """The scene's reference taxel loads at ``n_offsets`` offsets. With ``cache_dir``, they
+    are read from there when computed before (keyed by :func:`reference_key`), and stored
+    there when not (an iCub plate's reference takes about 10 minutes)."""
+    if cache_dir is not None:
+        path = (
+            Path(cache_dir) / f"physics-ref-{reference_key(plate, sensor, force_n, n_offsets)}.npz"
+        )
+        if path.is_file():
+            with np.load(path, allow_pickle=False) as z:
+                return PhysicsReference(
+                    tuple(float(o) for o in z["offsets_m"]),
+                    z["loads"],
+                    float(z["ref_change"]),
+                    float(z["spacing_m"]),
+                )
+        ref = reference(plate, sensor, force_n, n_offsets)
+        buf = io.BytesIO()
+        np.savez(
+            buf,
+            offsets_m=np.array(ref.offsets_m),
+            loads=ref.loads,
+            ref_change=ref.ref_change,
+            spacing_m=ref.spacing_m,
+        )
+        atomic_write(path, buf.getvalue())
+        return ref
     offs = offsets_m(plate, n_offsets)
     fine, coarse = [], []
     for off in offs:
