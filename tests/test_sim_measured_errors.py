@@ -197,6 +197,28 @@ def test_a_large_clipped_grid_comes_after_a_finer_whole_one():
     assert fid.expected_error < me.WARN_ABOVE
 
 
+def test_a_clipped_grid_over_its_cell_cap_is_never_taken(monkeypatch):
+    """icub60's boxes-3.0mm: whole patches 34.5% off at 1.16 mm, clipped 5.8%, but the
+    clipped grid has 4453 static cells (a slide had not finished in 10 minutes), so auto takes
+    the finer whole grid measured within 10% (0.385 mm, 9.3%, 6231 nodes, solved spectrally);
+    without that row it keeps its own grid and warns rather than clip."""
+    ss, sensor, proto = _scene("textures20-icub60-v1")
+    plate = get_plate("textures20/boxes-3.0mm")
+    args = (plate, sensor.layout, sensor.finger, proto, "auto")
+    base = choose_fidelity(*args, refine=False)
+    clipped = me.expected_error(
+        plate, sensor.layout, sensor.finger, proto.force_n, "L1", base.pitch_m, None, True
+    )
+    assert clipped is not None and clipped.error < me.WARN_ABOVE < base.expected_error
+    fid = choose_fidelity(*args)
+    assert not fid.clipped and fid.pitch_m == pytest.approx(base.pitch_m / 3)
+    assert fid.expected_error < me.WARN_ABOVE and "6231 nodes, solved spectrally" in fid.reason
+    _rows_only(monkeypatch, lambda r: r["pitch_m"] > 0.5e-3)
+    kept = choose_fidelity(*args)
+    assert not kept.clipped and kept.pitch_m == pytest.approx(base.pitch_m)
+    assert [w for w in kept.warnings if "from the physics" in w]
+
+
 def test_the_refined_choice_follows_the_table(monkeypatch):
     """Without the finer rows auto keeps its grid: the choice comes from the measurements."""
     _whole_patches_only(monkeypatch, keep=lambda r: r["pitch_m"] > 0.2e-3)

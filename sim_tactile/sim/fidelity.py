@@ -65,11 +65,21 @@ MAX_NODES = {"L0": 2500, "L1": 700, "L2": 2800}
 #: as N^3.
 DENSE_MAX_NODES = 3000
 #: Most skin nodes auto may take when the measured error sends it to a finer grid (solved
-#: spectrally above :data:`DENSE_MAX_NODES`): a slide there costs a few seconds per second
-#: of contact (finger7/bumps-6x6 at 2401 nodes 0.33x real time, the BioTac's boxes at 2835
-#: nodes 0.23x); finger7/bumps-4x4 at 16641 nodes (0.125 mm, 4.8% from the physics) runs at
+#: spectrally above :data:`DENSE_MAX_NODES`): a slide there costs seconds per second of
+#: contact (finger7/bumps-6x6 at 2401 nodes 0.33x real time, the BioTac's boxes at 2835
+#: nodes 0.23x). icub60's 0.385 mm grid (6231 nodes, spectral) brings its boxes, cylinders
+#: and hemispheres within 10% of the physics; a whole slide there (textures20/cylinders-3.0mm,
+#: 1.82 s of contact) took 23.6 s, against 28.9 s for the 0.578 mm grid (2835 nodes, dense,
+#: its set-up included) and 1.1 s for auto's own 1.16 mm (at 6c08322, one run each, the
+#: machine shared). finger7/bumps-4x4 at 16641 nodes (0.125 mm, 4.8% from the physics) runs at
 #: 0.03x and is left to the user (``pitch_m``; the warning names it).
-MAX_NODES_MEASURED = 5000
+MAX_NODES_MEASURED = 6500
+#: Most static cells of a clipped grid auto may take when no whole grid under
+#: :data:`MAX_NODES_MEASURED` was measured within the target: the step assembles and factors
+#: the patches along every moving wall, and the cost grows steeply with the cells (the
+#: BioTac's boxes, 2009 cells: 0.55x real time; icub60's boxes-3.0mm at 1.16 mm, 4453 cells:
+#: a whole slide had not finished in 10 minutes, at 6c08322).
+CLIPPED_MAX_CELLS = 2500
 #: Coarsest node pitch across the slide auto may pick over ridges along y [m].
 PITCH_MAX_Y_M = 2.0e-3
 #: Nodes across the smallest feature along the slide over ridges (x pitch = feature / this).
@@ -308,17 +318,19 @@ def _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
     whole 0.2-0.4x, benchmarks/bench_clipped.py at aa8c226) and not over a large contact,
     where a finer whole grid comes first (finger7/ridges-4 at 0.25 x 2 mm, 923 cells: 1.3x,
     against 0.125 x 1 mm whole 5.8x; the BioTac's boxes, 2009 cells: 0.55x against 0.355 mm
-    whole 3.7x)."""
+    whole 3.7x), and a clipped grid of more than :data:`CLIPPED_MAX_CELLS` cells is never
+    taken."""
     if not _clippable(plate, finger, protocol, level):
         return None, _refinement(plate, layout, finger, protocol.force_n, level, measured)
     grid = skin_grid(finger, pitch, py_key)
-    small = static_cells(grid, layout, plate, protocol.offset_y_m) <= MAX_NODES[level]
+    cells = static_cells(grid, layout, plate, protocol.offset_y_m)
+    small = cells <= MAX_NODES[level]
     clip = expected_error(plate, layout, finger, protocol.force_n, level, pitch, py_key, True)
     clip = clip if clip is not None and clip.error <= WARN_ABOVE else None
     if small and clip is not None:
         return clip, None
     better = _refinement(plate, layout, finger, protocol.force_n, level, measured)
-    if better is None and not small:
+    if better is None and cells <= CLIPPED_MAX_CELLS:
         return clip, None
     return None, better
 
