@@ -243,3 +243,29 @@ def test_a_stored_row_is_what_the_benchmark_measures_today():
     m = me.expected_error(plate, sensor.layout, sensor.finger, proto.force_n, *grid)
     assert norm == pytest.approx(m.error, abs=REMEASURE_ATOL)
     assert worst == pytest.approx(m.largest_taxel, abs=REMEASURE_ATOL)
+
+
+def test_a_long_plate_not_measured_takes_its_short_plates_rows_and_says_so():
+    """textures20-long/boxes-3.0mm was not measured on the iCub: its 36 mm plate's rows stand
+    in (the same features under the pad), and the reason names both plates. A plate that is
+    not the long preset itself (another content under its name, or no name) finds nothing."""
+    ss, sensor, proto = _scene("textures20-icub60-v2")
+    long = get_plate("textures20-long/boxes-3.0mm")
+    short = get_plate("textures20/boxes-3.0mm")
+    args = (sensor.layout, sensor.finger, proto.force_n, "L1", 0.3854496446637726e-3, None)
+    assert me.stand_in(long) == short
+    m = me.expected_error(long, *args)
+    direct = me.expected_error(short, *args)
+    assert m is not None and m.error == direct.error and m.plate == "textures20/boxes-3.0mm"
+    assert m.stands_in_for == "textures20-long/boxes-3.0mm" and direct.stands_in_for is None
+    assert "textures20-long/boxes-3.0mm not measured" in m.describe()
+    fid = choose_fidelity(long, sensor.layout, sensor.finger, proto, "auto")
+    assert fid.pitch_m == pytest.approx(args[-2]) and "not measured: the same" in fid.reason
+    assert me.stand_in(replace(long, thickness_m=long.thickness_m * 2)) is None
+    assert me.stand_in(replace(long, name=None)) is None and me.stand_in(short) is None
+    # a long plate measured itself keeps its own rows
+    g = get_plate("textures20-long/grating-3.0mm")
+    own = me.expected_error(
+        g, sensor.layout, sensor.finger, 1.0, "L1", 0.4478520163753057e-3, 0.002985680109168727
+    )
+    assert own is not None and own.stands_in_for is None and own.plate == g.name
