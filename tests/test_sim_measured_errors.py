@@ -123,14 +123,17 @@ def _rows_only(monkeypatch, keep):
 def test_auto_warns_where_its_grid_is_far_from_the_physics_and_names_finer_grids(monkeypatch):
     _whole_patches_only(monkeypatch)
     ss, sensor, proto = _scene("finger7-v1")
-    fid = choose_fidelity(
-        get_plate("finger7/bumps-4x4"), sensor.layout, sensor.finger, proto, "auto"
-    )
-    assert fid.expected_error > me.WARN_ABOVE and not fid.clipped
-    warn = [w for w in fid.warnings if "from the physics" in w]
-    assert len(warn) == 1 and "0.5 mm:" in warn[0], fid.warnings
+    args = (get_plate("finger7/bumps-4x4"), sensor.layout, sensor.finger, proto, "auto")
+    own = choose_fidelity(*args, refine=False)
+    assert own.expected_error > me.WARN_ABOVE and not own.clipped
+    warn = [w for w in own.warnings if "from the physics" in w]
+    assert len(warn) == 1 and "0.5 mm:" in warn[0], own.warnings
     # the finer grids say how they are solved
     assert "0.333 mm: 14.7% (2401 nodes, dense solve; pass pitch_m)" in warn[0], warn[0]
+    # none within 10% under the node cap: auto takes the closest (0.333 mm) and warns
+    fid = choose_fidelity(*args)
+    assert fid.pitch_m == pytest.approx(1e-3 / 3) and fid.expected_error > me.WARN_ABOVE
+    assert [w for w in fid.warnings if "(0.333 mm) are 15% from the physics" in w]
     flat = choose_fidelity(
         get_plate("finger7/ridges-2"), sensor.layout, sensor.finger, proto, "auto"
     )
@@ -201,7 +204,7 @@ def test_a_clipped_grid_over_its_cell_cap_is_never_taken(monkeypatch):
     """icub60's boxes-3.0mm: whole patches 34.5% off at 1.16 mm, clipped 5.8%, but the
     clipped grid has 4453 static cells (a slide had not finished in 10 minutes), so auto takes
     the finer whole grid measured within 10% (0.385 mm, 9.3%, 6231 nodes, solved spectrally);
-    without that row it keeps its own grid and warns rather than clip."""
+    without that row it takes the closest whole grid and warns rather than clip."""
     ss, sensor, proto = _scene("textures20-icub60-v1")
     plate = get_plate("textures20/boxes-3.0mm")
     args = (plate, sensor.layout, sensor.finger, proto, "auto")
@@ -214,9 +217,28 @@ def test_a_clipped_grid_over_its_cell_cap_is_never_taken(monkeypatch):
     assert not fid.clipped and fid.pitch_m == pytest.approx(base.pitch_m / 3)
     assert fid.expected_error < me.WARN_ABOVE and "6231 nodes, solved spectrally" in fid.reason
     _rows_only(monkeypatch, lambda r: r["pitch_m"] > 0.5e-3)
-    kept = choose_fidelity(*args)
-    assert not kept.clipped and kept.pitch_m == pytest.approx(base.pitch_m)
+    kept = choose_fidelity(*args)  # the closest whole grid measured (0.578 mm, 12.9%)
+    assert not kept.clipped and kept.pitch_m == pytest.approx(base.pitch_m / 2)
     assert [w for w in kept.warnings if "from the physics" in w]
+
+
+def test_where_no_grid_is_within_the_target_auto_takes_the_closest_and_warns(monkeypatch):
+    """icub60's hemispheres-3.0mm: 133% at its own 1.16 mm, 40.3% at 0.578 mm, 11.5% at
+    0.385 mm (under auto's node cap), none within 10%: auto takes 0.385 mm, says it is the
+    closest, and warns with its error."""
+    ss, sensor, proto = _scene("textures20-icub60-v1")
+    plate = get_plate("textures20/hemispheres-3.0mm")
+    args = (plate, sensor.layout, sensor.finger, proto, "auto")
+    base = choose_fidelity(*args, refine=False)
+    fid = choose_fidelity(*args)
+    assert base.expected_error > 1.0 and fid.pitch_m == pytest.approx(base.pitch_m / 3)
+    assert me.WARN_ABOVE < fid.expected_error < 0.2
+    assert "none measured under 6500 nodes is within 10%; the closest" in fid.reason
+    warn = [w for w in fid.warnings if "from the physics" in w]
+    assert len(warn) == 1 and "(0.385 mm) are 11% from the physics" in warn[0], warn
+    # a finer grid no closer than auto's own is not taken
+    _rows_only(monkeypatch, lambda r: r["error_vs_physics"] > 1.0 or r["pitch_m"] > 1e-3)
+    assert choose_fidelity(*args).pitch_m == pytest.approx(base.pitch_m)
 
 
 def test_the_refined_choice_follows_the_table(monkeypatch):
