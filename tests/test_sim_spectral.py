@@ -14,7 +14,7 @@ from sim_tactile.scene.layered import layered_compliance_matrix, layered_complia
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import resolve_sensor
 from sim_tactile.sensors.stack import Layer, Stack
-from sim_tactile.sim.contact import ActiveSet
+from sim_tactile.sim.contact import ActiveSet, spectral
 from sim_tactile.sim.contact.spectral import TOL, Spectral
 from sim_tactile.sim.runner import StepOptions
 from sim_tactile.sim.simulate import simulate
@@ -179,3 +179,29 @@ def test_a_one_node_warm_start_lets_the_overlapping_nodes_join():
     assert (p1 > 0).sum() > 1
     assert np.abs(p - p1).max() < AGREE * p1.max()
     assert dz == pytest.approx(dz1, rel=AGREE)
+
+
+@pytest.mark.parametrize(
+    "rounding,refresh", [(spectral.ROUNDING, 16), (spectral.ROUNDING, 1000), (0.0, 1000)]
+)
+def test_a_gradient_at_the_rounding_of_the_deflections_ends_the_solve(
+    rounding, refresh, monkeypatch
+):
+    """A held step of finger7/bumps-3x3 at 0.8 mm: 12 nodes converge until the gaps on the
+    set agree to 1e-19 m, where the gradient is the rounding of ``C p``; a step along it
+    (1e12 times the last) threw the pressures 24% off the answer and stopped there. The
+    iteration ends at the rounding floor instead, on the dense answer; without that floor it
+    does not (the last case: the deflections carried for 1000 iterations, as in that slide's
+    run, which shows the test can fail)."""
+    monkeypatch.setattr(spectral, "ROUNDING", rounding)
+    monkeypatch.setattr(spectral, "REFRESH_EVERY", refresh)
+    with np.load(Path(__file__).parent / "data" / "spectral_rounding.npz") as z:
+        pen, total, warm = z["pen"], float(z["total"]), z["warm"]
+    n, pitch = 21, 0.8e-3
+    sp = Spectral(compliance_table(n, n, pitch, E))
+    sp.p = warm.copy()
+    p, _ = sp.solve_force(pen, total)
+    C = compliance_matrix(_lattice(n, n, pitch, pitch), pitch, E)
+    p1, _ = ActiveSet(C, np.linalg.inv(C)).solve_force(pen, total)
+    close = np.abs(p - p1).max() < AGREE * p1.max()
+    assert close == (rounding > 0), np.abs(p - p1).max() / p1.max()

@@ -25,6 +25,7 @@ problem (not symmetric) takes the dense solve.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from scipy import fft
 
@@ -39,6 +40,35 @@ MAX_ITER = 2000
 #: Iterations from the last step's pressures before the solve starts afresh (see
 #: :meth:`Spectral._starts`); a sliding step converges in 1-60.
 WARM_ITER = 300
+#: The deflection ``C p`` is carried from one iteration to the next (``C (p - tau t)`` from
+#: the direction's product, which each iteration computes anyway), and the nodes the
+#: projection moves off that line are added by direct sums over the kernel, up to this many
+#: (a direct sum costs about N operations a node, an FFT product some 50 N); more, and the
+#: product is taken again by FFT.
+DIRECT_MAX = 24
+#: ... and it is taken again by FFT every this many iterations, so that rounding never
+#: accumulates.
+REFRESH_EVERY = 16
+#: The gaps on the contact set are equal when their spread is below this share of the
+#: largest deflection (a thousand times double precision): below it the gradient is the
+#: rounding of ``C p``, and a step along it can throw the pressures anywhere (measured: a
+#: converging held step of finger7/bumps-3x3 took a step 1e12 times its predecessors' on
+#: such a gradient and stopped far from the answer).
+ROUNDING = 1e-13
+
+
+@numba.njit(cache=True)
+def _add_columns(u, table, nodes, dp, nx):
+    """``u += C[:, nodes] @ dp`` on the lattice: each node's column is the kernel ``table``
+    shifted to it (``u`` and ``table`` as (ny, nx))."""
+    ny = u.shape[0]
+    for k in range(nodes.size):
+        jy, jx = divmod(nodes[k], nx)
+        d = dp[k]
+        for iy in range(ny):
+            row = table[abs(iy - jy)]
+            for ix in range(nx):
+                u[iy, ix] += d * row[abs(ix - jx)]
 
 
 class Spectral:
@@ -63,6 +93,7 @@ class Spectral:
         ext[Ly - ny + 1 :, Lx - nx + 1 :] = table[:0:-1, :0:-1]
         self.shape = ext.shape
         self.khat = fft.rfft2(ext)
+        self.table = table
         self.diag = float(table[0, 0])
         self.p = np.zeros(self.n)  # the last solve's pressures: the next one's start
         self.iterations = 0  # of the last solve
@@ -155,24 +186,29 @@ class Spectral:
         scale = total if total is not None else None
         change = np.inf
         gap_tol = 1e-9 * max(float(np.abs(pen_ok).max()), 1e-12)
+        u = None  # C p, carried between iterations
         for it in range(1, budget + 1):
             on = p > 0
             if not on.any():  # every node let go (the pad at its place above the plate)
                 return p, it, 0.0
-            g = self.apply(p) - pen_ok
+            if u is None or it % REFRESH_EVERY == 0:  # by FFT
+                u = self.apply(p)
+            g = u - pen_ok
             if total is not None:
                 g -= g[on].mean()
             G = float(g[on] @ g[on])
             t = np.where(on, g + (delta * G / g_old) * t, 0.0)
             g_old = G if G > 0 else 1.0
-            r = self.apply(t)
-            if total is not None:
-                r -= r[on].mean()
+            r_raw = self.apply(t)
+            r = r_raw - r_raw[on].mean() if total is not None else r_raw
             rt = float(r[on] @ t[on])
-            if not rt > 0:  # no direction left on the set: solved, unless a node off it
-                # overlaps the plate (a set whose gaps are all equal, e.g. one node, has no
-                # gradient; returning then kept a one-node warm start where the whole face
-                # touched). Those nodes join with the pressure that would lift them alone.
+            floor = (ROUNDING * float(np.abs(u).max())) ** 2 * float(on.sum())
+            if not rt > 0 or G <= floor:  # no direction left on the set (or the gaps on it
+                # agree to the deflections' rounding, where a step would follow the noise):
+                # solved, unless a node off it overlaps the plate (a set whose gaps are all
+                # equal, e.g. one node, has no gradient; returning then kept a one-node warm
+                # start where the whole face touched). Those nodes join with the pressure
+                # that would lift them alone.
                 join = (p == 0) & (g < -gap_tol) & ok
                 if not join.any():
                     return p, it, 0.0
@@ -182,24 +218,42 @@ class Spectral:
                     p *= total / p.sum()
                 t = np.zeros(self.n)
                 delta = 0.0
+                u = None
                 continue
             tau = float(g[on] @ t[on]) / rt
             p_old = p
-            p = np.maximum(p - tau * t, 0.0)
+            line = p - tau * t
+            p = np.maximum(line, 0.0)
             overlap = (p == 0) & (g < 0) & ok
             if overlap.any():
                 delta = 0.0
                 p[overlap] -= tau * g[overlap]
             else:
                 delta = 1.0
+            u = self._carry(u, tau, r_raw, line, p)
             if total is not None:
-                p *= total / p.sum()
+                s = total / p.sum()
+                p *= s
+                if u is not None:
+                    u *= s
             if scale is None:
                 scale = max(float(p.sum()), 1e-300)
             change = float(np.abs(p - p_old).sum()) / max(float(p.sum()), scale * 1e-12)
             if change < self.tol:
                 return p, it, change
         return None, budget, change
+
+    def _carry(self, u, tau, r_raw, line, p):
+        """``C p`` from ``C (p_old - tau t) = u - tau C t`` and the nodes where ``p`` left
+        that line (clipped at zero, or joining), by direct sums where they are few."""
+        moved = np.flatnonzero(p != line)
+        if moved.size > DIRECT_MAX:
+            return None  # taken again by FFT at the next iteration
+        u = u - tau * r_raw
+        if moved.size:
+            u2 = u.reshape(self.ny, self.nx)
+            _add_columns(u2, self.table, moved, p[moved] - line[moved], self.nx)
+        return u
 
     def stiffness_per_area(self, p: np.ndarray, tol: float = 1e-8) -> float:
         """``1' inv(C_SS) 1`` on the contact set of ``p`` [Pa/m] (as
