@@ -41,10 +41,18 @@ from dataclasses import asdict, dataclass, field
 from .. import _validate as v
 from ..plates import Plate, features
 from ..plates.spec import Roughness
-from ..scene.nodes import lattice_shape, skin_grid
+from ..scene.nodes import skin_grid
 from .anchored_lines import anchor_refusals, anchored_cells
 from .clipped import has_walls, skin_refusals, static_cells
-from .measured_errors import WARN_ABOVE, MeasuredError, expected_error, finer_grids
+from .measured_errors import (
+    MAX_NODES_MEASURED,
+    WARN_ABOVE,
+    MeasuredError,
+    expected_error,
+    finer_grids,
+    node_count,
+    refinement,
+)
 
 LEVELS = ("L0", "L1", "L2")
 #: What a ``fidelity`` argument may be (a :class:`Fidelity` too, in Python).
@@ -67,16 +75,6 @@ MAX_NODES = {"L0": 2500, "L1": 700, "L2": 2800}
 #: 3 s at 2835 nodes; the matrices grow as N^2 (two of 8 N^2 bytes) and the factorisation
 #: as N^3.
 DENSE_MAX_NODES = 3000
-#: Most skin nodes auto may take when the measured error sends it to a finer grid (solved
-#: spectrally above :data:`DENSE_MAX_NODES`): a slide there costs seconds per second of
-#: contact (finger7/bumps-6x6 at 2401 nodes 0.33x real time, the BioTac's boxes at 2835
-#: nodes 0.23x). icub60's 0.385 mm grid (6231 nodes, spectral) brings its boxes, cylinders
-#: and hemispheres within 10% of the physics; a whole slide there (textures20/cylinders-3.0mm,
-#: 1.82 s of contact) took 23.6 s, against 28.9 s for the 0.578 mm grid (2835 nodes, dense,
-#: its set-up included) and 1.1 s for auto's own 1.16 mm (at 6c08322, one run each, the
-#: machine shared). finger7/bumps-4x4 at 16641 nodes (0.125 mm, 4.8% from the physics) runs at
-#: 0.03x and is left to the user (``pitch_m``; the warning names it).
-MAX_NODES_MEASURED = 6500
 #: Most static cells of a clipped grid auto may take when no whole grid under
 #: :data:`MAX_NODES_MEASURED` was measured within the target: the step assembles and factors
 #: the patches along every moving wall, and the cost grows steeply with the cells (the
@@ -266,7 +264,7 @@ def _grid_text(finger, layout, plate, protocol, pitch, py_key, shape, refined, a
     """``(nodes, text)``: the node (or anchored lattice's cell) count and how the reason
     names the grid."""
     if anch is None:
-        nodes = _node_count(finger, pitch, py_key)
+        nodes = node_count(finger, pitch, py_key)
         return nodes, f"node pitch {shape}{refined}, {nodes} nodes"
     cells = anchored_cells(finger, layout, plate, protocol.offset_y_m, pitch, py_key, anch.wall_m)
     return cells, f"a node {shape}{refined}, about {cells} cells under the pad"
@@ -326,7 +324,7 @@ def _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
     whole 3.7x), and a clipped grid of more than :data:`CLIPPED_MAX_CELLS` cells is never
     taken."""
     if not _clippable(plate, finger, protocol, level):
-        return None, _refinement(plate, layout, finger, protocol.force_n, level, measured)
+        return None, refinement(plate, layout, finger, protocol.force_n, level, measured)
     grid = skin_grid(finger, pitch, py_key)
     cells = static_cells(grid, layout, plate, protocol.offset_y_m)
     small = cells <= MAX_NODES[level]
@@ -334,7 +332,7 @@ def _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
     clip = clip if clip is not None and clip.error <= WARN_ABOVE else None
     if small and clip is not None:
         return clip, None
-    better = _refinement(plate, layout, finger, protocol.force_n, level, measured)
+    better = refinement(plate, layout, finger, protocol.force_n, level, measured)
     if better is None and cells <= CLIPPED_MAX_CELLS:
         return clip, None
     return None, better
@@ -387,49 +385,6 @@ def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnin
     return auto_pitch, aspect
 
 
-def _node_count(finger, pitch_m: float, pitch_y_m: float | None) -> int:
-    nx, ny = lattice_shape(finger, pitch_m, pitch_y_m)
-    return nx * ny
-
-
-def _refinement(plate, layout, finger, force_n, level, measured) -> MeasuredError | None:
-    """The grid auto refines ``measured`` to, or None (None too when it is within
-    WARN_ABOVE, or not measured): the coarsest within WARN_ABOVE (:func:`_measured_within`),
-    else the measured finer grid closest to the physics under :data:`MAX_NODES_MEASURED`
-    nodes, where it is closer than ``measured`` (icub60/hemispheres-3.0mm: 133% at its own
-    1.16 mm, 40.3% at 0.578 mm, 11.5% at 0.385 mm: auto takes 0.385 mm and warns)."""
-    if measured is None or measured.error <= WARN_ABOVE:
-        return None
-    within = _measured_within(plate, layout, finger, force_n, level, measured)
-    if within is not None:
-        return within
-    py = measured.pitch_y_m
-    grids = [
-        m
-        for m in finer_grids(plate, layout, finger, force_n, level, measured.pitch_m, py)
-        if _node_count(finger, m.pitch_m, m.pitch_y_m) <= MAX_NODES_MEASURED
-        and m.error < measured.error
-    ]
-    return min(grids, key=lambda m: m.error) if grids else None
-
-
-def _measured_within(plate, layout, finger, force_n, level, measured) -> MeasuredError | None:
-    """The coarsest measured finer grid from which every finer measured grid is within
-    :data:`WARN_ABOVE` of the physics (under :data:`MAX_NODES_MEASURED` nodes), or None.
-    A grid within it whose finer neighbours are not is a lucky alignment of the nodes with
-    the features' edges (measured: finger7/bumps-3x3 at 0.25 mm 6.1%, at 0.167 mm 12.5%),
-    which a slide does not keep."""
-    py = measured.pitch_y_m
-    grids = finer_grids(plate, layout, finger, force_n, level, measured.pitch_m, py)
-    best = None
-    for m in reversed(grids):  # finest first
-        if m.error > WARN_ABOVE:
-            break
-        if _node_count(finger, m.pitch_m, m.pitch_y_m) <= MAX_NODES_MEASURED:
-            best = m
-    return best
-
-
 def _far_from_physics(plate, layout, finger, protocol, level, measured, shape) -> str:
     """The warning for a grid measured more than WARN_ABOVE from the physics, with what the
     measured finer grids give, their node counts and how they are solved."""
@@ -439,7 +394,7 @@ def _far_from_physics(plate, layout, finger, protocol, level, measured, shape) -
     )
     py_m = measured.pitch_y_m
     for m in finer_grids(plate, layout, finger, protocol.force_n, level, measured.pitch_m, py_m):
-        nodes = _node_count(finger, m.pitch_m, m.pitch_y_m)
+        nodes = node_count(finger, m.pitch_m, m.pitch_y_m)
         how = "solved spectrally" if nodes > DENSE_MAX_NODES else "dense solve"
         over = f", over auto's {MAX_NODES_MEASURED}" if nodes > MAX_NODES_MEASURED else ""
         out += f"; {m.grid}: {100 * m.error:.1f}% ({nodes} nodes{over}, {how}; pass pitch_m)"

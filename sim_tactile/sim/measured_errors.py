@@ -30,6 +30,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from ..hashing import content_hash
+from ..scene.nodes import lattice_shape
 
 #: The table, written by ``benchmarks/physics_per_plate.py --write-table``.
 TABLE = Path(__file__).with_name("measured_errors.json")
@@ -215,3 +216,59 @@ def finer_grids(plate, layout, finger, force_n: float, level: str, pitch_m: floa
         if m is not None:
             out.append(m)
     return out
+
+
+#: Most skin nodes auto may take when the measured error sends it to a finer grid (solved
+#: spectrally above :data:`~sim_tactile.sim.fidelity.DENSE_MAX_NODES`): a slide there
+#: costs seconds per second of contact (finger7/bumps-6x6 at 2401 nodes 0.33x real time, the BioTac's boxes at 2835
+#: nodes 0.23x). icub60's 0.385 mm grid (6231 nodes, spectral) brings its boxes, cylinders
+#: and hemispheres within 10% of the physics; a whole slide there (textures20/cylinders-3.0mm,
+#: 1.82 s of contact) took 23.6 s, against 28.9 s for the 0.578 mm grid (2835 nodes, dense,
+#: its set-up included) and 1.1 s for auto's own 1.16 mm (at 6c08322, one run each, the
+#: machine shared). finger7/bumps-4x4 at 16641 nodes (0.125 mm, 4.8% from the physics) runs at
+#: 0.03x and is left to the user (``pitch_m``; the warning names it).
+MAX_NODES_MEASURED = 6500
+
+
+def node_count(finger, pitch_m: float, pitch_y_m: float | None) -> int:
+    """The skin nodes of a node grid on ``finger``'s pad."""
+    nx, ny = lattice_shape(finger, pitch_m, pitch_y_m)
+    return nx * ny
+
+
+def refinement(plate, layout, finger, force_n, level, measured) -> MeasuredError | None:
+    """The grid auto refines ``measured`` to, or None (None too when it is within
+    WARN_ABOVE, or not measured): the coarsest within WARN_ABOVE (:func:`_measured_within`),
+    else the measured finer grid closest to the physics under :data:`MAX_NODES_MEASURED`
+    nodes, where it is closer than ``measured`` (icub60/hemispheres-3.0mm: 133% at its own
+    1.16 mm, 40.3% at 0.578 mm, 11.5% at 0.385 mm: auto takes 0.385 mm and warns)."""
+    if measured is None or measured.error <= WARN_ABOVE:
+        return None
+    within = _measured_within(plate, layout, finger, force_n, level, measured)
+    if within is not None:
+        return within
+    py = measured.pitch_y_m
+    grids = [
+        m
+        for m in finer_grids(plate, layout, finger, force_n, level, measured.pitch_m, py)
+        if node_count(finger, m.pitch_m, m.pitch_y_m) <= MAX_NODES_MEASURED
+        and m.error < measured.error
+    ]
+    return min(grids, key=lambda m: m.error) if grids else None
+
+
+def _measured_within(plate, layout, finger, force_n, level, measured) -> MeasuredError | None:
+    """The coarsest measured finer grid from which every finer measured grid is within
+    :data:`WARN_ABOVE` of the physics (under :data:`MAX_NODES_MEASURED` nodes), or None.
+    A grid within it whose finer neighbours are not is a lucky alignment of the nodes with
+    the features' edges (measured: finger7/bumps-3x3 at 0.25 mm 6.1%, at 0.167 mm 12.5%),
+    which a slide does not keep."""
+    py = measured.pitch_y_m
+    grids = finer_grids(plate, layout, finger, force_n, level, measured.pitch_m, py)
+    best = None
+    for m in reversed(grids):  # finest first
+        if m.error > WARN_ABOVE:
+            break
+        if node_count(finger, m.pitch_m, m.pitch_y_m) <= MAX_NODES_MEASURED:
+            best = m
+    return best
