@@ -17,6 +17,13 @@ the pressures at the target on every iteration, and the pad's shift is the mean 
 contact set (the Lagrange multiplier of that sum). Each solve starts from the previous
 step's pressures, which on a sliding pad are close.
 
+An iteration takes one FFT product: the deflection ``C p`` is carried from the last one
+through the search direction's product, and the nodes the projection moves are added by
+direct sums (:data:`DIRECT_MAX`). The iteration ends where the gaps on the set agree to the
+deflections' rounding (:data:`ROUNDING`). Where it cycles (:data:`CYCLE_ITER`), as it can
+when thousands of nodes join and leave at once, a last start lets few join at a time
+(:data:`JOIN_SHARE`).
+
 The answer agrees with the dense solve to the iteration's tolerance (:data:`TOL`, on the
 change of the pressures summed over the nodes, relative to their sum); tested. It needs a
 symmetric positive definite ``C``: a skin whose sliding friction is coupled into the normal
