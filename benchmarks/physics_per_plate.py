@@ -22,7 +22,9 @@ the scene and node grid, with the commit measured at), where ``auto`` finds its 
 error; a partial run (``--tasks``/``--plates``) replaces only the rows it measured.
 
 ``textures20-icub60-v1`` is left out unless named: its 36 x 26 mm pad needs a 90 mm
-reference cell, about 10 minutes a plate. Tamaas is a test extra.
+reference cell, about 10 minutes a plate. The references are kept in the package's cache
+(``--ref-cache``), keyed by their content and code, so measuring another grid on a plate
+takes seconds. Tamaas is a test extra.
 """
 
 from __future__ import annotations
