@@ -24,6 +24,12 @@
     [finger]                     # optional: change fields of the sensor's pad
     young_pa = 0.3e6
 
+    paper_stack = false          # optional: the skin its paper describes (layers on their
+                                 # backing, sensors.paper_stacks) instead of the half-space
+    [rig]                        # optional: slides on the probe rig (sim.rig.ProbeRig:
+    node_pitch_m = 0.25e-3       # node_pitch_m, probe_mass_kg, margin_m, direction,
+                                 # pass_at); needs protocol.duration_s
+
 :func:`config_slide_set` checks every value before anything runs; an error names the file,
 the key, the value and what would be valid.
 """
@@ -41,6 +47,7 @@ from ..plates import preset_names
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
 from ..sim.fidelity import FIDELITIES
 from ..sim.protocol import Protocol
+from ..sim.rig import ProbeRig
 from .slide_set import SLIDES_RANGE, SlideSet
 
 #: The keys of a configuration file, and what each takes.
@@ -56,6 +63,8 @@ TOP_KEYS = {
     "protocol": "table",
     "randomise": "table",
     "finger": "table",
+    "paper_stack": "true or false",
+    "rig": "table (the probe rig)",
 }
 #: The keys of ``[randomise]``: the protocol's per-slide jitters.
 RANDOMISE = ("speed_jitter", "force_jitter", "offset_jitter_m")
@@ -117,6 +126,20 @@ def _slide_set(cfg: dict) -> tuple[SlideSet, int, str]:
     ideal = cfg.get("ideal", False)
     if not isinstance(ideal, bool):
         raise ConfigError(f"ideal must be true or false, got {ideal!r}")
+    paper_stack = cfg.get("paper_stack", False)
+    if not isinstance(paper_stack, bool):
+        raise ConfigError(f"paper_stack must be true or false, got {paper_stack!r}")
+    finger = _finger(_table(cfg, "finger"), sensor)
+    if paper_stack:
+        if finger is not None:
+            raise ConfigError("paper_stack = true and [finger] both set the skin; give one")
+        finger = get_sensor(sensor).with_paper_stack().finger
+    rig = None
+    if "rig" in cfg:
+        try:
+            rig = ProbeRig.from_json(_table(cfg, "rig"))
+        except TypeError as exc:
+            raise ConfigError(f"rig: {exc}") from None
     ss = SlideSet(
         plates=tuple(plates),
         sensor=sensor,
@@ -125,7 +148,8 @@ def _slide_set(cfg: dict) -> tuple[SlideSet, int, str]:
         quick_slides=quick,
         fidelity=fidelity,
         ideal=ideal,
-        finger=_finger(_table(cfg, "finger"), sensor),
+        finger=finger,
+        rig=rig,
     )
     return ss, seed, name
 

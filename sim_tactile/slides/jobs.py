@@ -22,10 +22,11 @@ from ..records import Recording
 from ..sensors import Finger, Sensor
 from ..sim import measured_errors
 from ..sim.protocol import Protocol, SlideWindow
+from ..sim.rig import ProbeRig
 
 #: The module whose import closure makes a slide (with this one, which calls it), and the
 #: libraries whose versions change what it computes.
-SLIDE_MODULES = ("sim_tactile.sim.simulate", "sim_tactile.slides.jobs")
+SLIDE_MODULES = ("sim_tactile.sim.simulate", "sim_tactile.sim.rig_sim", "sim_tactile.slides.jobs")
 SLIDE_LIBRARIES = ("mujoco", "numba", "numpy", "scipy")
 #: Data files the slide's code reads and whose content changes a slide: the measured errors
 #: from which ``auto`` picks its node grid.
@@ -56,6 +57,8 @@ class SlideJob:
     fidelity: str = "auto"
     ideal: bool = False
     finger: Finger | None = None
+    #: the probe rig that makes the slide (:mod:`~sim_tactile.sim.rig`), else the finger scene
+    rig: ProbeRig | None = None
     #: what the job is called in messages (its plate's name and place in a set)
     label: str = field(default="", compare=False)
 
@@ -64,13 +67,18 @@ class SlideJob:
         return self.protocol.drawn(self.seed)
 
     def n_samples(self) -> int:
-        """Samples the slide records (its window, :class:`~sim_tactile.sim.protocol.SlideWindow`)."""
+        """Samples the slide records (its window, :class:`~sim_tactile.sim.protocol.SlideWindow`;
+        on the rig, ``duration_s``)."""
+        if self.rig is not None:
+            proto = self.protocol.at_rate(self.sensor.rate_hz)
+            return max(1, round(proto.duration_s * proto.rate_hz))
         pad = (self.finger or self.sensor.finger).patch_m[0]
         return SlideWindow.of(self.plate, pad, self.protocol.at_rate(self.sensor.rate_hz)).n_samples
 
     def describe(self) -> dict:
-        """Everything that determines the slide, as JSON data."""
-        return {
+        """Everything that determines the slide, as JSON data (``rig`` only on the rig, so
+        the keys of the finger's slides are unchanged)."""
+        d = {
             "kind": "slide",
             "plate": self.plate.params(),
             "sensor": self.sensor.to_json(),
@@ -80,6 +88,9 @@ class SlideJob:
             "ideal": bool(self.ideal),
             "finger": None if self.finger is None else self.finger.to_json(),
         }
+        if self.rig is not None:
+            d["rig"] = self.rig.to_json()
+        return d
 
     def key(self) -> str:
         """The slide's cache key: the content hash of :meth:`describe` and the code version."""
@@ -91,6 +102,18 @@ class SlideJob:
         from ..sim.simulate import simulate
 
         try:
+            if self.rig is not None:
+                from ..sim.rig_sim import simulate_rig
+
+                return simulate_rig(
+                    self.plate,
+                    self.sensor,
+                    rig=self.rig,
+                    protocol=self.protocol,
+                    finger=self.finger,
+                    seed=self.seed,
+                    ideal=self.ideal,
+                )
             return simulate(
                 self.plate,
                 self.sensor,

@@ -23,6 +23,7 @@ from ..records import TactileDataset
 from ..sensors import Finger, Sensor, get_sensor, sensor_names
 from ..sensors.calibration import Calibration, calibrated
 from ..sim.protocol import Protocol, SlideWindow
+from ..sim.rig import ProbeRig
 from .jobs import SlideJob
 from .run import run_slides
 
@@ -49,6 +50,9 @@ class SlideSet:
     ideal: record the noise-free normal loads [N] instead of the sensor's output.
     finger: a pad that replaces the sensor's (None: the sensor's own).
     calibration: a sensor calibration (``sim-tactile calibrate``) applied to the sensor.
+    rig: the slides are made on this probe rig (:mod:`~sim_tactile.sim.rig`: the plate's
+        texture on a probe sliding over the sensor, which lies on a bed; ``finger`` is then the
+        sensor's skin and ``protocol.duration_s`` the window), not by the finger scene.
     """
 
     plates: tuple[str, ...]
@@ -61,8 +65,11 @@ class SlideSet:
     quick_plates: tuple[str, ...] | None = None
     finger: Finger | None = None
     calibration: Calibration | None = None
+    rig: ProbeRig | None = None
 
     def __post_init__(self) -> None:
+        if self.rig is not None and self.protocol.duration_s is None:
+            raise ConfigError("a slide set on the probe rig needs protocol.duration_s (its window)")
         if len(self.plates) < 2:
             raise ConfigError(f"a task needs at least 2 plates, got {len(self.plates)}")
         for p in self.plates:
@@ -105,13 +112,16 @@ class SlideSet:
 
     def n_time(self) -> int:
         """Samples in every slide's window."""
+        if self.rig is not None:
+            proto = self.window_protocol()
+            return max(1, round(proto.duration_s * proto.rate_hz))
         plate = get_plate(self.plates[0])
         return SlideWindow.of(plate, self.pad().patch_m[0], self.window_protocol()).n_samples
 
     def describe(self) -> dict:
         """The set's configuration as JSON data, each plate with its parameters (so a data
         set records its plates whole, and a changed preset is another configuration)."""
-        return {
+        d = {
             "plates": list(self.plates),
             "plate_params": [get_plate(p).params() for p in self.plates],
             "sensor": self.sensor,
@@ -124,6 +134,9 @@ class SlideSet:
             "ideal": self.ideal,
             "finger": None if self.finger is None else self.finger.to_json(),
         }
+        if self.rig is not None:
+            d["rig"] = self.rig.to_json()
+        return d
 
     def setup(self, quick: bool) -> dict:
         """:meth:`describe` with the plates of the quick or the full run."""
@@ -162,6 +175,7 @@ class SlideSet:
                         self.fidelity,
                         self.ideal,
                         self.finger,
+                        rig=self.rig,
                         label=f"{name} slide {k}",
                     )
                 )
