@@ -300,6 +300,14 @@ def test_existing_stores_and_other_configurations_are_refused(tiny, tmp_path):
         ),
         ({"finger": {"colour": "red"}}, "unknown finger key.*colour; valid: shape"),
         ({"colour": "red"}, "unknown key.*colour; valid: name"),
+        ({"rig": {"pitch": 1}}, r"rig: unknown keys \['pitch'\]; valid: \['direction'"),
+        ({"rig": {"direction": "up"}}, "rig direction = 'up' is not valid; valid: both"),
+        ({"rig": {}, "protocol": {}}, "probe rig needs protocol.duration_s"),
+        ({"paper_stack": "yes"}, "paper_stack must be true or false"),
+        (
+            {"paper_stack": True, "finger": {"young_pa": 1e6}},
+            "paper_stack = true and .finger. both set the skin",
+        ),
     ],
 )
 def test_bad_configuration_values_are_named(tmp_path, change, message):
@@ -468,3 +476,24 @@ def test_a_suite_gets_one_group_per_part(tmp_path):
         _quiet("textures20-v1", out, quick=True, _worker=_fake_slide)
     res = _quiet("textures20-v1", out, quick=True, resume=True, _worker=_fake_slide)
     assert res["reused"] == 24 and res["written"] == 0
+
+
+def test_a_configuration_on_the_probe_rig_writes_its_slides(tmp_path):
+    """``[rig]`` and ``paper_stack``: the multilayer paper's rig from a user's file, whole
+    windows of both plates written, each slide the rig's (its meta says so)."""
+    cfg = {
+        "name": "rig",
+        "seed": 3,
+        "plates": ["multilayer3/flat", "multilayer3/grating-9"],
+        "sensor": "multilayer3x3x2",
+        "slides_per_plate": 2,
+        "paper_stack": True,
+        "protocol": {"speed_m_s": 0.065, "force_n": 5.0, "duration_s": 1.2},
+        "rig": {"direction": "+x"},
+    }
+    out = tmp_path / "rig.zarr"
+    _quiet(str(_write(tmp_path / "rig.json", cfg)), out)
+    ds = datasets.open_store(out).to_tactile()
+    assert ds.data.shape == (4, 120, 18) and list(ds.labels) == [0, 0, 1, 1]
+    flat, grating = ds.data[:2], ds.data[2:]
+    assert np.ptp(grating[:, :, 4]) > np.ptp(flat[:, :, 4])  # the ridges pass the centre

@@ -62,9 +62,11 @@ SIMULATED = [t for t in task_ids() if isinstance(get_task(t).get_data, SlideSet)
 
 @pytest.mark.parametrize("task_id", SIMULATED)
 def test_every_simulated_task_is_deterministic(task_id, cache):
-    """One short slide of each task, simulated twice from the same seed: the same bits."""
+    """One short slide of each task, simulated twice from the same seed: the same bits (on
+    the probe rig, its whole window: a pass takes a second, and it is computed in about one)."""
     job = get_task(task_id).get_data.jobs(seed=0, quick=True)[-1]
-    job = replace(job, protocol=replace(job.protocol, duration_s=DETERMINISM_WINDOW_S))
+    if job.rig is None:
+        job = replace(job, protocol=replace(job.protocol, duration_s=DETERMINISM_WINDOW_S))
     a = job.simulate(cache).recording
     b = job.simulate(cache).recording
     assert a.data.tobytes() == b.data.tobytes()

@@ -282,7 +282,7 @@ def simulate_rig(
     d = mujoco.MjData(m)
     z_held = -approach  # the face's lowest point this far below the sensor's surface
     avg = SampleAverager(n_samples, layout.n, n_sub)
-    x_probe = np.empty(n_samples)
+    x_steps = np.empty(n_samples * n_sub + 1)  # the probe at each step's start
     now = np.empty(layout.n)
     xt = layout.positions[:, 0]
     t0 = time.perf_counter()
@@ -290,7 +290,7 @@ def simulate_rig(
     def read(t: float) -> float:
         d.qpos[jz] = z_held
         d.qvel[jz] = 0.0
-        d.ctrl[0] = float(pas.speed(t + dt))  # the command for the step that follows
+        d.ctrl[0] = float(pas.speed(t + 0.5 * dt))  # the step that follows, at its middle
         x = pas.x_from_m + float(d.qpos[jx])
         for i in range(layout.n):
             now[i] = np.interp(xt[i] - x, u, R[i], left=0.0, right=0.0)
@@ -299,16 +299,18 @@ def simulate_rig(
     t = 0.0
     for s in range(n_samples):
         for k in range(n_sub):
-            read(t)
+            x_steps[s * n_sub + k] = read(t)
             avg.add(s, k, now, proto.force_n)
             mujoco.mj_step(m, d)
             t += dt
             if not np.isfinite(d.qpos[jx]):
                 raise PhysicsError(f"the probe's position became non-finite at {t:.3g} s")
         avg.end_sample()
-        x_probe[s] = pas.x_from_m + float(d.qpos[jx]) - 0.5 * float(d.qvel[jx]) / rate
-    read(t)
+    x_steps[-1] = read(t)
     avg.finish(now, proto.force_n)
+    # the probe over each sample, averaged as the loads are (trapezoid over its steps)
+    xs = x_steps[:-1].reshape(n_samples, n_sub)
+    x_probe = (xs.sum(axis=1) + 0.5 * (x_steps[n_sub::n_sub] - xs[:, 0])) / n_sub
     slide_wall = time.perf_counter() - t0
     out = avg.loads
     lag = float(np.max(np.abs(x_probe - pas.position((np.arange(n_samples) + 0.5) / rate))))
