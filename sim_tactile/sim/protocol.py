@@ -36,7 +36,11 @@ SPEED_RAMP_S = 0.02
 #:   which the skin carries exactly the commanded force (the held step,
 #:   :mod:`sim_tactile.sim.held`), so the load is a function of the pad's position alone: no
 #:   transients and no step limit from the coupling.
-FORCE_CONTROLS = ("dynamic", "quasi-static")
+#: - ``position``: no force control in the slide: the pad is lowered until the skin carries
+#:   ``force_n`` (the touch: the soft finger of seed 002 was "brought down ... until the
+#:   sensor array made physical contact"), then slides at that height, so the load follows
+#:   the texture (a feature as tall as the skin is thick presses the skin to the bottom).
+FORCE_CONTROLS = ("dynamic", "quasi-static", "position")
 
 #: Where a slide starts (``Protocol.start``):
 #:

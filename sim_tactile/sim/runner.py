@@ -162,7 +162,7 @@ class Runner:
         np.multiply(p, s.grid.area_m2, out=loads)
         Fs = float(loads.sum())
         self._after_skin(Fs, pen.max() if n else -math.inf, force_cmd, slide_v)
-        if not self.quasi_static:
+        if not self.quasi_static and z_vel is None:  # a pad moved kinematically has none
             self._check_coupling(Fs, p)
         dd.qfrc_applied[s.jz] = 0.0 if z_vel is not None else Fs - force_cmd
         dd.qfrc_applied[s.jx] = 0.0  # the arm holds its speed: it reacts the drag

@@ -160,8 +160,11 @@ def prepare(
     window = SlideWindow.of(plate, finger.patch_m[0], proto)
     runner = _setup(plate, layout, finger, proto, fid, window, options or StepOptions(), cache)
     warnings = list(fid.warnings)
-    _approach(runner, proto.force_n)
-    warnings += _press_and_settle(runner, proto)
+    if proto.force_control == "position":
+        _approach(runner, proto.force_n, touch=1.0)  # then held at that height
+    else:
+        _approach(runner, proto.force_n)
+        warnings += _press_and_settle(runner, proto)
     return Pressed(plate, sensor, finger, nominal, proto, fid, window, runner, warnings)
 
 
@@ -193,7 +196,8 @@ def _simulate(
             f"{sim_s:.3g} s window ({proto.speed_m_s * 1e3:.3g} mm/s): the pad rested on flat "
             "ground for the rest"
         )
-    warnings += _force_warnings(slide.forces, proto.force_n, proto.speed_m_s)
+    if proto.force_control != "position":  # there the load follows the texture
+        warnings += _force_warnings(slide.forces, proto.force_n, proto.speed_m_s)
     out = slide.loads
     # micro-roughness acts through the contact patch on top of the finger's simulation
     micro = micro_loads(plate, layout, slide.x_pad, out > 1e-9, finger.e_star_pa, proto.rate_hz)
@@ -303,13 +307,14 @@ def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
     )
 
 
-def _approach(runner: Runner, force_n: float) -> None:
-    """Lower the pad at :data:`APPROACH_SPEED` until the skin carries a fifth of the force."""
+def _approach(runner: Runner, force_n: float, touch: float = 0.2) -> None:
+    """Lower the pad at :data:`APPROACH_SPEED` until the skin carries ``touch`` times the
+    force (a fifth before a press; the whole of it under position control)."""
     t = 0.0
     while True:
         Fs = runner.step(z_vel=-APPROACH_SPEED, force_cmd=0.0, slide_v=0.0)
         t += runner.dt
-        if Fs >= 0.2 * force_n:
+        if Fs >= touch * force_n:
             return
         if t > APPROACH_TIMEOUT_S:
             raise PhysicsError(
@@ -413,10 +418,12 @@ def _slide(runner: Runner, window: SlideWindow, proto: Protocol, n_sub: int) -> 
     strokes = _Strokes(window, proto.speed_m_s, runner.dt)
     now = np.zeros(runner.s.layout.n)  # this step's taxel loads
     F, x0 = proto.force_n, window.x_start_m
+    # under position control the pad keeps its height (moved kinematically by nothing)
+    z_vel = 0.0 if proto.force_control == "position" else None
 
     def step() -> float:
         v = strokes.command(x0 + runner.x_m)
-        return runner.step(force_cmd=F, slide_v=v, taxel_out=now)
+        return runner.step(force_cmd=F, slide_v=v, z_vel=z_vel, taxel_out=now)
 
     t0 = time.perf_counter()
     for s in range(n):

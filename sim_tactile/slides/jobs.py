@@ -57,6 +57,8 @@ class SlideJob:
     fidelity: str = "auto"
     ideal: bool = False
     finger: Finger | None = None
+    #: the node pitch along the slide [m] when the set fixes it (None: the fidelity's)
+    pitch_m: float | None = None
     #: the probe rig that makes the slide (:mod:`~sim_tactile.sim.rig`), else the finger scene
     rig: ProbeRig | None = None
     #: what the job is called in messages (its plate's name and place in a set)
@@ -76,8 +78,8 @@ class SlideJob:
         return SlideWindow.of(self.plate, pad, self.protocol.at_rate(self.sensor.rate_hz)).n_samples
 
     def describe(self) -> dict:
-        """Everything that determines the slide, as JSON data (``rig`` only on the rig, so
-        the keys of the finger's slides are unchanged)."""
+        """Everything that determines the slide, as JSON data (``rig`` and ``pitch_m`` only
+        where they are set, so the keys of the other slides are unchanged)."""
         d = {
             "kind": "slide",
             "plate": self.plate.params(),
@@ -90,6 +92,8 @@ class SlideJob:
         }
         if self.rig is not None:
             d["rig"] = self.rig.to_json()
+        if self.pitch_m is not None:
+            d["pitch_m"] = self.pitch_m
         return d
 
     def key(self) -> str:
@@ -122,6 +126,7 @@ class SlideJob:
                 fidelity=self.fidelity,
                 seed=self.seed,
                 ideal=self.ideal,
+                pitch_m=self.pitch_m,
                 cache=cache,
             )
         except SimTactileError as exc:

@@ -50,6 +50,8 @@ class SlideSet:
     ideal: record the noise-free normal loads [N] instead of the sensor's output.
     finger: a pad that replaces the sensor's (None: the sensor's own).
     calibration: a sensor calibration (``sim-tactile calibrate``) applied to the sensor.
+    pitch_m: the skin's node pitch [m] along the slide, fixed for every slide (None: the
+        fidelity's choice; the level's pitch across the slide follows it as in ``simulate``).
     rig: the slides are made on this probe rig (:mod:`~sim_tactile.sim.rig`: the plate's
         texture on a probe sliding over the sensor, which lies on a bed; ``finger`` is then the
         sensor's skin and ``protocol.duration_s`` the window), not by the finger scene.
@@ -66,8 +68,11 @@ class SlideSet:
     finger: Finger | None = None
     calibration: Calibration | None = None
     rig: ProbeRig | None = None
+    pitch_m: float | None = None
 
     def __post_init__(self) -> None:
+        if self.pitch_m is not None:
+            v.in_range("pitch_m", self.pitch_m, 20e-6, 5e-3, unit="m")
         if self.rig is not None and self.protocol.duration_s is None:
             raise ConfigError("a slide set on the probe rig needs protocol.duration_s (its window)")
         if len(self.plates) < 2:
@@ -136,6 +141,8 @@ class SlideSet:
         }
         if self.rig is not None:
             d["rig"] = self.rig.to_json()
+        if self.pitch_m is not None:
+            d["pitch_m"] = self.pitch_m
         return d
 
     def setup(self, quick: bool) -> dict:
@@ -175,6 +182,7 @@ class SlideSet:
                         self.fidelity,
                         self.ideal,
                         self.finger,
+                        pitch_m=self.pitch_m,
                         rig=self.rig,
                         label=f"{name} slide {k}",
                     )
