@@ -1,6 +1,6 @@
 """Write the golden recordings ``tests/data/golden_slides.npz`` (one short slide of every
-task's sensor and plate kind: each collider path, the reduced and full skin, L0 to L2, both
-force controls).
+task's sensor and plate kind: each collider path, the reduced and full skin, L0 to L2, the
+force controls, the probe rig).
 
     python benchmarks/golden_slides.py [--check]
 
@@ -49,6 +49,9 @@ CASES = [
     ("biotac-grating3", "textures20-biotac19-v1", "textures20/grating-3.0mm", 0, 1.0, {}),
     ("biotac-hemi6", "textures20-biotac19-v1", "textures20/hemispheres-6.0mm", 0, 1.0, {}),
     ("icub-grating4", "textures20-icub60-v1", "textures20/grating-4.0mm", 0, 0.4, {}),
+    # the probe rig (its whole 5 s window) and the curved finger under position control
+    ("multilayer3v2-grating9", "multilayer3-v2", "multilayer3/grating-9", 0, None, {}),
+    ("finger7v2-bumps4x4", "finger7-v2", "finger7/bumps-4x4", 0, 1.3, {}),
 ]
 
 
@@ -68,7 +71,15 @@ def case_job(case: dict) -> SlideJob:
         seed,
         case.get("fidelity", ss.fidelity),
         case.get("ideal", ss.ideal),
+        ss.finger,
+        pitch_m=ss.pitch_m,
+        rig=ss.rig,
     )
+
+
+def _path(meta: dict) -> list:
+    """The pad's path (the probe's on the rig)."""
+    return meta["x_pad_m"] if "x_pad_m" in meta else meta["x_probe_m"]
 
 
 def record(cache: ArtefactCache) -> dict:
@@ -80,7 +91,7 @@ def record(cache: ArtefactCache) -> dict:
         rec = job.simulate(cache).recording
         arrays[f"{name}/data"] = np.asarray(rec.data)
         arrays[f"{name}/normal_force_n"] = np.asarray(rec.meta["normal_force_n"])
-        arrays[f"{name}/x_pad_m"] = np.asarray(rec.meta["x_pad_m"])
+        arrays[f"{name}/x_pad_m"] = np.asarray(_path(rec.meta))
         cases.append({**case, "seed": job.seed, "skin_problem": rec.meta["skin_problem"]})
         print(name, rec.data.shape, rec.meta["skin_problem"], file=sys.stderr)
     arrays["cases_json"] = np.array(json.dumps(cases))

@@ -103,7 +103,7 @@ def test_run_finger7_quick_and_rerun_is_exact(tmp_path, cli):
 @pytest.mark.slow
 @pytest.mark.parametrize(
     "task, n_rows",
-    [("multilayer3-v1", 9), ("multilayer3-v2", 9), ("roughness8-v1", 10)],
+    [("multilayer3-v1", 9), ("multilayer3-v2", 9), ("finger7-v2", 11), ("roughness8-v1", 10)],
 )
 def test_run_quick_feature_tasks(task, n_rows, tmp_path, cli):
     p = cli(["run", task, "--quick", "--out", str(tmp_path), "--json"], check=False)
