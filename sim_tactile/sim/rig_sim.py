@@ -223,39 +223,15 @@ def simulate_rig(
     (:meth:`ProbeRig.sign`), and rests again; the elements' outputs, or with ``ideal`` their
     noise-free loads [N]. ``finger``: the sensor's skin (its stack on the bed), else the
     sensor's own. ``protocol.duration_s`` is the window."""
-    from threadpoolctl import threadpool_limits
-
     t_wall = time.perf_counter()
     plate = get_plate(plate) if isinstance(plate, str) else plate
     sensor = resolve_sensor(sensor)
     finger = finger or sensor.finger
-    if finger.skin_tractions and finger.friction > 0:
-        raise ConfigError(
-            "the probe rig takes a frictionless skin (finger.skin_tractions with friction "
-            f"{finger.friction:g}); valid: skin_tractions False"
-        )
-    if protocol.force_control != "quasi-static":
-        raise ConfigError(
-            f"force_control = {protocol.force_control!r}: the probe rig holds the force "
-            "quasi-statically; valid: 'quasi-static'"
-        )
-    if protocol.duration_s is None:
-        raise ConfigError("the probe rig needs the window: give duration_s")
-    if plate.texture.kind == "roughness":
-        raise ConfigError(
-            f"plate {plate.name or plate.hash}: the probe rig does not model micro-roughness; "
-            "valid: plates of ridges, gratings, bumps or flat"
-        )
+    sheet = _check_rig_inputs(plate, sensor, finger, protocol)
     layout = sensor.layout
     nominal = protocol.at_rate(sensor.rate_hz)
     proto = nominal.drawn(seed)
     sign = rig.sign(seed)
-    sheet = finger.thickness_m if finger.stack is None else finger.stack.thickness_m
-    if np.any(layout.depth_m >= sheet):
-        raise ConfigError(
-            f"sensor {sensor.name}: elements {layout.depth_m.max() * 1e3:g} mm deep lie below "
-            f"its {sheet * 1e3:g} mm skin; valid: depths < the skin's thickness"
-        )
     reach = float(np.max(np.abs(layout.positions[:, 0]) + layout.sizes[:, 0] / 2))
     pas = ProbePass.of(
         rig, plate.area_length_m, reach, sheet, proto.speed_m_s, proto.duration_s, sign
@@ -265,61 +241,14 @@ def simulate_rig(
     n_sub = max(1, math.ceil(proto.speed_m_s / (rate * STEP_FRACTION * rig.node_pitch_m)))
     dt = 1.0 / (rate * n_sub)
     grid = probe_grid(plate, rig.node_pitch_m)
-    y_rel = layout.positions[:, 1] - proto.offset_y_m
-    with threadpool_limits(limits=1, user_api="blas"):
-        p, approach, what = probe_contact(plate, finger, grid, proto.force_n)
-        loads = p * grid.area_m2
-        u, R = reading_lines(
-            grid,
-            loads,
-            finger,
-            layout.sizes,
-            layout.depth_m,
-            y_rel,
-            abs(pas.x_from_m) + float(np.max(np.abs(layout.positions[:, 0]))),
-        )
+    p, approach, what, u, R = _face(plate, finger, grid, proto, layout, pas)
     m, jx, jz = rig_model(plate, sensor, rig, pas.x_from_m, proto.offset_y_m, dt)
-    d = mujoco.MjData(m)
-    z_held = -approach  # the face's lowest point this far below the sensor's surface
-    avg = SampleAverager(n_samples, layout.n, n_sub)
-    x_steps = np.empty(n_samples * n_sub + 1)  # the probe at each step's start
-    now = np.empty(layout.n)
-    xt = layout.positions[:, 0]
     t0 = time.perf_counter()
-
-    def read(t: float) -> float:
-        d.qpos[jz] = z_held
-        d.qvel[jz] = 0.0
-        d.ctrl[0] = float(pas.speed(t + 0.5 * dt))  # the step that follows, at its middle
-        x = pas.x_from_m + float(d.qpos[jx])
-        for i in range(layout.n):
-            now[i] = np.interp(xt[i] - x, u, R[i], left=0.0, right=0.0)
-        return x
-
-    t = 0.0
-    for s in range(n_samples):
-        for k in range(n_sub):
-            x_steps[s * n_sub + k] = read(t)
-            avg.add(s, k, now, proto.force_n)
-            mujoco.mj_step(m, d)
-            t += dt
-            if not np.isfinite(d.qpos[jx]):
-                raise PhysicsError(f"the probe's position became non-finite at {t:.3g} s")
-        avg.end_sample()
-    x_steps[-1] = read(t)
-    avg.finish(now, proto.force_n)
-    # the probe over each sample, averaged as the loads are (trapezoid over its steps)
-    xs = x_steps[:-1].reshape(n_samples, n_sub)
-    x_probe = (xs.sum(axis=1) + 0.5 * (x_steps[n_sub::n_sub] - xs[:, 0])) / n_sub
+    out, x_probe = _carry(
+        m, jx, jz, pas, -approach, (u, R), layout, proto.force_n, n_sub, n_samples
+    )
     slide_wall = time.perf_counter() - t0
-    out = avg.loads
-    lag = float(np.max(np.abs(x_probe - pas.position((np.arange(n_samples) + 0.5) / rate))))
-    warnings = []
-    if lag > rig.node_pitch_m:
-        warnings.append(
-            f"the carriage ran {lag * 1e3:.3g} mm from its commanded path (more than a node "
-            "pitch): a heavier probe or a faster pass than its actuator holds"
-        )
+    warnings = _lag_warnings(x_probe, pas, rate, rig.node_pitch_m)
     units, transducer = "N", "ideal"
     if not ideal and sensor.transducer is not None:
         out = sensor.transduce(out, rate, np.random.default_rng([seed, 1]))
@@ -367,3 +296,98 @@ def simulate_rig(
     times = (np.arange(n_samples) + 0.5) / rate
     rec = Recording(out.astype(np.float32), times, layout.positions, units=units, meta=meta)
     return SimResult(rec, None, n_samples / rate, wall, warnings)
+
+
+def _face(plate, finger, grid, proto, layout, pas):
+    """The probe face's contact (pressure [Pa], approach [m], the skin's description) and the
+    elements' reading lines ``u, R`` (:func:`reading_lines`) out to the pass's reach."""
+    from threadpoolctl import threadpool_limits
+
+    y_rel = layout.positions[:, 1] - proto.offset_y_m
+    reach = abs(pas.x_from_m) + float(np.max(np.abs(layout.positions[:, 0])))
+    with threadpool_limits(limits=1, user_api="blas"):
+        p, approach, what = probe_contact(plate, finger, grid, proto.force_n)
+        u, R = reading_lines(
+            grid, p * grid.area_m2, finger, layout.sizes, layout.depth_m, y_rel, reach
+        )
+    return p, approach, what, u, R
+
+
+def _lag_warnings(x_probe: np.ndarray, pas: ProbePass, rate: float, pitch_m: float) -> list[str]:
+    """A warning when the carriage ran more than a node pitch from its commanded path."""
+    t = (np.arange(len(x_probe)) + 0.5) / rate
+    lag = float(np.max(np.abs(x_probe - pas.position(t))))
+    if lag <= pitch_m:
+        return []
+    return [
+        f"the carriage ran {lag * 1e3:.3g} mm from its commanded path (more than a node "
+        "pitch): a heavier probe or a faster pass than its actuator holds"
+    ]
+
+
+def _check_rig_inputs(plate: Plate, sensor: Sensor, finger: Finger, protocol: Protocol) -> float:
+    """Refuse what the rig does not model; the sensor sheet's thickness [m]."""
+    if finger.skin_tractions and finger.friction > 0:
+        raise ConfigError(
+            "the probe rig takes a frictionless skin (finger.skin_tractions with friction "
+            f"{finger.friction:g}); valid: skin_tractions False"
+        )
+    if protocol.force_control != "quasi-static":
+        raise ConfigError(
+            f"force_control = {protocol.force_control!r}: the probe rig holds the force "
+            "quasi-statically; valid: 'quasi-static'"
+        )
+    if protocol.duration_s is None:
+        raise ConfigError("the probe rig needs the window: give duration_s")
+    if plate.texture.kind == "roughness":
+        raise ConfigError(
+            f"plate {plate.name or plate.hash}: the probe rig does not model micro-roughness; "
+            "valid: plates of ridges, gratings, bumps or flat"
+        )
+    layout = sensor.layout
+    sheet = finger.thickness_m if finger.stack is None else finger.stack.thickness_m
+    if np.any(layout.depth_m >= sheet):
+        raise ConfigError(
+            f"sensor {sensor.name}: elements {layout.depth_m.max() * 1e3:g} mm deep lie below "
+            f"its {sheet * 1e3:g} mm skin; valid: depths < the skin's thickness"
+        )
+    return sheet
+
+
+def _carry(m, jx, jz, pas, z_held, lines, layout, force_n, n_sub, n_samples):
+    """Step MuJoCo's carriage along the pass, the probe held at ``z_held`` [m] (its face's
+    lowest point below the sensor's surface), each element reading its line (``lines``:
+    ``(u, R)`` of :func:`reading_lines`) where it is. Returns the sample means (T, M) and the
+    probe's x over each sample, averaged as the loads are (trapezoid over its steps)."""
+    u, R = lines
+    dt = m.opt.timestep
+    d = mujoco.MjData(m)
+    avg = SampleAverager(n_samples, layout.n, n_sub)
+    x_steps = np.empty(n_samples * n_sub + 1)  # the probe at each step's start
+    now = np.empty(layout.n)
+    xt = layout.positions[:, 0]
+
+    def read(t: float) -> float:
+        d.qpos[jz] = z_held
+        d.qvel[jz] = 0.0
+        d.ctrl[0] = float(pas.speed(t + 0.5 * dt))  # the step that follows, at its middle
+        x = pas.x_from_m + float(d.qpos[jx])
+        for i in range(layout.n):
+            now[i] = np.interp(xt[i] - x, u, R[i], left=0.0, right=0.0)
+        return x
+
+    t = 0.0
+    for s in range(n_samples):
+        for k in range(n_sub):
+            x_steps[s * n_sub + k] = read(t)
+            avg.add(s, k, now, force_n)
+            mujoco.mj_step(m, d)
+            t += dt
+            if not np.isfinite(d.qpos[jx]):
+                raise PhysicsError(f"the probe's position became non-finite at {t:.3g} s")
+        avg.end_sample()
+    x_steps[-1] = read(t)
+    avg.finish(now, force_n)
+    xs = x_steps[:-1].reshape(n_samples, n_sub)
+    x_probe = (xs.sum(axis=1) + 0.5 * (x_steps[n_sub::n_sub] - xs[:, 0])) / n_sub
+    return avg.loads, x_probe
