@@ -2,13 +2,15 @@
 0.14 mm (the finest the finger's 22 x 16 mm patch allows under the 20000-node cap), on the
 plates with the smallest features, and the wall time of each. No independent solver serves a
 layered curved finger under position control, so this is convergence against our own finer
-grid. Prints a markdown table (``docs/finger7_v2.md`` quotes it).
+grid. Prints a markdown table (``docs/finger7_v2.md`` quotes it); ``--figure PATH`` also draws
+an outer taxel's stream on bumps-4x4 at each pitch (``docs/img/finger7_v2_pitch.png``).
 
-    python benchmarks/bench_finger7_v2.py
+    python benchmarks/bench_finger7_v2.py [--figure PATH]
 """
 
 from __future__ import annotations
 
+import argparse
 import time
 
 import numpy as np
@@ -24,6 +26,10 @@ PROTO = Protocol(speed_m_s=0.06, force_n=0.05, duration_s=1.3, force_control="po
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--figure", default=None, help="where to draw bumps-4x4's outer taxel")
+    args = ap.parse_args()
+    streams = {}
     print(
         "| plate | 0.5 mm: max / rms | 0.25 mm (default): max / rms | wall 0.5 / 0.25 / 0.14 mm |"
     )
@@ -37,6 +43,7 @@ def main() -> None:
             ).recording
             walls.append(time.perf_counter() - t)
             out[h] = rec.data.astype(float)
+            streams[name, h] = (rec.times, out[h][:, 0])
         ref = out[PITCHES_M[-1]]
         peak = np.abs(ref).max()
         cells = []
@@ -47,6 +54,27 @@ def main() -> None:
             )
         wall = " / ".join(f"{w:.1f} s" for w in walls)
         print(f"| {name} | {cells[0]} | {cells[1]} | {wall} |", flush=True)
+    if args.figure:
+        _figure(streams, "finger7/bumps-4x4", args.figure)
+
+
+def _figure(streams: dict, plate: str, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    for h, ls in zip(PITCHES_M, (":", "-", "--"), strict=True):
+        t, y = streams[plate, h]
+        ax.plot(t, y, ls, label=f"{h * 1e3:g} mm nodes")
+    ax.set_xlim(0.25, 0.9)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("load [N]")
+    ax.set_title(f"{plate}: taxel 0 (an outer row), ideal loads, one pass")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
 
 
 if __name__ == "__main__":

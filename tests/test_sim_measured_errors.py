@@ -230,16 +230,22 @@ def test_a_clipped_grid_over_its_cell_cap_is_never_taken(monkeypatch):
 
 def test_where_no_grid_is_within_the_target_auto_takes_the_closest_and_warns(monkeypatch):
     """icub60's hemispheres-3.0mm: 133% at its own 1.16 mm, 40.3% at 0.578 mm, 11.5% at
-    0.385 mm (under auto's node cap), none within 10%: auto takes 0.385 mm, says it is the
-    closest, and warns with its error."""
+    0.385 mm and 7.2% at 0.289 mm (11125 nodes, under auto's node cap): auto takes 0.289 mm.
+    Without that row none is within 10%: auto takes 0.385 mm, says it is the closest, and
+    warns with its error."""
     ss, sensor, proto = _scene("textures20-icub60-v1")
     plate = get_plate("textures20/hemispheres-3.0mm")
     args = (plate, sensor.layout, sensor.finger, proto, "auto")
     base = choose_fidelity(*args, refine=False)
     fid = choose_fidelity(*args)
-    assert base.expected_error > 1.0 and fid.pitch_m == pytest.approx(base.pitch_m / 3)
+    assert base.expected_error > 1.0 and fid.pitch_m == pytest.approx(base.pitch_m / 4)
+    assert fid.expected_error < me.WARN_ABOVE and "11125 nodes, solved spectrally" in fid.reason
+    assert not [w for w in fid.warnings if "from the physics" in w]
+    _rows_only(monkeypatch, lambda r: r["pitch_m"] > 0.3e-3)
+    fid = choose_fidelity(*args)
+    assert fid.pitch_m == pytest.approx(base.pitch_m / 3)
     assert me.WARN_ABOVE < fid.expected_error < 0.2
-    assert "none measured under 6500 nodes is within 10%; the closest" in fid.reason
+    assert "none measured under 11500 nodes is within 10%; the closest" in fid.reason
     warn = [w for w in fid.warnings if "from the physics" in w]
     assert len(warn) == 1 and "(0.385 mm) are 11% from the physics" in warn[0], warn
     # a finer grid no closer than auto's own is not taken

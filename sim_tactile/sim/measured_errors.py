@@ -224,14 +224,14 @@ def finer_grids(plate, layout, finger, force_n: float, level: str, pitch_m: floa
 
 #: Most skin nodes auto may take when the measured error sends it to a finer grid (solved
 #: spectrally above :data:`~sim_tactile.sim.fidelity.DENSE_MAX_NODES`): a slide there
-#: costs seconds per second of contact (finger7/bumps-6x6 at 2401 nodes 0.33x real time, the BioTac's boxes at 2835
-#: nodes 0.23x). icub60's 0.385 mm grid (6231 nodes, spectral) brings its boxes, cylinders
-#: and hemispheres within 10% of the physics; a whole slide there (textures20/cylinders-3.0mm,
-#: 1.82 s of contact) took 23.6 s, against 28.9 s for the 0.578 mm grid (2835 nodes, dense,
-#: its set-up included) and 1.1 s for auto's own 1.16 mm (at 6c08322, one run each, the
-#: machine shared). finger7/bumps-4x4 at 16641 nodes (0.125 mm, 4.8% from the physics) runs at
-#: 0.03x and is left to the user (``pitch_m``; the warning names it).
-MAX_NODES_MEASURED = 6500
+#: costs seconds per second of contact (finger7/bumps-6x6 at 2401 nodes 0.33x real time, the
+#: BioTac's boxes at 2835 nodes 0.23x). icub60's 0.385 mm grid (6231 nodes, spectral) brings
+#: its boxes and cylinders within 10% of the physics; its hemispheres-3.0mm need 0.289 mm
+#: (11125 nodes: 7.2%, against 11.5% at 0.385 mm). A whole slide of that plate, the process
+#: timed with its imports, took 12.2 s at 0.289 mm against 7.7 s at 0.385 mm (medians of 3,
+#: A B A B, at 78bfefb: 1.60x). finger7/bumps-4x4 at 16641 nodes (0.125 mm, 4.8% from the
+#: physics) runs at 0.03x and is left to the user (``pitch_m``; the warning names it).
+MAX_NODES_MEASURED = 11500
 
 
 def node_count(finger, pitch_m: float, pitch_y_m: float | None) -> int:
@@ -244,8 +244,8 @@ def refinement(plate, layout, finger, force_n, level, measured) -> MeasuredError
     """The grid auto refines ``measured`` to, or None (None too when it is within
     WARN_ABOVE, or not measured): the coarsest within WARN_ABOVE (:func:`_measured_within`),
     else the measured finer grid closest to the physics under :data:`MAX_NODES_MEASURED`
-    nodes, where it is closer than ``measured`` (icub60/hemispheres-3.0mm: 133% at its own
-    1.16 mm, 40.3% at 0.578 mm, 11.5% at 0.385 mm: auto takes 0.385 mm and warns)."""
+    nodes, where it is closer than ``measured`` (the case of a scene measured only at grids
+    all beyond 10%; auto warns with the error of the one it takes)."""
     if measured is None or measured.error <= WARN_ABOVE:
         return None
     within = _measured_within(plate, layout, finger, force_n, level, measured)
