@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from sim_tactile.errors import ConfigError, UnknownNameError
@@ -16,24 +15,6 @@ from sim_tactile.tasks.report import compare
 REPORT_KEYS = {"task", "results", "timing", "figures"}
 RESULT_KEYS = {"classifier", "features", "accuracy_mean", "accuracy_std", "paper"}
 TIMING_KEYS = {"simulate_s", "encode_s", "classify_s"}
-
-
-@pytest.fixture(scope="module")
-def fake_icub(tmp_path_factory) -> Path:
-    """compiled_data/ like the release's, 4 materials x 10 slides: material k vibrates taxel
-    patch k at 2 + 3 k Hz on top of a level k (so every model can tell them apart)."""
-    root = tmp_path_factory.mktemp("icub")
-    (root / "compiled_data").mkdir()
-    rng = np.random.default_rng(0)
-    t = np.arange(75) / 50.0
-    for f in ("test", "val_0", "val_1", "val_2", "val_3"):
-        y = np.repeat(np.arange(4), 2)
-        x = rng.normal(0, 0.2, size=(8, 6, 10, 75)).astype(np.float32)
-        for i, k in enumerate(y):
-            x[i, k] += k + np.sin(2 * np.pi * (2 + 3 * k) * t + rng.uniform(0, 6))
-        np.save(root / "compiled_data" / f"icub_{f}.npy", x)
-        np.save(root / "compiled_data" / f"labels_{f}.npy", y)
-    return root
 
 
 def test_registry_ids_aliases_and_errors():

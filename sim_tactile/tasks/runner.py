@@ -9,6 +9,7 @@ task, its checked options and its data.
 
 from __future__ import annotations
 
+import hashlib
 import platform
 import sys
 import time
@@ -16,6 +17,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import numpy as np
 from sklearn.pipeline import Pipeline
 
 from .. import __version__
@@ -30,6 +32,7 @@ from ..records import TactileDataset
 from ..sensors.calibration import load_calibration
 from ..slides import SlideSet
 from ..slides.plan import task_slide_config
+from .methods import USER_FEATURES, Method, as_methods, method_protocol
 from .precompute import Precomputed
 from .registry import DataRequest, Run, TaskSpec, get_task, with_calibration
 from .report import Report, ResultRow, compare, write_figures
@@ -43,10 +46,12 @@ def classifier_list(spec: TaskSpec, classifiers: Sequence[str] | str | None) -> 
     """The classifier names a run uses: the task's, or the user's (``"a,b"`` or a list)."""
     if classifiers is None:
         return list(dict.fromkeys(r.classifier for r in spec.all_runs()))
+    if isinstance(classifiers, str) and classifiers.strip() == "none":
+        return []  # no built-in row: the user's methods only
     names = classifiers.split(",") if isinstance(classifiers, str) else list(classifiers)
     names = [n.strip() for n in names if n.strip()]
     if not names:
-        raise ConfigError("--classifiers is empty; give names like svm-raw,snn")
+        raise ConfigError("--classifiers is empty; give names like svm-raw,snn (or none)")
     for n in names:
         get_classifier(n)
     if len(set(names)) != len(names):
@@ -183,6 +188,7 @@ def run_task(
     log: Callable[[str], None] | None = None,
     store: str | Path | None = None,
     sensor_config: str | Path | None = None,
+    methods=None,
 ) -> dict:
     """Run ``task_id`` and write its report into ``out_dir``; returns the report as JSON data.
 
@@ -194,6 +200,8 @@ def run_task(
         seed: seeds the splits and every model.
         store: read the data from this store (``sim-tactile generate``) instead.
         sensor_config: a calibration file (``sim-tactile calibrate``) for the task's sensor.
+        methods: the user's methods, name -> estimator or (encoder, estimator)
+            (:mod:`.methods`), scored beside the built-in rows.
     """
     t_start = time.perf_counter()
     log = log or stderr_log
@@ -204,7 +212,16 @@ def run_task(
     if repeats is not None:
         repeats = integer("repeats", repeats, 1, None)
     if spec.parts:
-        return _run_suite(spec, out_dir, quick, data, classifiers, repeats, seed, log, store)
+        methods = {m.name: m for m in as_methods(methods)} or None  # checked before any part
+        return _run_suite(
+            spec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods
+        )
+    runs = task_runs(spec, classifiers)
+    user = as_methods(methods, {r.name for r in runs})
+    if not runs and not user:
+        raise ConfigError(
+            "nothing to run: no built-in classifier (--classifiers none) and no method"
+        )
     task = load_task(
         spec, quick=quick, data=data, classifiers=classifiers, seed=seed, log=log, store=store
     )
@@ -217,6 +234,7 @@ def run_task(
         repeats=repeats,
         seed=seed,
         log=log,
+        methods=user,
     )
     report.timing["load_s"] = round(task.load_s, 3)
     report.timing["wall_s"] = round(time.perf_counter() - t_start, 2)
@@ -235,26 +253,32 @@ def evaluate_task(
     seed: int,
     log: Callable[[str], None],
     figures: bool = True,
+    methods: Sequence[Method] = (),
 ) -> Report:
-    """Encode ``ds``, run each of ``runs`` under the task's protocol and make the report
-    (with its figures in ``out``; the caller writes it)."""
+    """Encode ``ds``, run each of ``runs`` and of the user's ``methods`` under the task's
+    protocol and make the report (with its figures in ``out``; the caller writes it)."""
     t0 = time.perf_counter()
-    out.mkdir(parents=True, exist_ok=True)
     settings = spec.settings(quick)
     ctx = spec.context(ds, quick)
     encoded = Pipeline(spec.encoder(ctx)).fit_transform(ds.data)
     encode_s = time.perf_counter() - t0
     n_rep = {r.name: repeats or settings.repeats_for(r.classifier) for r in runs}
+    n_rep.update({m.name: repeats or settings.repeats for m in methods})
     pre = Precomputed(spec, ds, encoded) if spec.encode_once else None
     t1 = time.perf_counter()
-    results, wall = _classify(spec, ds, ctx, runs, n_rep, pre, quick=quick, seed=seed, log=log)
-    classify_s = time.perf_counter() - t1
+    results, wall, splits = _classify(
+        spec, ds, ctx, runs, n_rep, pre, quick=quick, seed=seed, log=log
+    )
+    user_enc = _classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, seed, log)
+    encode_s += user_enc
+    classify_s = time.perf_counter() - t1 - user_enc
     names = list(dict.fromkeys(r.classifier for r in runs))
     report = Report(
         task=spec.id,
         title=spec.title,
         quick=quick,
-        results=[_row(spec, run, results[run.name], wall[run.name], quick) for run in runs],
+        results=[_row(spec, run, results[run.name], wall[run.name], quick) for run in runs]
+        + [_method_row(spec, m, results[m.name], wall[m.name], quick) for m in methods],
         timing={
             "simulate_s": round(float(ds.meta.get("simulate_s", 0.0)), 3),
             "encode_s": round(encode_s, 3),
@@ -271,6 +295,7 @@ def evaluate_task(
             "encoding": spec.encoding,
             "params": {n: dict(settings.params.get(n, {})) for n in names},
             "precomputed": pre.describe() if pre is not None else None,
+            "splits_sha256": {k: splits_digest(v) for k, v in splits.items()},
         },
         dataset=ds.describe(),
         remarks=list(spec.remarks),
@@ -282,14 +307,16 @@ def evaluate_task(
         },
     )
     if figures:
-        report.figures = write_figures(out, spec, ds, encoded, results, runs)
+        out.mkdir(parents=True, exist_ok=True)
+        report.figures = write_figures(out, spec, ds, encoded, results, [*runs, *methods])
     report.timing["wall_s"] = round(time.perf_counter() - t0, 2)
     return report
 
 
 def _classify(spec, ds, ctx, runs, n_rep, pre, *, quick, seed, log):
-    """Each run's repeated evaluation: ``({name: EvalResult}, {name: wall [s]})``. The
-    splits are seeded by ``(seed, 0)``, the models by the classifier's name and the repeat."""
+    """Each run's repeated evaluation: ``({name: EvalResult}, {name: wall [s]}, {split:
+    its (train, test) pairs})``. The splits are seeded by ``(seed, 0)``
+    (:func:`task_splits`), the models by the classifier's name and the repeat."""
     settings = spec.settings(quick)
     split_cache: dict[str, list] = {}
     results: dict[str, EvalResult] = {}
@@ -300,9 +327,7 @@ def _classify(spec, ds, ctx, runs, n_rep, pre, *, quick, seed, log):
         split = spec.split_for(run, quick)
         cols = _channels(spec, run, ds)
         if split not in split_cache:
-            split_cache[split] = repeated_splits(
-                ds.labels, split, max(n_rep.values()), derive_seed(seed, 0)
-            )
+            split_cache[split] = task_splits(ds.labels, split, max(n_rep.values()), seed)
         rctx = _run_context(ctx, run, cols, ds)
         log(f"{spec.id}: {name} on {cs.features}, split {split}, {n_rep[name]} repeat(s)")
         t0 = time.perf_counter()
@@ -335,7 +360,66 @@ def _classify(spec, ds, ctx, runs, n_rep, pre, *, quick, seed, log):
         wall[name] = time.perf_counter() - t0
         r = results[name]
         log(f"{spec.id}: {name} accuracy {r.mean:.3f} +- {r.std:.3f} ({wall[name]:.1f} s)")
-    return results, wall
+    return results, wall, split_cache
+
+
+def task_splits(labels, split: str, repeats: int, seed: int) -> list:
+    """The (train, test) index pairs of a task's protocol: ``repeats`` draws of ``split``
+    from one generator seeded by ``(seed, 0)``. Each draw follows the ones before it, so the
+    first ``k`` pairs are the same whatever ``repeats`` is (a run's rows of fewer repeats take
+    the first pairs of the longest)."""
+    return repeated_splits(labels, split, repeats, derive_seed(seed, 0))
+
+
+def splits_digest(pairs) -> str:
+    """SHA-256 of a list of (train, test) index pairs (the report's ``splits_sha256``: a
+    user's framework can check it uses the same splits)."""
+    h = hashlib.sha256()
+    for tr, te in pairs:
+        h.update(np.asarray(tr, dtype=np.int64).tobytes() + b"|")
+        h.update(np.asarray(te, dtype=np.int64).tobytes() + b";")
+    return h.hexdigest()
+
+
+def _classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, seed, log) -> float:
+    """The user's methods under the task's split (:mod:`.methods`), into ``results`` and
+    ``wall``; returns the time their encoders took on the whole data set (encode once)."""
+    settings = spec.settings(quick)
+    split = settings.split or spec.split
+    enc_total = 0.0
+    for m in methods:
+        if split not in splits or len(splits[split]) < n_rep[m.name]:
+            splits[split] = task_splits(ds.labels, split, max(n_rep.values()), seed)
+        log(
+            f"{spec.id}: {m.name} (your method: {m.describe()}), split {split}, {n_rep[m.name]} repeat(s)"
+        )
+        t0 = time.perf_counter()
+        x, make, times_s, enc_s = method_protocol(
+            m, ds.data, ds.rate_hz, spec.encode_once, settings.time_points_s, seed
+        )
+        enc_total += enc_s
+        try:
+            results[m.name] = evaluate(
+                make,
+                x,
+                ds.labels,
+                splits[split][: n_rep[m.name]],
+                times_s=times_s,
+                rate_hz=ds.rate_hz,
+                time_repeats=settings.time_repeats,
+                log=log,
+                name=m.name,
+            )
+        except ConfigError:
+            raise
+        except Exception as exc:  # noqa: BLE001 (the user's estimator: say whose and what)
+            raise ConfigError(
+                f"method {m.name!r}: fitting or predicting raised {type(exc).__name__}: {exc}"
+            ) from exc
+        wall[m.name] = time.perf_counter() - t0 - enc_s
+        r = results[m.name]
+        log(f"{spec.id}: {m.name} accuracy {r.mean:.3f} +- {r.std:.3f} ({wall[m.name]:.1f} s)")
+    return enc_total
 
 
 def _row(spec: TaskSpec, run: Run, r: EvalResult, wall_s: float, quick: bool) -> ResultRow:
@@ -357,7 +441,28 @@ def _row(spec: TaskSpec, run: Run, r: EvalResult, wall_s: float, quick: bool) ->
     )
 
 
-def _run_suite(spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed, log, store):
+def _method_row(spec: TaskSpec, m: Method, r: EvalResult, wall_s: float, quick: bool) -> ResultRow:
+    extra = {k: v for k, v in r.to_json().items() if k not in ("accuracy_mean", "accuracy_std")}
+    extra.update(user_method=True, method=m.describe())
+    return ResultRow(
+        classifier=m.name,
+        label=m.name,
+        features=USER_FEATURES,
+        accuracy_mean=round(r.mean, 4),
+        accuracy_std=round(r.std, 4),
+        paper=None,
+        repeats=len(r.accuracies),
+        comparison={"status": "no paper value", "message": "your method"},
+        wall_s=round(wall_s, 2),
+        channels="all",
+        split=spec.settings(quick).split or spec.split,
+        extra=extra,
+    )
+
+
+def _run_suite(
+    spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods=None
+):
     """A task made of parts (one per sensor): each part's report in ``out_dir/<part>``, and
     one report whose rows are the parts' rows, labelled ``<part>: <row>``."""
     t0 = time.perf_counter()
@@ -376,6 +481,7 @@ def _run_suite(spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed,
             seed=seed,
             log=log,
             store=store,
+            methods=methods,
         )
         parts[part] = Report.from_json(doc)
     rows = [
