@@ -38,13 +38,13 @@ check: lint $(STAMP_TEST)
 
 # style, and the one-way flow of the imports (import-linter's contracts in pyproject.toml)
 lint: $(STAMP_TEST)
-	$(BIN)/ruff check sim_tactile tests benchmarks docs
-	$(BIN)/ruff format --check sim_tactile tests benchmarks docs
+	$(BIN)/ruff check sim_tactile tests benchmarks docs examples
+	$(BIN)/ruff format --check sim_tactile tests benchmarks docs examples
 	$(BIN)/lint-imports
 
 format: $(STAMP_TEST)
-	$(BIN)/ruff format sim_tactile tests benchmarks docs
-	$(BIN)/ruff check --fix sim_tactile tests benchmarks docs
+	$(BIN)/ruff format sim_tactile tests benchmarks docs examples
+	$(BIN)/ruff check --fix sim_tactile tests benchmarks docs examples
 
 bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_plates.py

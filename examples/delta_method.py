@@ -2,8 +2,10 @@
 
 - ``DeltaEncoder``: send-on-delta (level-crossing) encoding. Each channel emits an ON spike
   each time its signal rises by ``delta`` from the level of its last spike, and an OFF spike
-  each time it falls by ``delta``; ``delta`` is a fraction of the channel's range over the
-  samples it is fitted on. It returns one :class:`sim_tactile.records.SpikeTrains` per sample
+  each time it falls by ``delta``; ``delta`` is in units of the channel's typical swing: the
+  median, over the samples it is fitted on, of each sample's standard deviation in time (a
+  fraction of the range would leave the quiet samples silent where amplitudes span decades,
+  as roughness8's do). It returns one :class:`sim_tactile.records.SpikeTrains` per sample
   (ON and OFF channels), so the package's spike features and distances read it.
 - ``NearestMean``: a nearest class mean on standardised features, by cosine similarity.
 
@@ -34,7 +36,7 @@ class DeltaEncoder(TransformerMixin, BaseEstimator):
     """Send-on-delta spikes of ``X`` (samples, time, channels) sampled at ``rate_hz``:
     2 x channels spike trains per sample (ON then OFF for each channel)."""
 
-    def __init__(self, delta: float = 0.05, rate_hz: float | None = None) -> None:
+    def __init__(self, delta: float = 0.25, rate_hz: float | None = None) -> None:
         self.delta = delta
         self.rate_hz = rate_hz
 
@@ -42,10 +44,10 @@ class DeltaEncoder(TransformerMixin, BaseEstimator):
         x = np.asarray(X, dtype=np.float64)
         if x.ndim != 3:
             raise ValueError(f"X must be (samples, time, channels), got shape {x.shape}")
-        if not 0.0 < self.delta <= 1.0:
-            raise ValueError(f"delta = {self.delta!r}; valid: a fraction in (0, 1]")
-        span = x.max(axis=(0, 1)) - x.min(axis=(0, 1))
-        self.step_ = self.delta * np.where(span > 0, span, 1.0)  # per channel
+        if not self.delta > 0.0:
+            raise ValueError(f"delta = {self.delta!r}; valid: > 0 (of the typical swing)")
+        swing = np.median(x.std(axis=1), axis=0)  # per channel
+        self.step_ = self.delta * np.where(swing > 0, swing, 1.0)
         return self
 
     def transform(self, X):
@@ -90,7 +92,7 @@ class NearestMean(ClassifierMixin, BaseEstimator):
         return self.classes_[np.argmax(a @ b.T, axis=1)]
 
 
-def _encoder(delta: float = 0.05) -> Pipeline:
+def _encoder(delta: float = 0.25) -> Pipeline:
     return Pipeline(
         [
             ("delta", DeltaEncoder(delta=delta)),
