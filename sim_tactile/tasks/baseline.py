@@ -1,6 +1,7 @@
 """The CI mode of ``sim-tactile run``: a run's rows against a saved report, row by row.
 
-``--save-baseline PATH`` writes the run's report (the same JSON as ``report.json``);
+``--save-baseline PATH`` writes the run's rows, protocol and environment (a ``report.json``
+serves as well);
 ``--baseline PATH [--tolerance 0.02]`` compares this run's rows with it. A row is the same
 row when its task, label, classifier and features agree (a user's method: its name). The run
 fails (exit 1) when a row's mean accuracy falls below its baseline by more than the
@@ -148,9 +149,37 @@ def _row(key: tuple, base: float | None, now: float | None, status: str) -> dict
     }
 
 
+#: The keys of a row that a baseline keeps (the per-repeat details stay in report.json).
+BASELINE_ROW_KEYS = (
+    "label",
+    "classifier",
+    "features",
+    "accuracy_mean",
+    "accuracy_std",
+    "repeats",
+    "split",
+    "channels",
+)
+
+
 def save_baseline(report: dict, path: str | Path) -> Path:
-    """Write ``report`` as a baseline (its JSON, as ``report.json``)."""
+    """Write ``report`` as a baseline: its task, mode, protocol and environment, and each
+    row's keys (:data:`BASELINE_ROW_KEYS`), small enough to commit beside a user's code (a
+    whole ``report.json`` is a baseline too)."""
     path = Path(path)
+    doc = {
+        "task": report["task"],
+        "quick": report.get("quick", False),
+        "protocol": report.get("protocol", {}),
+        "environment": report.get("environment", {}),
+        "results": [
+            {k: r[k] for k in BASELINE_ROW_KEYS if k in r} | _part(r) for r in report["results"]
+        ],
+    }
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(report, indent=2) + "\n")
+    path.write_text(json.dumps(doc, indent=1) + "\n")
     return path
+
+
+def _part(row: dict) -> dict:
+    return {"part": row["part"]} if "part" in row else {}

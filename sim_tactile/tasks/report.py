@@ -171,6 +171,10 @@ class Report:
         lines += markdown_table(head, [_cells(r) for r in self.results])
         lines += ["", _timing(self.timing)]
         lines += _over_time_table(self.results)
+        users = [r for r in self.results if r.extra.get("user_method")]
+        if users:
+            lines += ["", "Your methods (run from your code; their splits are the task's):", ""]
+            lines += [f"- `{r.label}`: `{r.extra.get('method', '')}`" for r in users]
         if self.parts is not None:
             lines += ["", "Parts: " + ", ".join(f"[{p}]({p}/report.md)" for p in self.parts)]
         if self.figures:
