@@ -22,7 +22,8 @@ from .._validate import integer
 from ..errors import ConfigError
 from ..records import TactileDataset
 from .registry import get_task
-from .runner import load_task, run_task, splits_digest, task_splits
+from .runner import load_task, run_task
+from .splits import splits_digest, task_splits
 
 
 def _quiet(msg: str) -> None:

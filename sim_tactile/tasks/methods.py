@@ -30,6 +30,7 @@ import importlib
 import importlib.util
 import re
 import sys
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,6 +42,10 @@ from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from ..errors import ConfigError
 from ..hashing import derive_seed
 from ..learn.precomputed import sample_index
+from ..learn.protocols import EvalResult, evaluate
+from .registry import TaskSpec
+from .report import ResultRow
+from .splits import task_splits
 
 #: What a method's name may be: it labels its report row and its baseline key.
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]{0,63}$")
@@ -231,8 +236,6 @@ def method_protocol(
 ):
     """What :func:`~sim_tactile.learn.protocols.evaluate` takes for ``method``: ``(X, make,
     times_s, encode_s)``. ``make(repeat)`` builds the repeat's estimator (seeded)."""
-    import time
-
     from sklearn.pipeline import Pipeline
 
     def est(r: int):
@@ -268,3 +271,63 @@ def _user_call(method: Method, what: str, fn):
         raise ConfigError(
             f"method {method.name!r}: its {what} raised {type(exc).__name__}: {exc}"
         ) from exc
+
+
+def classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, seed, log) -> float:
+    """The user's methods under the task's split (:mod:`.methods`), into ``results`` and
+    ``wall``; returns the time their encoders took on the whole data set (encode once)."""
+    settings = spec.settings(quick)
+    split = settings.split or spec.split
+    enc_total = 0.0
+    for m in methods:
+        if split not in splits or len(splits[split]) < n_rep[m.name]:
+            splits[split] = task_splits(ds.labels, split, max(n_rep.values()), seed)
+        log(
+            f"{spec.id}: {m.name} (your method: {m.describe()}), split {split}, {n_rep[m.name]} repeat(s)"
+        )
+        t0 = time.perf_counter()
+        x, make, times_s, enc_s = method_protocol(
+            m, ds.data, ds.rate_hz, spec.encode_once, settings.time_points_s, seed
+        )
+        enc_total += enc_s
+        try:
+            results[m.name] = evaluate(
+                make,
+                x,
+                ds.labels,
+                splits[split][: n_rep[m.name]],
+                times_s=times_s,
+                rate_hz=ds.rate_hz,
+                time_repeats=settings.time_repeats,
+                log=log,
+                name=m.name,
+            )
+        except ConfigError:
+            raise
+        except Exception as exc:  # noqa: BLE001 (the user's estimator: say whose and what)
+            raise ConfigError(
+                f"method {m.name!r}: fitting or predicting raised {type(exc).__name__}: {exc}"
+            ) from exc
+        wall[m.name] = time.perf_counter() - t0 - enc_s
+        r = results[m.name]
+        log(f"{spec.id}: {m.name} accuracy {r.mean:.3f} +- {r.std:.3f} ({wall[m.name]:.1f} s)")
+    return enc_total
+
+
+def method_row(spec: TaskSpec, m: Method, r: EvalResult, wall_s: float, quick: bool) -> ResultRow:
+    extra = {k: v for k, v in r.to_json().items() if k not in ("accuracy_mean", "accuracy_std")}
+    extra.update(user_method=True, method=m.describe())
+    return ResultRow(
+        classifier=m.name,
+        label=m.name,
+        features=USER_FEATURES,
+        accuracy_mean=round(r.mean, 4),
+        accuracy_std=round(r.std, 4),
+        paper=None,
+        repeats=len(r.accuracies),
+        comparison={"status": "no paper value", "message": "your method"},
+        wall_s=round(wall_s, 2),
+        channels="all",
+        split=spec.settings(quick).split or spec.split,
+        extra=extra,
+    )

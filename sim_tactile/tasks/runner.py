@@ -9,7 +9,6 @@ task, its checked options and its data.
 
 from __future__ import annotations
 
-import hashlib
 import platform
 import sys
 import time
@@ -17,7 +16,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import numpy as np
 from sklearn.pipeline import Pipeline
 
 from .. import __version__
@@ -27,15 +25,16 @@ from ..errors import ConfigError, StoreError, require
 from ..hashing import derive_seed
 from ..learn.classifiers import LearnContext, get_classifier, make_classifier
 from ..learn.precomputed import sample_index
-from ..learn.protocols import EvalResult, evaluate, repeated_splits
+from ..learn.protocols import EvalResult, evaluate
 from ..records import TactileDataset
 from ..sensors.calibration import load_calibration
 from ..slides import SlideSet
 from ..slides.plan import task_slide_config
-from .methods import USER_FEATURES, Method, as_methods, method_protocol
+from .methods import Method, as_methods, classify_methods, method_row
 from .precompute import Precomputed
 from .registry import DataRequest, Run, TaskSpec, get_task, with_calibration
 from .report import Report, ResultRow, compare, write_figures
+from .splits import splits_digest, task_splits
 
 
 def stderr_log(msg: str) -> None:
@@ -269,7 +268,7 @@ def evaluate_task(
     results, wall, splits = _classify(
         spec, ds, ctx, runs, n_rep, pre, quick=quick, seed=seed, log=log
     )
-    user_enc = _classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, seed, log)
+    user_enc = classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, seed, log)
     encode_s += user_enc
     classify_s = time.perf_counter() - t1 - user_enc
     names = list(dict.fromkeys(r.classifier for r in runs))
@@ -278,7 +277,7 @@ def evaluate_task(
         title=spec.title,
         quick=quick,
         results=[_row(spec, run, results[run.name], wall[run.name], quick) for run in runs]
-        + [_method_row(spec, m, results[m.name], wall[m.name], quick) for m in methods],
+        + [method_row(spec, m, results[m.name], wall[m.name], quick) for m in methods],
         timing={
             "simulate_s": round(float(ds.meta.get("simulate_s", 0.0)), 3),
             "encode_s": round(encode_s, 3),
@@ -363,65 +362,6 @@ def _classify(spec, ds, ctx, runs, n_rep, pre, *, quick, seed, log):
     return results, wall, split_cache
 
 
-def task_splits(labels, split: str, repeats: int, seed: int) -> list:
-    """The (train, test) index pairs of a task's protocol: ``repeats`` draws of ``split``
-    from one generator seeded by ``(seed, 0)``. Each draw follows the ones before it, so the
-    first ``k`` pairs are the same whatever ``repeats`` is (a run's rows of fewer repeats take
-    the first pairs of the longest)."""
-    return repeated_splits(labels, split, repeats, derive_seed(seed, 0))
-
-
-def splits_digest(pairs) -> str:
-    """SHA-256 of a list of (train, test) index pairs (the report's ``splits_sha256``: a
-    user's framework can check it uses the same splits)."""
-    h = hashlib.sha256()
-    for tr, te in pairs:
-        h.update(np.asarray(tr, dtype=np.int64).tobytes() + b"|")
-        h.update(np.asarray(te, dtype=np.int64).tobytes() + b";")
-    return h.hexdigest()
-
-
-def _classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, seed, log) -> float:
-    """The user's methods under the task's split (:mod:`.methods`), into ``results`` and
-    ``wall``; returns the time their encoders took on the whole data set (encode once)."""
-    settings = spec.settings(quick)
-    split = settings.split or spec.split
-    enc_total = 0.0
-    for m in methods:
-        if split not in splits or len(splits[split]) < n_rep[m.name]:
-            splits[split] = task_splits(ds.labels, split, max(n_rep.values()), seed)
-        log(
-            f"{spec.id}: {m.name} (your method: {m.describe()}), split {split}, {n_rep[m.name]} repeat(s)"
-        )
-        t0 = time.perf_counter()
-        x, make, times_s, enc_s = method_protocol(
-            m, ds.data, ds.rate_hz, spec.encode_once, settings.time_points_s, seed
-        )
-        enc_total += enc_s
-        try:
-            results[m.name] = evaluate(
-                make,
-                x,
-                ds.labels,
-                splits[split][: n_rep[m.name]],
-                times_s=times_s,
-                rate_hz=ds.rate_hz,
-                time_repeats=settings.time_repeats,
-                log=log,
-                name=m.name,
-            )
-        except ConfigError:
-            raise
-        except Exception as exc:  # noqa: BLE001 (the user's estimator: say whose and what)
-            raise ConfigError(
-                f"method {m.name!r}: fitting or predicting raised {type(exc).__name__}: {exc}"
-            ) from exc
-        wall[m.name] = time.perf_counter() - t0 - enc_s
-        r = results[m.name]
-        log(f"{spec.id}: {m.name} accuracy {r.mean:.3f} +- {r.std:.3f} ({wall[m.name]:.1f} s)")
-    return enc_total
-
-
 def _row(spec: TaskSpec, run: Run, r: EvalResult, wall_s: float, quick: bool) -> ResultRow:
     cell = run.paper
     extra = {k: v for k, v in r.to_json().items() if k not in ("accuracy_mean", "accuracy_std")}
@@ -437,25 +377,6 @@ def _row(spec: TaskSpec, run: Run, r: EvalResult, wall_s: float, quick: bool) ->
         wall_s=round(wall_s, 2),
         channels=run.channels,
         split=spec.split_for(run, quick),
-        extra=extra,
-    )
-
-
-def _method_row(spec: TaskSpec, m: Method, r: EvalResult, wall_s: float, quick: bool) -> ResultRow:
-    extra = {k: v for k, v in r.to_json().items() if k not in ("accuracy_mean", "accuracy_std")}
-    extra.update(user_method=True, method=m.describe())
-    return ResultRow(
-        classifier=m.name,
-        label=m.name,
-        features=USER_FEATURES,
-        accuracy_mean=round(r.mean, 4),
-        accuracy_std=round(r.std, 4),
-        paper=None,
-        repeats=len(r.accuracies),
-        comparison={"status": "no paper value", "message": "your method"},
-        wall_s=round(wall_s, 2),
-        channels="all",
-        split=spec.settings(quick).split or spec.split,
         extra=extra,
     )
 
