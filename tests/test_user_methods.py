@@ -213,62 +213,29 @@ def test_loaded_splits_are_repeatable_and_the_ones_the_builtin_run_used(shared_c
 @pytest.mark.slow
 def test_run_with_methods_and_the_ci_mode(tmp_path, cli):
     ex = f"delta={EXAMPLE}:delta_nearest_mean"
+
+    def run(out, *more, check=True):
+        return cli(
+            ["run", "finger7-v1", "--quick", "--method", ex, "--out", out, *more], check=check
+        )
+
     base = tmp_path / "baseline.json"
     out = tmp_path / "a"
-    p = cli(
-        [
-            "run",
-            "finger7-v1",
-            "--quick",
-            "--method",
-            ex,
-            "--out",
-            out,
-            "--save-baseline",
-            base,
-            "--json",
-        ]
-    )
+    p = run(out, "--save-baseline", base, "--json")
     doc = json.loads(p.stdout)
     rows = {r["label"]: r for r in doc["results"]}
     assert rows["delta"]["accuracy_mean"] > 3 / 7 and "DeltaEncoder" in rows["delta"]["method"]
     assert "svm all taxels" in rows and json.loads(base.read_text())["task"] == "finger7-v1"
     assert "| delta | user method |" in (out / "report.md").read_text()
     # against its own baseline: passes, and says so
-    p = cli(
-        [
-            "run",
-            "finger7-v1",
-            "--quick",
-            "--method",
-            ex,
-            "--out",
-            tmp_path / "b",
-            "--baseline",
-            base,
-        ]
-    )
+    p = run(tmp_path / "b", "--baseline", base)
     assert "passed: no row below the baseline" in p.stderr and "delta" in p.stdout
     # against a baseline whose accuracies were raised: exit 1, with the table
     raised = json.loads(base.read_text())
     for r in raised["results"]:
         r["accuracy_mean"] = min(1.0, r["accuracy_mean"] + 0.05)
     (tmp_path / "raised.json").write_text(json.dumps(raised))
-    p = cli(
-        [
-            "run",
-            "finger7-v1",
-            "--quick",
-            "--method",
-            ex,
-            "--out",
-            tmp_path / "c",
-            "--baseline",
-            tmp_path / "raised.json",
-            "--json",
-        ],
-        check=False,
-    )
+    p = run(tmp_path / "c", "--baseline", tmp_path / "raised.json", "--json", check=False)
     assert p.returncode == 1 and "FAILED" in p.stderr and "below" in p.stderr
     assert json.loads(p.stdout)["baseline_check"]["failed"] is True
     # a baseline row missing from the run (the user's method not given): exit 1
@@ -307,7 +274,8 @@ def test_bad_input_is_refused_before_anything_is_written(tmp_path, cli, args, me
 
 def test_a_users_estimator_that_raises_is_named(tmp_path, fake_icub):
     with pytest.raises(
-        ConfigError, match="method 'boom': fitting or predicting raised RuntimeError: my bug"
+        ConfigError,
+        match="method 'boom': its estimator \\(fitting or predicting\\) raised RuntimeError: my bug",
     ):
         evaluate("icub20-real-v1", {"boom": Boom()}, quick=True, data=fake_icub, classifiers="none")
 

@@ -166,33 +166,13 @@ def evaluate(
     folder that is removed."""
     if not methods:
         raise ConfigError("methods is empty; give name -> estimator or (encoder, estimator)")
-    if out is not None:
-        return run_task(
-            task_id,
-            out,
-            quick=quick,
-            data=data,
-            classifiers=classifiers,
-            repeats=repeats,
-            seed=seed,
-            log=log or _quiet,
-            store=store,
-            methods=methods,
-        )
     import tempfile
 
+    kw = dict(quick=quick, data=data, classifiers=classifiers, repeats=repeats, seed=seed)
+    kw.update(log=log or _quiet, store=store, methods=methods)
+    if out is not None:
+        return run_task(task_id, out, **kw)
     with tempfile.TemporaryDirectory(prefix="sim-tactile-evaluate-") as tmp:
-        report = run_task(
-            task_id,
-            Path(tmp) / "report",
-            quick=quick,
-            data=data,
-            classifiers=classifiers,
-            repeats=repeats,
-            seed=seed,
-            log=log or _quiet,
-            store=store,
-            methods=methods,
-        )
+        report = run_task(task_id, Path(tmp) / "report", **kw)
         report["figures"] = []  # they were in the removed folder
         return report

@@ -290,8 +290,10 @@ def classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, see
             m, ds.data, ds.rate_hz, spec.encode_once, settings.time_points_s, seed
         )
         enc_total += enc_s
-        try:
-            results[m.name] = evaluate(
+        results[m.name] = _user_call(
+            m,
+            "estimator (fitting or predicting)",
+            lambda m=m, x=x, make=make, times_s=times_s: evaluate(
                 make,
                 x,
                 ds.labels,
@@ -301,13 +303,8 @@ def classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, see
                 time_repeats=settings.time_repeats,
                 log=log,
                 name=m.name,
-            )
-        except ConfigError:
-            raise
-        except Exception as exc:  # noqa: BLE001 (the user's estimator: say whose and what)
-            raise ConfigError(
-                f"method {m.name!r}: fitting or predicting raised {type(exc).__name__}: {exc}"
-            ) from exc
+            ),
+        )
         wall[m.name] = time.perf_counter() - t0 - enc_s
         r = results[m.name]
         log(f"{spec.id}: {m.name} accuracy {r.mean:.3f} +- {r.std:.3f} ({wall[m.name]:.1f} s)")
