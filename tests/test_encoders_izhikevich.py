@@ -119,6 +119,32 @@ def test_batch_equals_single_and_mixed_presets():
     assert IZHIKEVICH_PRESETS["FS"] == IZHIKEVICH_PRESETS["RA"]
 
 
+@pytest.mark.parametrize("scheme", ["rk4", "euler", "izhikevich2003"])
+def test_a_large_batch_equals_its_neurons_one_at_a_time(scheme):
+    """The batch kernel (one pass over the neurons per step, the spikes regrouped by neuron
+    at the end) against each neuron alone: the same spikes, bit for bit."""
+    rng = np.random.default_rng(3)
+    cur = rng.uniform(-2.0, 40.0, (60, 80))
+    presets = [("RS", "FS")[i % 2] for i in range(60)]
+    batch = simulate_izhikevich(cur, 100.0, presets, scheme=scheme)
+    assert sum(b.size for b in batch) > 500
+    for row, p, got in zip(cur, presets, batch, strict=True):
+        assert np.array_equal(got, simulate_izhikevich(row, 100.0, p, scheme=scheme)[0])
+
+
+def test_spikes_are_regrouped_by_neuron_in_time_order():
+    """The counting sort of the kernels against numpy's stable argsort."""
+    from sim_tactile.encoders._kernels import group_by_neuron
+
+    rng = np.random.default_rng(4)
+    who = rng.integers(0, 37, 2000)
+    times = np.sort(rng.uniform(0, 10, 2000))
+    got, counts = group_by_neuron(times, who, 1500, 40)
+    order = np.argsort(who[:1500], kind="stable")
+    assert np.array_equal(got, times[:1500][order])
+    assert np.array_equal(counts, np.bincount(who[:1500], minlength=40))
+
+
 def test_rest_gives_no_spikes_and_time_axis_is_zero_order_hold():
     assert izhikevich_spike_times(np.zeros(50), 100.0, "RS").size == 0
     # input switched on at sample 5 of 10 ms: no spike may come before 50 ms

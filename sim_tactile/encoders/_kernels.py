@@ -5,8 +5,8 @@ starts at ``k * dt`` and uses the input sample ``sample_of_step[k]`` (zero-order
 plain references are :func:`sim_tactile.encoders.izhikevich.simulate_reference` and
 :func:`sim_tactile.encoders.lif.simulate_reference`; the tests demand equal spike times.
 
-Outputs: ``times`` (all spike times in the kernel's time unit), ``who`` (the neuron of each
-spike; a stable sort by ``who`` gives each neuron's spikes in time order), and per-neuron diagnostics ``multi`` (steps in which the neuron fired
+Outputs: ``times`` (all spike times in the kernel's time unit, grouped by neuron, each
+neuron's in time order), ``counts`` (each neuron's spikes), and per-neuron diagnostics ``multi`` (steps in which the neuron fired
 more than once, or, for the one-spike-per-step schemes, fired again on the very next step),
 ``capped`` (steps where more than ``max_per_step`` spikes would have been needed) and
 ``nonfinite`` (1 if the state overflowed; the simulation of that neuron stopped).
@@ -141,73 +141,169 @@ def izhikevich_run(
     """Izhikevich neurons; time unit ms. ``current_t``: (n_samples, n_neurons), i.e. the input
     transposed so that the inner loop over neurons reads contiguous memory.
 
-    Returns ``(times, who, multi, capped, nonfinite)``: spike times in the order they occur and
-    the neuron of each, plus the per-neuron diagnostics.
+    Returns ``(times, counts, multi, capped, nonfinite)``: every spike time grouped by neuron
+    (neuron 0's spikes in time order, then neuron 1's, ...), the spikes of each neuron, and
+    the per-neuron diagnostics.
     """
     n_neurons = current_t.shape[1]
-    n_steps = sample_of_step.size
     v = np.full(n_neurons, v_init)
     u = b * v_init
-    last = np.full(n_neurons, -2, dtype=np.int64)
-    times = np.empty(1024)
-    who = np.empty(1024, dtype=np.int64)
-    nt = 0
     multi = np.zeros(n_neurons, dtype=np.int64)
     capped = np.zeros(n_neurons, dtype=np.int64)
     nonfinite = np.zeros(n_neurons, dtype=np.int64)
+    if scheme == RK4:
+        times, who, nt = _rk4_steps(
+            current_t,
+            sample_of_step,
+            a,
+            b,
+            c,
+            d,
+            v_peak,
+            v,
+            u,
+            dt,
+            tol,
+            max_per_step,
+            multi,
+            capped,
+            nonfinite,
+        )
+    else:
+        times, who, nt = _one_spike_steps(
+            current_t, sample_of_step, a, b, c, d, v_peak, v, u, dt, scheme, multi, nonfinite
+        )
+    grouped, counts = group_by_neuron(times, who, nt, n_neurons)
+    return grouped, counts, multi, capped, nonfinite
+
+
+@njit(cache=True)
+def group_by_neuron(times, who, nt, n_neurons):
+    """The first ``nt`` spikes, recorded in time order, regrouped by neuron (a counting sort:
+    stable, so each neuron's spikes stay in time order); and each neuron's count."""
+    counts = np.zeros(n_neurons, dtype=np.int64)
+    for j in range(nt):
+        counts[who[j]] += 1
+    start = np.empty(n_neurons, dtype=np.int64)
+    acc = 0
+    for n in range(n_neurons):
+        start[n] = acc
+        acc += counts[n]
+    out = np.empty(nt)
+    for j in range(nt):
+        n = who[j]
+        out[start[n]] = times[j]
+        start[n] += 1
+    return out, counts
+
+
+@njit(cache=True)
+def _rk4_steps(
+    current_t,
+    sample_of_step,
+    a,
+    b,
+    c,
+    d,
+    v_peak,
+    v,
+    u,
+    dt,
+    tol,
+    max_per_step,
+    multi,
+    capped,
+    nonfinite,
+):
+    """The rk4 scheme: each step for every neuron branch-free (LLVM vectorises it across
+    neurons), then the rare spiking path per neuron (:func:`_rk4_spiking_step`)."""
+    n_neurons = v.size
+    times = np.empty(1024)
+    who = np.empty(1024, dtype=np.int64)
+    nt = 0
     vn = np.empty(n_neurons)
     un = np.empty(n_neurons)
-    for k in range(n_steps):
+    for k in range(sample_of_step.size):
         row = current_t[sample_of_step[k]]
-        # 1) the step for every neuron: branch-free, so LLVM vectorises it across neurons
-        if scheme == RK4:
-            _rk4_all(v, u, vn, un, row, a, b, dt)
-        elif scheme == EULER:
-            _euler_all(v, u, vn, un, row, a, b, dt)
-        else:
-            _izh2003_all(v, u, vn, un, row, a, b, dt)
-        # 2) the new state becomes current (swap, no copy); the rare spiking path (NaN also
-        #    lands here) restarts from the old state kept in vn, un
+        _rk4_all(v, u, vn, un, row, a, b, dt)
+        # the new state becomes current (swap, no copy); the spiking path (NaN also lands
+        # here) restarts from the old state kept in vn, un
         v, vn = vn, v
         u, un = un, u
         for n in range(n_neurons):
             if v[n] < v_peak or nonfinite[n]:
                 continue
-            if scheme == RK4:
-                vr, ur, fired, cap, times, who, nt = _rk4_spiking_step(
-                    vn[n],
-                    un[n],
-                    row[n],
-                    a[n],
-                    b[n],
-                    c[n],
-                    d[n],
-                    v_peak,
-                    k * dt,
-                    dt,
-                    tol,
-                    max_per_step,
-                    times,
-                    who,
-                    nt,
-                    n,
-                )
-                v[n] = vr
-                u[n] = ur
-                if fired > 1:
-                    multi[n] += 1
-                capped[n] += cap
-            else:
-                times, who, nt = _record(times, who, nt, (k + 1) * dt, n)
-                if last[n] == k - 1:
-                    multi[n] += 1
-                last[n] = k
-                v[n] = c[n]
-                u[n] = u[n] + d[n]
+            vr, ur, fired, cap, times, who, nt = _rk4_spiking_step(
+                vn[n],
+                un[n],
+                row[n],
+                a[n],
+                b[n],
+                c[n],
+                d[n],
+                v_peak,
+                k * dt,
+                dt,
+                tol,
+                max_per_step,
+                times,
+                who,
+                nt,
+                n,
+            )
+            v[n] = vr
+            u[n] = ur
+            if fired > 1:
+                multi[n] += 1
+            capped[n] += cap
             if not (math.isfinite(v[n]) and math.isfinite(u[n])):
                 nonfinite[n] = 1
                 v[n] = math.nan
-    return times[:nt].copy(), who[:nt].copy(), multi, capped, nonfinite
+    return times, who, nt
+
+
+@njit(cache=True)
+def _one_spike_steps(
+    current_t, sample_of_step, a, b, c, d, v_peak, v, u, dt, scheme, multi, nonfinite
+):
+    """The papers' schemes (Euler, or the 2003 code's two half steps of ``v``): at most one
+    spike per step, at the step's end. Each step for every neuron branch-free (vectorised),
+    then the neurons that reached the peak (a fused loop measured slower:
+    ``docs/spikes.md``)."""
+    n_neurons = v.size
+    times = np.empty(max(1024, 4 * n_neurons))
+    who = np.empty(times.size, dtype=np.int64)
+    nt = 0
+    last = np.full(n_neurons, -2, dtype=np.int64)
+    vn = np.empty(n_neurons)
+    un = np.empty(n_neurons)
+    for k in range(sample_of_step.size):
+        row = current_t[sample_of_step[k]]
+        t_end = (k + 1) * dt
+        if scheme == EULER:
+            _euler_all(v, u, vn, un, row, a, b, dt)
+        else:
+            _izh2003_all(v, u, vn, un, row, a, b, dt)
+        v, vn = vn, v
+        u, un = un, u
+        for n in range(n_neurons):
+            if v[n] < v_peak or nonfinite[n]:
+                continue
+            if nt == times.size:
+                times, who, nt = _record(times, who, nt, t_end, n)
+            else:
+                times[nt] = t_end
+                who[nt] = n
+                nt += 1
+            if last[n] == k - 1:
+                multi[n] += 1
+            last[n] = k
+            v[n] = c[n]
+            u[n] = u[n] + d[n]
+            if not (math.isfinite(v[n]) and math.isfinite(u[n])):
+                nonfinite[n] = 1
+                v[n] = math.nan
+    return times, who, nt
 
 
 @njit(cache=True, inline="always")

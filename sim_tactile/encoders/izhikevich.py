@@ -115,7 +115,7 @@ def simulate_izhikevich(
             for i, r in zip(rows, res, strict=True):
                 out[i] = r
         return out
-    times, who, multi, capped, nonfinite = K.izhikevich_run(
+    times, counts, multi, capped, nonfinite = K.izhikevich_run(
         np.ascontiguousarray(cur.T),
         steps,
         col("a"),
@@ -140,9 +140,7 @@ def simulate_izhikevich(
         one_per_step=scheme != "rk4",
         max_per_step=MAX_SPIKES_PER_STEP,
     )
-    order = np.argsort(who, kind="stable")  # spikes of each neuron stay in time order
-    counts = np.bincount(who, minlength=cur.shape[0])
-    return split(times[order], counts, 1e-3)
+    return split(times, counts, 1e-3)  # grouped by neuron, each in time order
 
 
 def izhikevich_spike_times(
