@@ -8,13 +8,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from sim_tactile.plates import get_plate
+from sim_tactile.plates import get_plate, height_at
 from sim_tactile.scene.model import build_scene
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, get_layout, get_sensor
 from sim_tactile.sim.collide import (
     MujocoCollider,
     PrimitiveCollider,
+    ProfileCollider,
     make_collider,
     penetration_map,
 )
@@ -122,12 +123,43 @@ def test_the_colliders_answer_alike_from_the_joints(cache):
     assert ref.warnings() == [] and prim.warnings() == []
 
 
-def test_meshes_and_height_fields_keep_mujocos_collider(cache):
-    for plate in ("multilayer3/grating-9", "roughness8/ra-50"):
-        sc = _scene(plate, 0.0, cache)
-        bone = sc.m_col.body("bone").id
-        assert PrimitiveCollider.from_model(sc.m_col, sc.node_of_geom, bone) is None
-        assert isinstance(make_collider(sc), MujocoCollider)
+def test_meshes_keep_mujocos_collider_and_roughness_takes_the_height_map(cache):
+    sc = _scene("multilayer3/grating-9", 0.0, cache)
+    bone = sc.m_col.body("bone").id
+    assert PrimitiveCollider.from_model(sc.m_col, sc.node_of_geom, bone) is None
+    assert isinstance(make_collider(sc), MujocoCollider)
+    sc = _scene("roughness8/ra-50", 0.0, cache)
+    assert isinstance(make_collider(sc), ProfileCollider)
+    assert isinstance(make_collider(sc, primitive=False), MujocoCollider)  # the reference
+
+
+@pytest.mark.parametrize("plate", ["roughness8/ra-50", "textures20/rough-ra100"])
+def test_the_profile_collider_reads_the_height_map_at_each_node(plate, cache):
+    """Each node's depth is the plate's height at its centre (height_at) less its lowest
+    point, reported within its margin; over the flat base MuJoCo's collider reads the same
+    (on the profile MuJoCo's convex-prism contacts read another depth: the height map is what
+    the skin model and its reference take)."""
+    sc = _scene(plate, 0.1e-3, cache)
+    col, ref = make_collider(sc), MujocoCollider(sc)
+    rng = np.random.default_rng(1)
+    qpos = np.zeros(sc.m_col.nq)
+    pl = get_plate(plate)
+    for _ in range(12):
+        qpos[sc.jx] = rng.uniform(-0.02, 0.06)  # off, across and past the textured area
+        qpos[sc.jz] = rng.uniform(-1.3e-3, -0.8e-3)
+        got, want = np.empty(sc.n_nodes), np.empty(sc.n_nodes)
+        near = col.depths_at(qpos, got)
+        x = col.bone0[0] + qpos[sc.jx] + col.local[:, 0]
+        y = col.bone0[1] + col.local[:, 1]
+        z = col.bone0[2] + qpos[sc.jz] + col.local[:, 2] - col.radius
+        d = height_at(pl, x, y) - z
+        expect = np.where(d >= -col.margin, d, -np.inf)
+        np.testing.assert_allclose(got, expect, rtol=0, atol=1e-15)
+        assert near == bool(np.isfinite(expect).any())
+        ref.depths_at(qpos, want)
+        base = (np.abs(x) > pl.area_length_m / 2 + 1e-3) & np.isfinite(want)
+        np.testing.assert_allclose(got[base], want[base], rtol=0, atol=1e-12)
+    assert col.warnings() == []
 
 
 @pytest.mark.parametrize("force_control", ["dynamic", "quasi-static"])
@@ -182,3 +214,45 @@ def test_a_held_pad_rides_over_the_bumps_at_a_fine_grid(cache):
     assert centre.max() < 1e-3, centre.max()  # the middle taxel lies between the bump rows
     flat = r.data[x < -26.5e-3, 4]  # before the pad's face reaches the texture at -26 mm
     assert flat.size and flat.min() > 5e-3  # on flat ground it carries its share
+
+
+def test_a_large_pad_on_a_rough_plate_fills_mujocos_buffer_and_not_the_height_maps(cache):
+    """icub60 pressed on textures20/rough-ra100 at auto's 0.385 mm grid (6231 nodes):
+    MuJoCo's height-field collider gives several contacts a node and fills its contact
+    buffer (a slide stopped there with mjWARN_CONTACTFULL) or, pressed further, runs out of
+    its stack (a fatal error); the height map has no buffer."""
+    f = get_sensor("icub60").finger
+    grid = skin_grid(f, 1.1563489339913178e-3 / 3)
+    sc = build_scene(
+        get_plate("textures20/rough-ra100"),
+        f,
+        grid,
+        get_layout("icub60"),
+        dt_s=1e-3,
+        x0_m=0.0,
+        z0_m=0.15e-3,  # the pad's face 0.15 mm above the base: the profile's peaks press in
+        z_damping=1.0,
+        node_margin_m=0.1e-3,
+        cache=cache,
+    )
+    assert grid.n == 6231
+    qpos = np.zeros(sc.m_col.nq)
+    got, ref = np.empty(grid.n), MujocoCollider(sc)
+    make_collider(sc).depths_at(qpos, got)
+    assert np.isfinite(got).sum() > 1000 and make_collider(sc).warnings() == []
+    try:  # its buffer full, or (pressed this far) its stack
+        ref.depths_at(qpos, np.empty(grid.n))
+        failed = "mjWARN_CONTACTFULL" in ref.warnings()
+    except mujoco.FatalError as exc:
+        failed = "out of memory" in str(exc)
+    assert failed
+
+
+@pytest.mark.slow
+def test_the_icub_slides_over_a_rough_plate_at_autos_fine_grid(cache):
+    """A short slide of icub60 onto textures20/rough-ra100 at auto's grid runs through."""
+    sensor = get_sensor("icub60")
+    proto = Protocol(speed_m_s=0.04, force_n=1.0, duration_s=0.3)
+    rec = simulate("textures20/rough-ra100", sensor, protocol=proto, ideal=True, cache=cache)
+    assert "93 x 67 nodes" in rec.recording.meta["skin_problem"]
+    assert rec.recording.data.max() > 0.01
