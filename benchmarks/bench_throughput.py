@@ -6,13 +6,14 @@ core, and where a slide's time goes.
 
 A scene is a simulated task (every ``-v1`` and ``-v2``, each sensor of ``textures20``). For
 each, one process simulates ``--slides`` of the task's slides (the first slide of plates
-spread over the task's list), after one warm-up slide that is not counted, with one artefact
-cache as ``generate`` has (plates and skin matrices kept between slides, no slide read from
-the slide cache). The real-time factor per core is the simulated seconds over the process's
+spread over the task's list), after a warm-up slide of each of those plates that is not
+counted, with one artefact cache as ``generate`` has (plates and skin matrices kept between
+slides, no slide read from the slide cache): the steady state of a data set, whose workers
+make tens of slides of each plate. The real-time factor per core is the simulated seconds over the process's
 CPU seconds for those slides (CPU time, not wall: the machine is shared).
 
-``--breakdown`` profiles the same slides (cProfile; its overhead inflates the total, so the
-shares are read, not the seconds) and sorts each function's own time into: setup (building
+``--breakdown`` profiles the same slides again (cProfile; its overhead inflates the total,
+so the shares are read, not the seconds) and sorts each function's own time into: setup (building
 the scene, the skin and its matrices, choosing the fidelity), collider, solve (the skin's
 contact problem and the held step), readout (taxel loads, sample averages, transducer),
 MuJoCo (its step and forward calls) and Python (the rest).
@@ -80,27 +81,31 @@ def scene_ids() -> list[str]:
 
 
 def scene_jobs(task_id: str, n: int):
-    """The warm-up slide and ``n`` slides: the first slide of plates spread over the task's
-    list (the warm-up is another plate's second slide)."""
+    """The warm-up slides and ``n`` measured slides: plates spread over the task's list, the
+    second slide of each to warm the process up (its skin computed or read, its kernels
+    compiled), then the first slide of each, measured: as in a data set, where each worker
+    makes tens of slides of a plate after its first."""
     from sim_tactile.tasks import get_task
 
     ss = get_task(task_id).get_data
     jobs = ss.jobs(seed=0, quick=False)
     per = len(jobs) // len(ss.plates)
-    picks = [round(i * (len(ss.plates) - 1) / max(1, n - 1)) for i in range(n)]
-    return jobs[1], [jobs[p * per] for p in picks]
+    picks = sorted({round(i * (len(ss.plates) - 1) / max(1, n - 1)) for i in range(n)})
+    return [jobs[p * per + 1] for p in picks], [jobs[p * per] for p in picks]
 
 
 def measure(task_id: str, n: int, breakdown: bool) -> dict:
     """Simulate the scene's slides in this process; CPU seconds, simulated seconds, RTF; with
     ``breakdown``, the same slides again under the profiler (a fresh cache) for the shares."""
     warm, jobs = scene_jobs(task_id, n)
-    warm.simulate(_fresh_cache())
-    cpu, sim, _ = _run(jobs, None)
+    cache = _fresh_cache()
+    for job in warm:
+        job.simulate(cache)
+    cpu, sim, _ = _run(jobs, None, cache)
     out = {"scene": task_id, "slides": len(jobs), "sim_s": sim, "cpu_s": cpu, "rtf": sim / cpu}
     if breakdown:
         prof = cProfile.Profile()
-        _run(jobs, prof)
+        _run(jobs, prof, cache)
         out["breakdown"] = _buckets(prof)
     return out
 
@@ -111,8 +116,7 @@ def _fresh_cache():
     return ArtefactCache(tempfile.mkdtemp(prefix="bench-throughput-"))
 
 
-def _run(jobs, prof):
-    cache = _fresh_cache()
+def _run(jobs, prof, cache):
     cpu = sim = 0.0
     for job in jobs:
         t0 = time.process_time()

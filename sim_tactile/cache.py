@@ -66,3 +66,43 @@ class ArtefactCache:
         p = self.path(key, ext)
         atomic_write(p, data)
         return p
+
+
+class ArrayMemo:
+    """Read-only arrays kept in this process by their content key, the least recently used
+    dropped past ``max_bytes``: a worker that makes many slides of one scene reads a skin's
+    matrices from disk once. The key must hold everything the arrays depend on (as the disk
+    cache's does), so an entry is never stale; the arrays are made read-only, so no slide can
+    change what the next one reads."""
+
+    def __init__(self, max_bytes: int) -> None:
+        self.max_bytes = int(max_bytes)
+        self._items: dict[str, tuple] = {}
+        self._bytes: dict[str, int] = {}
+
+    def get(self, key: str):
+        item = self._items.pop(key, None)
+        if item is not None:
+            self._items[key] = item  # most recently used last
+        return item
+
+    def put(self, key: str, item: tuple) -> tuple:
+        """Keep ``item`` (a tuple of arrays and plain values), its arrays made read-only."""
+        import numpy as np
+
+        size = 0
+        for a in item:
+            if isinstance(a, np.ndarray):
+                a.flags.writeable = False
+                size += a.nbytes
+        if size > self.max_bytes:
+            return item
+        self._items.pop(key, None)
+        self._items[key], self._bytes[key] = item, size
+        while sum(self._bytes.values()) > self.max_bytes:
+            old = next(iter(self._items))
+            del self._items[old], self._bytes[old]
+        return item
+
+    def __len__(self) -> int:
+        return len(self._items)

@@ -3,13 +3,21 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from sim_tactile.cache import ArtefactCache
+from sim_tactile.cache import ArrayMemo, ArtefactCache
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import get_sensor
+from sim_tactile.sim import skin as skin_module
 from sim_tactile.sim.protocol import Protocol
 from sim_tactile.sim.simulate import simulate
 from sim_tactile.sim.skin import CACHE_MIN_NODES, CoupledSkin, make_skin
+
+
+@pytest.fixture(autouse=True)
+def fresh_memo(monkeypatch):
+    """Each test starts with nothing kept in the process (the memo outlives a test)."""
+    monkeypatch.setattr(skin_module, "_MEMO", ArrayMemo(skin_module.MEMO_BYTES))
 
 
 def _files(cache: ArtefactCache) -> list:
@@ -57,3 +65,23 @@ def test_a_slide_is_the_same_bit_for_bit_whether_its_skin_came_from_the_cache(tm
     for r in (b, c):
         assert r.data.tobytes() == a.data.tobytes()
         assert r.meta["normal_force_n"] == a.meta["normal_force_n"]
+
+
+def test_a_worker_keeps_the_arrays_read_only_by_their_key_and_drops_the_oldest(tmp_path):
+    """The second slide of a scene in a process takes the first's arrays from memory (the
+    same objects, read-only, so no slide changes what the next one reads); the memo keeps
+    what fits its byte budget, the least recently used dropped first."""
+    finger = get_sensor("grid3x3").finger
+    grid = skin_grid(finger, 0.43e-3)
+    a = make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0, cache=ArtefactCache(tmp_path / "x"))
+    b = make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0, cache=ArtefactCache(tmp_path / "y"))
+    assert b.C is a.C and b.K is a.K and not a.C.flags.writeable
+    assert not _files(ArtefactCache(tmp_path / "y"))  # not even read from disk
+    memo = ArrayMemo(max_bytes=2 * 800)
+    one, two, three = (np.zeros(100) for _ in range(3))  # 800 bytes each
+    memo.put("1", (one, "a"))
+    memo.put("2", (two, "b"))
+    assert memo.get("1")[0] is one  # now the most recent
+    memo.put("3", (three, "c"))
+    assert memo.get("2") is None and memo.get("1") is not None and len(memo) == 2
+    assert memo.put("big", (np.zeros(1000),)) and memo.get("big") is None  # over the budget

@@ -39,6 +39,7 @@ import io
 
 import numpy as np
 
+from ..cache import ArrayMemo
 from ..errors import ConfigError
 from ..hashing import code_version, content_hash
 from ..scene.elastic import compliance_matrix, compliance_table
@@ -225,19 +226,32 @@ def _dense_key(grid: SkinGrid, finger: Finger, slide_dir, inverse: bool) -> str:
     )
 
 
+#: The dense skins kept in a worker process between slides (:class:`~sim_tactile.cache.
+#: ArrayMemo`, by the disk cache's content key): the BioTac's 2835 nodes make two 64 MB
+#: matrices, which a slide had read from disk anew, 46% of its time in a data set.
+MEMO_BYTES = 512 * 2**20
+_MEMO = ArrayMemo(MEMO_BYTES)
+
+
 def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
-    """:class:`CoupledSkin` of the finger on ``grid``, its arrays read from ``cache`` (an
-    :class:`~sim_tactile.cache.ArtefactCache`) when they were computed before, else computed
-    and stored there: the compliance of a large pad and its inverse take seconds (2835
-    nodes: 4 s and 3 s), reading them a tenth of that. The arrays are the computed ones bit
-    for bit, so a slide does not depend on whether they came from the cache (tested)."""
+    """:class:`CoupledSkin` of the finger on ``grid``, its arrays kept in this process
+    (:data:`_MEMO`) or read from ``cache`` (an :class:`~sim_tactile.cache.ArtefactCache`)
+    when they were computed before, else computed and stored there: the compliance of a
+    large pad and its inverse take seconds (2835 nodes: 4 s and 3 s), reading them a tenth
+    of that. The arrays are the computed ones bit for bit, so a slide does not depend on
+    where they came from (tested)."""
     key = _dense_key(grid, finger, slide_dir, inverse)
+    kept = _MEMO.get(key)
+    if kept is not None:
+        C, K, what, symmetric = kept
+        return CoupledSkin(C, K, what, symmetric=symmetric)
     hit = cache.get(key, "skin.npz")
     if hit is not None:
         try:
             with np.load(hit, allow_pickle=False) as z:
                 C, K = z["C"], (z["K"] if inverse else None)
                 what, symmetric = str(z["what"]), bool(z["symmetric"])
+            _MEMO.put(key, (C, K, what, symmetric))
             return CoupledSkin(C, K, what, symmetric=symmetric)
         except (OSError, ValueError, KeyError):
             pass  # unreadable: computed again and stored over it
@@ -248,6 +262,7 @@ def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
         arrays["K"] = skin.K
     np.savez(buf, **arrays)
     cache.put(key, "skin.npz", buf.getvalue())
+    _MEMO.put(key, (skin.C, skin.K, skin.what, skin.symmetric))
     return skin
 
 
