@@ -257,6 +257,7 @@ def evaluate_task(
     """Encode ``ds``, run each of ``runs`` and of the user's ``methods`` under the task's
     protocol and make the report (with its figures in ``out``; the caller writes it)."""
     t0 = time.perf_counter()
+    out.mkdir(parents=True, exist_ok=True)
     settings = spec.settings(quick)
     ctx = spec.context(ds, quick)
     encoded = Pipeline(spec.encoder(ctx)).fit_transform(ds.data)
@@ -306,7 +307,6 @@ def evaluate_task(
         },
     )
     if figures:
-        out.mkdir(parents=True, exist_ok=True)
         report.figures = write_figures(out, spec, ds, encoded, results, [*runs, *methods])
     report.timing["wall_s"] = round(time.perf_counter() - t0, 2)
     return report
