@@ -422,7 +422,8 @@ def _texture_warnings(plate: Plate, layout, scale: float | None, pitch: float) -
     if isinstance(plate.texture, Roughness):
         warnings.append(
             f"micro-roughness (Ra {plate.texture.ra_m * 1e6:.3g} um) is below the node grid: the finger simulation sees "
-            "it only as far as its MuJoCo height field resolves it"
+            "it only where its nodes sample the height map (the micro-roughness model of the "
+            "sensor adds what lies below)"
         )
     period = texture_period(plate)
     if period is not None and layout.min_pitch_m > period / 2 and layout.n > 1:
