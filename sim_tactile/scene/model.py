@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from ..cache import array_digest, setup_memo
 from ..plates import Plate
 from ..plates import build as build_plate
 from ..sensors.layouts import Layout
@@ -68,7 +69,20 @@ def taxel_weights(
     """(M, N): the share of each node's load that each taxel reads, in the finger's skin
     (a half-space, or its stack of layers), with the stress of the skin's sliding tractions
     when the finger has them (the pad sliding along ``slide_dir``, a unit vector; slides go
-    along +x)."""
+    along +x). Kept in this process by content (:func:`~sim_tactile.cache.setup_memo`): every
+    slide of a sensor on a grid reads the same weights."""
+    parts = {
+        "xy": array_digest(grid.xy),
+        "pitch": [grid.pitch_m, grid.pitch_y_m],
+        "taxels": [array_digest(a) for a in (layout.positions, layout.sizes, layout.depth_m)],
+        "finger": finger.to_json(),
+        "slide_dir": [float(v) for v in slide_dir],
+    }
+    compute = lambda: (_taxel_weights(grid, layout, finger, slide_dir),)  # noqa: E731
+    return setup_memo("taxel weights", parts, compute, (__name__,))[0]
+
+
+def _taxel_weights(grid, layout, finger, slide_dir) -> np.ndarray:
     args = (grid.xy, grid.pitch_m, layout.positions[:, :2], layout.sizes, layout.depth_m)
     if finger.stack is not None:
         W = layered_subsurface_weights(*args, finger.stack, pitch_y_m=grid.pitch_y_m)

@@ -35,6 +35,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..cache import array_digest, setup_memo
 from ..errors import PhysicsError
 from . import contact
 from .collide import PrimitiveCollider, depths_kernel
@@ -91,6 +92,28 @@ class HeldStep:
         return float(loads.sum()), float(pen.max())
 
 
+def _halved_arrays(skin: CoupledSkin, nodes: np.ndarray, pair: np.ndarray):
+    """The mirror-halved compliance ``C_f`` on ``nodes`` (their mirrors ``pair``) and its
+    inverse (None when the skin keeps none)."""
+    C = skin.C
+    Cf = 0.5 * (C[np.ix_(nodes, nodes)] + C[np.ix_(nodes, pair)])
+    if skin.symmetric:
+        Cf = np.ascontiguousarray(0.5 * (Cf + Cf.T))
+        return Cf, np.ascontiguousarray(np.linalg.inv(Cf))
+    Cf = np.ascontiguousarray(Cf)  # friction coupled in: C is not symmetric
+    return Cf, None if skin.K is None else np.ascontiguousarray(np.linalg.inv(Cf))
+
+
+def _halved(skin: CoupledSkin, nodes: np.ndarray, pair: np.ndarray):
+    """:func:`_halved_arrays`, kept in this process under the skin's content key when it has
+    one (every slide of a scene halves the same skin)."""
+    if skin.key is None:
+        return _halved_arrays(skin, nodes, pair)
+    parts = {"skin": skin.key, "nodes": array_digest(nodes), "pair": array_digest(pair)}
+    compute = lambda: _halved_arrays(skin, nodes, pair)  # noqa: E731
+    return setup_memo("mirror-halved skin", parts, compute, (__name__,))
+
+
 class CompiledHeldStep:
     """The held step in one compiled call on the reduced problem (see the module docstring).
 
@@ -126,13 +149,7 @@ class CompiledHeldStep:
                 pair = mirror[nodes]
                 mult = np.where(pair != nodes, 2.0, 1.0)
                 if coupled:
-                    Cf = 0.5 * (C[np.ix_(nodes, nodes)] + C[np.ix_(nodes, pair)])
-                    if skin.symmetric:
-                        C = np.ascontiguousarray(0.5 * (Cf + Cf.T))
-                        K = np.ascontiguousarray(np.linalg.inv(C))
-                    else:  # friction coupled in: C is not symmetric
-                        C = np.ascontiguousarray(Cf)
-                        K = None if K is None else np.ascontiguousarray(np.linalg.inv(C))
+                    C, K = _halved(skin, nodes, pair)
                 W = 0.5 * (W[:, nodes] + W[:, pair])
         self.nodes = nodes
         self.n_full = n

@@ -30,6 +30,7 @@ import math
 import time
 
 import mujoco
+import numba
 import numpy as np
 
 from .. import __version__
@@ -354,6 +355,33 @@ def _check_rig_inputs(plate: Plate, sensor: Sensor, finger: Finger, protocol: Pr
     return sheet
 
 
+@numba.njit(cache=True)
+def _read_lines(xt, x, u, R, out):
+    """``out[i] = np.interp(xt[i] - x, u, R[i], left=0, right=0)`` for every element, with
+    numpy's arithmetic (the same numbers bit for bit, tested), in one call: the slide's
+    steps had spent most of their time in 18 calls of ``np.interp`` each."""
+    n = u.size
+    for i in range(xt.size):
+        q = xt[i] - x
+        if np.isnan(q):
+            out[i] = q
+            continue
+        if q < u[0] or q > u[n - 1]:
+            out[i] = 0.0
+            continue
+        j = np.searchsorted(u, q, side="right") - 1
+        if j == n - 1 or u[j] == q:
+            out[i] = R[i, j]
+            continue
+        slope = (R[i, j + 1] - R[i, j]) / (u[j + 1] - u[j])
+        v = slope * (q - u[j]) + R[i, j]
+        if np.isnan(v):
+            v = slope * (q - u[j + 1]) + R[i, j + 1]
+            if np.isnan(v) and R[i, j] == R[i, j + 1]:
+                v = R[i, j]
+        out[i] = v
+
+
 def _carry(m, jx, jz, pas, z_held, lines, layout, force_n, n_sub, n_samples):
     """Step MuJoCo's carriage along the pass, the probe held at ``z_held`` [m] (its face's
     lowest point below the sensor's surface), each element reading its line (``lines``:
@@ -372,8 +400,7 @@ def _carry(m, jx, jz, pas, z_held, lines, layout, force_n, n_sub, n_samples):
         d.qvel[jz] = 0.0
         d.ctrl[0] = float(pas.speed(t + 0.5 * dt))  # the step that follows, at its middle
         x = pas.x_from_m + float(d.qpos[jx])
-        for i in range(layout.n):
-            now[i] = np.interp(xt[i] - x, u, R[i], left=0.0, right=0.0)
+        _read_lines(xt, x, u, R, now)
         return x
 
     t = 0.0

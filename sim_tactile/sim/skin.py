@@ -39,7 +39,7 @@ import io
 
 import numpy as np
 
-from ..cache import ArrayMemo
+from ..cache import SETUP, SETUP_MEMO_BYTES, setup_memo
 from ..errors import ConfigError
 from ..hashing import code_version, content_hash
 from ..scene.elastic import compliance_matrix, compliance_table
@@ -108,6 +108,9 @@ class CoupledSkin(_SolvedSkin):
         self.C, self.K = C, K
         self.solver = contact.ActiveSet(C, K, symmetric=symmetric)
         self.what = what
+        #: the content key of ``C`` and ``K`` when they came through the set-up memo (what
+        #: is derived from them, e.g. a mirror-halved solve's, is kept under it), else None
+        self.key: str | None = None
 
     @classmethod
     def half_space(
@@ -184,11 +187,13 @@ class SpectralSkin(_SolvedSkin):
         nx, ny = grid.lattice
         st = finger.stack
         if st is None:
-            table = compliance_table(nx, ny, grid.pitch_m, finger.e_star_pa, grid.pitch_y_m)
             what = f"elastic half-space, E* {finger.e_star_pa:.4g} Pa"
         else:
-            table = layered_compliance_table(nx, ny, grid.pitch_m, st, grid.pitch_y_m)
             what = _stack_name(st)
+        parts = {"lattice": [nx, ny, grid.pitch_m, grid.pitch_y_m], "finger": finger.to_json()}
+        (table,) = setup_memo(
+            "spectral compliance table", parts, lambda: (_table(grid, finger),), SKIN_MODULES
+        )
         return cls(table, f"{what}; spectral solve on {nx} x {ny} nodes")
 
     def stiffness(self, p: np.ndarray, area_m2: float) -> float:
@@ -197,6 +202,15 @@ class SpectralSkin(_SolvedSkin):
 
     def describe(self) -> str:
         return self.what
+
+
+def _table(grid: SkinGrid, finger: Finger) -> np.ndarray:
+    """The finger's compliance kernel on ``grid``'s lattice (its stack's, else the
+    half-space's)."""
+    nx, ny = grid.lattice
+    if finger.stack is None:
+        return compliance_table(nx, ny, grid.pitch_m, finger.e_star_pa, grid.pitch_y_m)
+    return layered_compliance_table(nx, ny, grid.pitch_m, finger.stack, grid.pitch_y_m)
 
 
 #: Fewest nodes whose dense arrays go through the cache (600 nodes: 6 MB and 0.2 s to
@@ -226,11 +240,13 @@ def _dense_key(grid: SkinGrid, finger: Finger, slide_dir, inverse: bool) -> str:
     )
 
 
-#: The dense skins kept in a worker process between slides (:class:`~sim_tactile.cache.
-#: ArrayMemo`, by the disk cache's content key): the BioTac's 2835 nodes make two 64 MB
-#: matrices, which a slide had read from disk anew, 46% of its time in a data set.
-MEMO_BYTES = 512 * 2**20
-_MEMO = ArrayMemo(MEMO_BYTES)
+#: The dense skins kept in a worker process between slides (the set-up memo,
+#: :data:`~sim_tactile.cache.SETUP`, by the disk cache's content key): the BioTac's 2835 nodes
+#: make two 64 MB matrices, which a slide had read from disk anew, 46% of its time in a data
+#: set; a small skin's arrays (roughness8's 330 nodes) took half of a 0.2 s slide's time to
+#: compute.
+MEMO_BYTES = SETUP_MEMO_BYTES
+_MEMO = SETUP
 
 
 def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
@@ -243,8 +259,7 @@ def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
     key = _dense_key(grid, finger, slide_dir, inverse)
     kept = _MEMO.get(key)
     if kept is not None:
-        C, K, what, symmetric = kept
-        return CoupledSkin(C, K, what, symmetric=symmetric)
+        return _keyed(key, *kept)
     hit = cache.get(key, "skin.npz")
     if hit is not None:
         try:
@@ -252,17 +267,40 @@ def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
                 C, K = z["C"], (z["K"] if inverse else None)
                 what, symmetric = str(z["what"]), bool(z["symmetric"])
             _MEMO.put(key, (C, K, what, symmetric))
-            return CoupledSkin(C, K, what, symmetric=symmetric)
+            return _keyed(key, C, K, what, symmetric)
         except (OSError, ValueError, KeyError):
             pass  # unreadable: computed again and stored over it
     skin = _dense(grid, finger, slide_dir, inverse)
+    _store(cache, key, skin.C, skin.K, skin.what, skin.symmetric)
+    _MEMO.put(key, (skin.C, skin.K, skin.what, skin.symmetric))
+    skin.key = key
+    return skin
+
+
+def _store(cache, key, C, K, what, symmetric) -> None:
     buf = io.BytesIO()
-    arrays = {"C": skin.C, "what": np.array(skin.what), "symmetric": np.array(skin.symmetric)}
-    if inverse:
-        arrays["K"] = skin.K
+    arrays = {"C": C, "what": np.array(what), "symmetric": np.array(symmetric)}
+    if K is not None:
+        arrays["K"] = K
     np.savez(buf, **arrays)
     cache.put(key, "skin.npz", buf.getvalue())
-    _MEMO.put(key, (skin.C, skin.K, skin.what, skin.symmetric))
+
+
+def _memo_dense(grid, finger, slide_dir, inverse) -> CoupledSkin:
+    """:class:`CoupledSkin` of the finger on ``grid``, its arrays kept in this process
+    (:data:`_MEMO`, by the disk cache's key) and not on disk: a small skin's (below
+    :data:`CACHE_MIN_NODES`, whose arrays are as quick to compute as to read)."""
+    key = _dense_key(grid, finger, slide_dir, inverse)
+    kept = _MEMO.get(key)
+    if kept is None:
+        skin = _dense(grid, finger, slide_dir, inverse)
+        kept = _MEMO.put(key, (skin.C, skin.K, skin.what, skin.symmetric))
+    return _keyed(key, *kept)
+
+
+def _keyed(key, C, K, what, symmetric) -> CoupledSkin:
+    skin = CoupledSkin(C, K, what, symmetric=symmetric)
+    skin.key = key
     return skin
 
 
@@ -305,7 +343,8 @@ def make_skin(
     ``dense``, ``spectral`` or ``auto`` (spectral above :data:`DENSE_MAX_NODES` nodes; a skin
     whose friction enters the normal problem is always dense). ``cache``: an
     :class:`~sim_tactile.cache.ArtefactCache` that keeps a dense skin's arrays from one slide
-    to the next (from :data:`CACHE_MIN_NODES` nodes; below, computing them is as quick)."""
+    to the next (from :data:`CACHE_MIN_NODES` nodes; a smaller skin's arrays are kept in the
+    process only, by the same key, as computing them is as quick as reading them)."""
     if solver not in SOLVERS:
         raise ConfigError(f"solver = {solver!r}; valid: {', '.join(SOLVERS)}")
     if level == "L0":
@@ -320,6 +359,8 @@ def make_skin(
         spectral = False
     if spectral:
         return SpectralSkin.of(grid, finger)
-    if cache is not None and grid.n >= CACHE_MIN_NODES:
+    if grid.n < CACHE_MIN_NODES:
+        return _memo_dense(grid, finger, slide_dir, inverse)
+    if cache is not None:
         return _cached_dense(grid, finger, slide_dir, inverse, cache)
     return _dense(grid, finger, slide_dir, inverse)

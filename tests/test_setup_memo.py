@@ -1,0 +1,113 @@
+"""A worker's set-up kept between slides: content-keyed, read-only, and the slides equal bit
+for bit whether their set-up was computed or kept."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sim_tactile import cache as cache_module
+from sim_tactile.cache import ArrayMemo, array_digest, setup_memo
+from sim_tactile.sim import skin as skin_module
+from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.rig_sim import _read_lines
+from sim_tactile.sim.simulate import simulate
+
+
+@pytest.fixture(autouse=True)
+def fresh_memo(monkeypatch):
+    """Each test starts with nothing kept in the process."""
+    memo = ArrayMemo(cache_module.SETUP_MEMO_BYTES)
+    monkeypatch.setattr(cache_module, "SETUP", memo)
+    monkeypatch.setattr(skin_module, "_MEMO", memo)
+    return memo
+
+
+def test_the_key_holds_every_part_and_the_value_is_kept_read_only(fresh_memo):
+    calls = []
+
+    def compute(v):
+        calls.append(v)
+        return (np.full(3, float(v)), "label")
+
+    mods = ("sim_tactile.cache",)
+    a = setup_memo("x", {"v": 1}, lambda: compute(1), mods)
+    b = setup_memo("x", {"v": 1}, lambda: compute(1), mods)
+    assert a is b and calls == [1] and not a[0].flags.writeable
+    with pytest.raises(ValueError):
+        a[0][0] = 5.0  # no slide can change what the next one reads
+    c = setup_memo("x", {"v": 2}, lambda: compute(2), mods)  # another part: computed
+    d = setup_memo("y", {"v": 1}, lambda: compute(3), mods)  # another kind: computed
+    assert calls == [1, 2, 3] and c[0][0] == 2.0 and d[0][0] == 3.0
+    assert len(fresh_memo) == 3
+
+
+def test_array_digest_tells_dtype_shape_and_bytes_apart():
+    a = np.arange(6, dtype=np.float64)
+    assert array_digest(a) == array_digest(a.copy())
+    assert array_digest(a) != array_digest(a.reshape(2, 3))
+    assert array_digest(a) != array_digest(a.astype(np.float32))
+    b = a.copy()
+    b[3] = np.nextafter(b[3], 10.0)  # one rounding
+    assert array_digest(a) != array_digest(b)
+
+
+@pytest.mark.parametrize(
+    ("plate", "sensor", "kw"),
+    [
+        # a small dense skin (its compliance and inverse kept), mirror-halved held step
+        ("finger7/ridges-4", "grid3x3", dict(pitch_m=0.5e-3)),
+        # a rough plate on the roughness fingertip's layered skin
+        ("roughness8/ra-50", "pvdf2", {}),
+    ],
+)
+def test_slides_are_equal_bit_for_bit_with_their_set_up_computed_or_kept(
+    plate, sensor, kw, fresh_memo, monkeypatch
+):
+    proto = Protocol(duration_s=0.25)
+    first = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
+    assert len(fresh_memo) >= 2  # the weights and the skin were kept
+    again = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
+    fresh = ArrayMemo(cache_module.SETUP_MEMO_BYTES)  # and computed anew
+    monkeypatch.setattr(cache_module, "SETUP", fresh)
+    monkeypatch.setattr(skin_module, "_MEMO", fresh)
+    anew = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
+    assert first.data.max() > 0
+    for r in (again, anew):
+        assert r.data.tobytes() == first.data.tobytes()
+        assert r.meta["normal_force_n"] == first.meta["normal_force_n"]
+
+
+def test_a_softer_skin_is_never_served_the_kept_weights(fresh_memo):
+    from dataclasses import replace
+
+    from sim_tactile.sensors import get_sensor
+
+    s = get_sensor("grid3x3")
+    soft = replace(s, finger=replace(s.finger, young_pa=s.finger.young_pa / 2))
+    kw = dict(protocol=Protocol(duration_s=0.25), ideal=True, pitch_m=0.5e-3)
+    a = simulate("finger7/ridges-4", s, **kw).recording
+    n = len(fresh_memo)
+    b = simulate("finger7/ridges-4", soft, **kw).recording
+    assert len(fresh_memo) > n  # its own skin kept beside the first
+    assert a.data.tobytes() != b.data.tobytes()
+
+
+def test_the_rig_reads_its_lines_as_numpy_interpolates_them():
+    rng = np.random.default_rng(3)
+    u = np.cumsum(rng.uniform(0.5e-4, 1.5e-4, 400)) - 0.02
+    R = rng.normal(size=(18, u.size))
+    xt = rng.uniform(-0.01, 0.01, 18)
+    out = np.empty(18)
+    xs = np.concatenate(
+        [
+            rng.uniform(-0.04, 0.04, 300),
+            xt[:1] - u[[0, 5, -1]],  # exactly on a knot, the first, the last
+            xt[:1] - u[0] + 1e-12,  # just beyond the first knot
+            [np.nan],
+        ]
+    )
+    for x in xs:
+        _read_lines(xt, float(x), u, R, out)
+        ref = np.array([np.interp(xt[i] - x, u, R[i], left=0.0, right=0.0) for i in range(18)])
+        assert out.tobytes() == ref.tobytes(), x
