@@ -192,7 +192,9 @@ def test_a_gradient_at_the_rounding_of_the_deflections_ends_the_solve(
     (1e12 times the last) threw the pressures 24% off the answer and stopped there. The
     iteration ends at the rounding floor instead, on the dense answer; without that floor it
     does not (the last case: the deflections carried for 1000 iterations, as in that slide's
-    run, which shows the test can fail)."""
+    run, which shows the test can fail). The whole lattice is solved (no block): the
+    recorded iterates are the whole lattice's."""
+    monkeypatch.setattr(spectral, "BLOCK_SHARE", 0.0)
     monkeypatch.setattr(spectral, "ROUNDING", rounding)
     monkeypatch.setattr(spectral, "REFRESH_EVERY", refresh)
     with np.load(Path(__file__).parent / "data" / "spectral_rounding.npz") as z:
@@ -234,3 +236,37 @@ def test_a_cycling_iteration_converges_when_few_nodes_join_at_a_time(share, monk
     assert (g[ok & ~on] - g[on].mean()).min() > -1e-9 * span  # ... and none off it overlaps
     assert p.sum() == pytest.approx(total, rel=1e-12) and p.min() >= 0
     assert dz == pytest.approx(float(g[on].mean()), rel=1e-6)  # the pad's shift
+
+
+def test_a_pad_touching_a_patch_of_its_lattice_is_solved_on_that_block_alike(monkeypatch):
+    """A curved pad: only a patch of its lattice is within reach of the plate, so the solve
+    runs on the block of rows and columns around that patch (its own, smaller FFTs). While
+    the patch slides and grows (blocks of several shapes, warm starts carried between them)
+    each step equals the whole lattice's solve and the dense one; a patch wider than
+    BLOCK_SHARE of the lattice is solved whole."""
+    nx, ny, px = 40, 30, 0.5e-3
+    table = compliance_table(nx, ny, px, E)
+    xy = _lattice(nx, ny, px, px)
+    C = compliance_matrix(xy, px, E)
+    dense = ActiveSet(C, np.linalg.inv(C))
+    block, whole = Spectral(table), Spectral(table)
+    monkeypatch.setattr(whole, "_box", lambda ok: None)
+    shapes = set()
+    for step, (cx, r) in enumerate(zip(np.linspace(-6e-3, 5e-3, 9), np.linspace(2e-3, 4e-3, 9))):
+        d2 = (xy[:, 0] - cx) ** 2 + (xy[:, 1] - 1e-3) ** 2
+        pen = 2e-5 - d2 / (2 * 0.01) + 1e-6 * np.sin(3e3 * xy[:, 0])  # a sphere, R 10 mm
+        pen[d2 > r * r] = -np.inf  # beyond the collider's margin
+        box = block._box(np.isfinite(pen))
+        assert box is not None
+        shapes.add((box[1] - box[0], box[3] - box[2]))
+        total = 3e6 * (1 + 0.1 * step)
+        p, dz = block.solve_force(pen, total)
+        p2, dz2 = whole.solve_force(pen, total)
+        p1, dz1 = dense.solve_force(pen, total)
+        assert (p1 > 0).sum() > 10 and p[~np.isfinite(pen)].max() == 0.0
+        for q, z in ((p2, dz2), (p1, dz1)):
+            assert np.abs(p - q).max() < AGREE * q.max()
+            assert dz == pytest.approx(z, rel=AGREE)
+    assert len(shapes) > 2 and len(block._blocks) == min(len(shapes), spectral.BLOCKS_KEPT)
+    wide = np.full(nx * ny, 1e-5)  # every node in reach: the whole lattice
+    assert block._box(np.isfinite(wide)) is None

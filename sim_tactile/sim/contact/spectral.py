@@ -24,6 +24,11 @@ deflections' rounding (:data:`ROUNDING`). Where it cycles (:data:`CYCLE_ITER`), 
 when thousands of nodes join and leave at once, a last start lets few join at a time
 (:data:`JOIN_SHARE`).
 
+Where the nodes within the collider's reach fill a small block of the lattice (a curved
+pad), the solve runs on that block alone (:data:`BLOCK_SHARE`): the nodes outside it cannot
+carry load, and the kernel depends on offsets only, so the block's problem is the whole
+lattice's, solved with smaller FFTs.
+
 The answer agrees with the dense solve to the iteration's tolerance (:data:`TOL`, on the
 change of the pressures summed over the nodes, relative to their sum); tested. It needs a
 symmetric positive definite ``C``: a skin whose sliding friction is coupled into the normal
@@ -66,6 +71,14 @@ DIRECT_MAX = 24
 #: ... and it is taken again by FFT every this many iterations, so that rounding never
 #: accumulates.
 REFRESH_EVERY = 16
+#: A solve runs on the smallest block of the lattice that holds every node in reach (the
+#: nodes beyond the collider's margin carry no load, and the kernel depends on offsets only,
+#: so the block's problem is the lattice's) when that block has at most this share of its
+#: nodes: the FFTs and every vector of the iteration shrink with it (a curved finger touches
+#: a patch of its lattice: finger7-v2's 5785 nodes, some 600 in reach).
+BLOCK_SHARE = 0.5
+#: Solvers of blocks kept, by their shape (a sliding pad's block changes shape now and then).
+BLOCKS_KEPT = 8
 #: The gaps on the contact set are equal when their spread is below this share of the
 #: largest deflection (a thousand times double precision): below it the gradient is the
 #: rounding of ``C p``, and a step along it can throw the pressures anywhere (measured: a
@@ -86,6 +99,12 @@ def _add_columns(u, table, nodes, dp, nx):
             row = table[abs(iy - jy)]
             for ix in range(nx):
                 u[iy, ix] += d * row[abs(ix - jx)]
+
+
+def _mean_gap(u: np.ndarray, pen: np.ndarray, on: np.ndarray) -> float:
+    """The mean of the deflection less the penetration on the contact set ``on``: the pad's
+    shift at which the pressures hold their total."""
+    return float(np.mean(u[on] - pen[on]))
 
 
 class Spectral:
@@ -115,6 +134,7 @@ class Spectral:
         self.p = np.zeros(self.n)  # the last solve's pressures: the next one's start
         self.iterations = 0  # of the last solve
         self._last = (None, None, None)  # (pen, total, answer) of the last solve
+        self._blocks: dict[tuple[int, int], Spectral] = {}  # solvers of blocks, by shape
 
     def apply(self, p: np.ndarray) -> np.ndarray:
         """``C p`` [m]: the deflection of the nodes under pressures ``p`` [Pa]. The padded
@@ -150,13 +170,48 @@ class Spectral:
         last_pen, last_total, last = self._last
         if last_pen is not None and total == last_total and np.array_equal(pen, last_pen):
             return last[0].copy(), last[1]
-        p = self._solve(pen, total)
-        dz = 0.0
-        if total is not None:
-            on = p > 0
-            dz = float(np.mean(self.apply(p)[on] - pen[on]))
+        box = self._box(np.isfinite(pen))
+        if box is None:
+            p = self._solve(pen, total)
+            dz = 0.0 if total is None else _mean_gap(self.apply(p), pen, p > 0)
+        else:
+            p, dz = self._solve_block(pen, total, box)
         self._last = (pen.copy(), total, (p.copy(), dz))
         return p, dz
+
+    def _box(self, ok: np.ndarray) -> tuple[int, int, int, int] | None:
+        """``(y0, y1, x0, x1)``: the block of rows and columns that holds every node in reach
+        ``ok``, when it has at most :data:`BLOCK_SHARE` of the nodes (else None)."""
+        if not ok.any():
+            return None
+        grid = ok.reshape(self.ny, self.nx)
+        rows = np.flatnonzero(grid.any(axis=1))
+        cols = np.flatnonzero(grid.any(axis=0))
+        y0, y1, x0, x1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+        if (y1 - y0) * (x1 - x0) > BLOCK_SHARE * self.n:
+            return None
+        return int(y0), int(y1), int(x0), int(x1)
+
+    def _solve_block(self, pen, total, box) -> tuple[np.ndarray, float]:
+        """The solve on the block ``box`` of the lattice (its own FFTs, started from this
+        solver's last pressures there); the pressures on the whole lattice and ``dz``."""
+        y0, y1, x0, x1 = box
+        shape = (y1 - y0, x1 - x0)
+        sub = self._blocks.pop(shape, None)
+        if sub is None:
+            sub = Spectral(self.table[: shape[0], : shape[1]], self.tol, self.max_iter)
+        self._blocks[shape] = sub  # most recently used last
+        while len(self._blocks) > BLOCKS_KEPT:
+            del self._blocks[next(iter(self._blocks))]
+        pen_b = np.ascontiguousarray(pen.reshape(self.ny, self.nx)[y0:y1, x0:x1]).ravel()
+        sub.p = np.ascontiguousarray(self.p.reshape(self.ny, self.nx)[y0:y1, x0:x1]).ravel()
+        p_b = sub._solve(pen_b, total)
+        self.iterations = sub.iterations
+        p = np.zeros(self.n)
+        p.reshape(self.ny, self.nx)[y0:y1, x0:x1] = p_b.reshape(shape)
+        self.p = p
+        dz = 0.0 if total is None else _mean_gap(sub.apply(p_b), pen_b, p_b > 0)
+        return p.copy(), dz
 
     def _starts(self, ok: np.ndarray, pen: np.ndarray, total: float | None):
         """The first iterates, in the order they are tried: the last solve's pressures where
