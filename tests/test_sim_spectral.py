@@ -252,7 +252,8 @@ def test_a_pad_touching_a_patch_of_its_lattice_is_solved_on_that_block_alike(mon
     block, whole = Spectral(table), Spectral(table)
     monkeypatch.setattr(whole, "_box", lambda ok: None)
     shapes = set()
-    for step, (cx, r) in enumerate(zip(np.linspace(-6e-3, 5e-3, 9), np.linspace(2e-3, 4e-3, 9))):
+    path = zip(np.linspace(-6e-3, 5e-3, 9), np.linspace(2e-3, 4e-3, 9), strict=True)
+    for step, (cx, r) in enumerate(path):
         d2 = (xy[:, 0] - cx) ** 2 + (xy[:, 1] - 1e-3) ** 2
         pen = 2e-5 - d2 / (2 * 0.01) + 1e-6 * np.sin(3e3 * xy[:, 0])  # a sphere, R 10 mm
         pen[d2 > r * r] = -np.inf  # beyond the collider's margin
