@@ -16,6 +16,7 @@ from sim_tactile.sim.collide import (
     MujocoCollider,
     PrimitiveCollider,
     ProfileCollider,
+    interp_at,
     make_collider,
     penetration_map,
 )
@@ -149,6 +150,9 @@ def test_the_profile_collider_reads_the_height_map_at_each_node(plate, cache):
         qpos[sc.jz] = rng.uniform(-1.3e-3, -0.8e-3)
         got, want = np.empty(sc.n_nodes), np.empty(sc.n_nodes)
         near = col.depths_at(qpos, got)
+        plain = np.empty(sc.n_nodes)  # the compiled loop against its numpy reference
+        assert col.depths_numpy(qpos, plain) == near
+        assert got.tobytes() == plain.tobytes()
         x = col.bone0[0] + qpos[sc.jx] + col.local[:, 0]
         y = col.bone0[1] + col.local[:, 1]
         z = col.bone0[2] + qpos[sc.jz] + col.local[:, 2] - col.radius
@@ -256,3 +260,15 @@ def test_the_icub_slides_over_a_rough_plate_at_autos_fine_grid(cache):
     rec = simulate("textures20/rough-ra100", sensor, protocol=proto, ideal=True, cache=cache)
     assert "93 x 67 nodes" in rec.recording.meta["skin_problem"]
     assert rec.recording.data.max() > 0.01
+
+
+def test_interp_at_is_numpys_interp_bit_for_bit():
+    rng = np.random.default_rng(5)
+    xp = np.cumsum(rng.uniform(1e-6, 3e-6, 500))
+    fp = rng.normal(size=500) * 1e-5
+    fp[10] = fp[11]  # a flat piece
+    qs = np.concatenate([rng.uniform(xp[0] - 1e-4, xp[-1] + 1e-4, 2000), xp[[0, 7, -1]], [np.nan]])
+    for left, right in ((fp[0], fp[-1]), (0.0, 0.0), (-1.0, 2.0)):
+        got = np.array([interp_at(q, xp, fp, left, right) for q in qs])
+        want = np.interp(qs, xp, fp, left=left, right=right)
+        assert got.tobytes() == want.tobytes()

@@ -41,6 +41,7 @@ from ..scene.elastic import subsurface_weights
 from ..scene.layered import layered_subsurface_weights
 from ..scene.nodes import SkinGrid
 from ..sensors import Finger, Sensor, resolve_sensor
+from .collide import interp_at
 from .protocol import Protocol
 from .rig import ProbePass, ProbeRig
 from .simulate import SampleAverager, SimResult
@@ -358,28 +359,11 @@ def _check_rig_inputs(plate: Plate, sensor: Sensor, finger: Finger, protocol: Pr
 @numba.njit(cache=True)
 def _read_lines(xt, x, u, R, out):
     """``out[i] = np.interp(xt[i] - x, u, R[i], left=0, right=0)`` for every element, with
-    numpy's arithmetic (the same numbers bit for bit, tested), in one call: the slide's
-    steps had spent most of their time in 18 calls of ``np.interp`` each."""
-    n = u.size
+    numpy's arithmetic (:func:`~.collide.interp_at`; the same numbers bit for bit, tested),
+    in one call: the slide's steps had spent most of their time in 18 calls of
+    ``np.interp`` each."""
     for i in range(xt.size):
-        q = xt[i] - x
-        if np.isnan(q):
-            out[i] = q
-            continue
-        if q < u[0] or q > u[n - 1]:
-            out[i] = 0.0
-            continue
-        j = np.searchsorted(u, q, side="right") - 1
-        if j == n - 1 or u[j] == q:
-            out[i] = R[i, j]
-            continue
-        slope = (R[i, j + 1] - R[i, j]) / (u[j + 1] - u[j])
-        v = slope * (q - u[j]) + R[i, j]
-        if np.isnan(v):
-            v = slope * (q - u[j + 1]) + R[i, j + 1]
-            if np.isnan(v) and R[i, j] == R[i, j + 1]:
-                v = R[i, j]
-        out[i] = v
+        out[i] = interp_at(xt[i] - x, u, R[i], 0.0, 0.0)
 
 
 def _carry(m, jx, jz, pas, z_held, lines, layout, force_n, n_sub, n_samples):
