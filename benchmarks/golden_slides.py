@@ -96,11 +96,9 @@ def _path(meta: dict) -> list:
 
 def blas_core() -> str:
     """OpenBLAS's kernel in this process (``"unknown"`` when threadpoolctl cannot tell)."""
-    from threadpoolctl import threadpool_info
+    from sim_tactile.hashing import blas_kernel
 
-    cores = {i.get("architecture") for i in threadpool_info() if i.get("user_api") == "blas"}
-    cores.discard(None)
-    return "+".join(sorted(cores)) or "unknown"
+    return blas_kernel()
 
 
 def differences(got: dict, want: dict, core: str) -> list[str]:

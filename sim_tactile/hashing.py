@@ -145,6 +145,19 @@ def _library_version(dist: str) -> str:
         return "absent"
 
 
+@lru_cache(maxsize=1)
+def blas_kernel() -> str:
+    """The BLAS library's kernel in this process (OpenBLAS picks one by CPU: ``Haswell``,
+    ``SkylakeX``, ...; ``"unknown"`` when threadpoolctl cannot tell). Arrays a BLAS call
+    makes on one kernel differ from another's in their last bits, so what is cached on disk
+    from them is keyed by it."""
+    from threadpoolctl import threadpool_info
+
+    found = {i.get("architecture") for i in threadpool_info() if i.get("user_api") == "blas"}
+    found.discard(None)
+    return "+".join(sorted(found)) or "unknown"
+
+
 def file_digest(path: Path) -> str:
     """The sha256 of a file's bytes ("absent" when it does not exist)."""
     path = Path(path)

@@ -85,3 +85,19 @@ def test_a_worker_keeps_the_arrays_read_only_by_their_key_and_drops_the_oldest(t
     memo.put("3", (three, "c"))
     assert memo.get("2") is None and memo.get("1") is not None and len(memo) == 2
     assert memo.put("big", (np.zeros(1000),)) and memo.get("big") is None  # over the budget
+
+
+def test_arrays_cached_on_another_blas_kernel_are_not_served(tmp_path, monkeypatch):
+    """Another CPU's BLAS kernel computes the arrays bit-different in their last places: the
+    key holds the kernel, so a cache written there is not read here."""
+    from sim_tactile.hashing import blas_kernel
+
+    cache = ArtefactCache(tmp_path)
+    finger = get_sensor("grid3x3").finger
+    grid = skin_grid(finger, 0.45e-3)
+    assert blas_kernel() != ""
+    make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0, cache=cache)
+    monkeypatch.setattr(skin_module, "_MEMO", ArrayMemo(skin_module.MEMO_BYTES))
+    monkeypatch.setattr(skin_module, "blas_kernel", lambda: "AnotherCore")
+    make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0, cache=cache)
+    assert len(_files(cache)) == 2

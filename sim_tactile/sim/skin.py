@@ -41,7 +41,7 @@ import numpy as np
 
 from ..cache import SETUP, SETUP_MEMO_BYTES, setup_memo
 from ..errors import ConfigError
-from ..hashing import code_version, content_hash
+from ..hashing import blas_kernel, code_version, content_hash
 from ..scene.elastic import compliance_matrix, compliance_table
 from ..scene.layered import Stack, layered_compliance_matrix, layered_compliance_table
 from ..scene.nodes import SkinGrid
@@ -225,7 +225,9 @@ SKIN_LIBRARIES = ("numpy", "scipy")
 def _dense_key(grid: SkinGrid, finger: Finger, slide_dir, inverse: bool) -> str:
     """The content key of a coupled skin's dense arrays: the node grid (its centres
     whole), the finger (skin, stack, friction), the slide's direction, whether the inverse
-    is kept, and the code that computes them."""
+    is kept, the code that computes them, and the BLAS kernel they are computed on (another
+    CPU's kernel makes them bit-different in their last places: a slide that read them would
+    then match neither kernel's own, bit for bit)."""
     return content_hash(
         {
             "what": "dense skin compliance",
@@ -236,6 +238,7 @@ def _dense_key(grid: SkinGrid, finger: Finger, slide_dir, inverse: bool) -> str:
             "slide_dir": list(slide_dir),
             "inverse": inverse,
             "code": code_version(*SKIN_MODULES, libraries=SKIN_LIBRARIES),
+            "blas": blas_kernel(),
         }
     )
 
