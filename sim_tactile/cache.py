@@ -16,7 +16,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from .hashing import content_hash
+from .hashing import code_version, content_hash
 
 
 def default_root() -> Path:
@@ -111,7 +111,7 @@ class ArrayMemo:
 #: The set-up a worker keeps between slides (:func:`setup_memo`): a data set's worker makes
 #: tens of slides of one scene, and each had built again what depends only on the sensor,
 #: its skin and the grid (taxel weights, small compliance matrices and their inverses, the
-#: spectral kernel, the rig's reading kernels): 55-70% of a short slide's time.
+#: spectral kernel, the mirror-halved skin): about half of a roughness8 slide's time.
 SETUP_MEMO_BYTES = 512 * 2**20
 SETUP = ArrayMemo(SETUP_MEMO_BYTES)
 
@@ -134,8 +134,6 @@ def setup_memo(what: str, parts: dict, compute, modules: tuple[str, ...]) -> tup
     and the source of ``modules`` (and what they import) with numpy's and scipy's versions:
     the key holds everything the value depends on, so it is never stale. The value is the
     computed one, its arrays read-only (tested: slides equal bit for bit either way)."""
-    from .hashing import code_version
-
     key = content_hash(
         {
             "what": what,
