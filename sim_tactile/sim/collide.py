@@ -4,27 +4,28 @@ A collider answers one question, :meth:`depths_at`: with the finger's joints at 
 deep is each skin node in the plate (``-inf`` where no plate geom lies within the node's
 margin), and is any node that close. :func:`make_collider` chooses one, in one place:
 
-- :class:`PrimitiveCollider`: a compiled narrow phase for plates made of boxes and spheres.
+- :class:`PrimitiveCollider`: a compiled narrow phase for plates of features: boxes,
+  spherical caps, upright cylinders and drafted ridges (which MuJoCo holds as convex meshes).
   MuJoCo's collider (``mj_kinematics`` + ``mj_collision``) costs about 60 us a step for a
   few hundred skin nodes, a third of a whole L1 step, although the plate never moves and
   every node is a sphere on the one bone; this computes the same map in one numba loop (the
-  signed distance of each probe sphere to each plate box, in the box's frame, and sphere; the
-  deepest per node). Over an upright box's footprint a node's depth is the depth below the
-  box's top face, as the plate's height map (and the skin model, and the reference it is
-  measured against) has it: MuJoCo measures a node inside a box to its nearest face, so a
+  signed distance of each probe sphere to each plate geom in its frame; the deepest per
+  node). Over an upright geom's footprint, below its top surface, a node's depth is the depth
+  below that surface, as the plate's height map (and the skin model, and the reference it is
+  measured against) has it: MuJoCo measures a node inside a solid to its nearest face, so a
   node that a slide carries into a box's side, deeper than half the box is wide, reads a
   depth that falls as the pad sinks, and the held force then let the pad pass through the
-  box onto the base (finger7/bumps-4x4 at 0.5 mm nodes read as flat). Tested equal to
-  MuJoCo's map everywhere else, on every plate it accepts, at random poses.
-- :class:`ProfileCollider`: a roughness plate (a profile z(x) across the textured area, on
-  its base): each node's depth below the plate's height map at its centre, in one numba
-  loop (numpy's interpolation, bit for bit).
-  MuJoCo's height-field collider returned about four contacts per node (26 160 for the iCub's
-  6231 nodes on rough-ra100) and filled its contact buffer there, which stopped the slide;
-  and it measured each sphere's distance to the nearest facet, where the skin model and the
-  reference it is measured against take the height map's depth.
+  box onto the base (finger7/bumps-4x4 at 0.5 mm nodes read as flat). Elsewhere tested equal
+  to MuJoCo's map at random poses on every plate kind: bit for bit on boxes and caps, within
+  1e-15 m on cylinders, and within 1e-6 m on drafted ridges, where MuJoCo's mesh penetration
+  is the approximate one (measured 4.5e-7 m off; ours equals a brute-force distance).
+- :class:`~.height_collider.ProfileCollider`: a roughness plate (a profile z(x) across the
+  textured area, on its base): each node's depth below the plate's height map at its centre,
+  in one numba loop (numpy's interpolation, bit for bit).
 - :class:`MujocoCollider`: MuJoCo's own collider on the scene's collision model, for any
-  geometry (meshes of drafted ridges, cylinders, height fields): the reference.
+  geometry: the reference the tests compare the others with, and the collider of a plate
+  neither of them takes (a mesh that is not a drafted ridge of the plate's features, a
+  rotated plate). No preset plate steps it.
 """
 
 from __future__ import annotations
@@ -36,9 +37,14 @@ import numba
 import numpy as np
 
 from ..plates import features
+from .height_collider import ProfileCollider, report_depth
 
 _BOX = int(mujoco.mjtGeom.mjGEOM_BOX)
 _SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
+_CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
+#: a drafted ridge (MuJoCo holds it as a convex mesh): a box whose x-walls slope in from
+#: ``size[0]`` at its bottom to ``top[g]`` at its top
+_PRISM = int(mujoco.mjtGeom.mjGEOM_MESH)
 
 
 @numba.njit(cache=True)
@@ -102,26 +108,23 @@ class MujocoCollider:
 #: the plate are reported, so they can join the contact when the pad sinks; a step that would
 #: move the pad further than this is re-collided at the new height.
 QS_MARGIN_M = 0.5e-3
-#: The margin where MuJoCo's collider serves (meshes, cylinders) and on roughness plates: each
-#: node within it is a contact MuJoCo must generate, which on a height field filled the
-#: contact buffer at 0.5 mm; a step that sinks further is re-collided. The roughness plates
-#: keep it under the profile collider (their slides unchanged but for the depths).
+#: The margin on roughness plates: the profile collider keeps the one MuJoCo's height-field
+#: collider had there (each node within it was a contact MuJoCo generated, which filled its
+#: contact buffer at 0.5 mm), so that their slides stayed unchanged but for the depths; a
+#: step that sinks further is re-collided.
 QS_MARGIN_MUJOCO_M = 0.1e-3
 
 
 def node_margin_m(plate) -> float:
     """The skin nodes' collider margin for a held force on ``plate``: wide where the compiled
-    collider serves (boxes and spherical caps; it costs nothing there), narrow where MuJoCo
-    collides."""
+    collider serves (every plate of features; it costs nothing there), narrow on roughness."""
     if plate.texture.kind == "roughness":
         return QS_MARGIN_MUJOCO_M
-    if all(f.kind in ("box", "cap") for f in features(plate)):
-        return QS_MARGIN_M
-    return QS_MARGIN_MUJOCO_M
+    return QS_MARGIN_M
 
 
 def make_collider(scene, primitive: bool = True):
-    """The compiled collider where the plate allows it, the profile collider on a roughness
+    """The compiled collider on a plate of features, the profile collider on a roughness
     plate (both where ``primitive`` is set), else MuJoCo's. The bone must be at its starting
     pose (its world position is read here)."""
     if primitive:
@@ -133,152 +136,26 @@ def make_collider(scene, primitive: bool = True):
     return MujocoCollider(scene)
 
 
-class ProfileCollider:
-    """Depths of the skin's probe spheres below a roughness plate's height map: its profile
-    z(x) (:func:`~sim_tactile.plates.roughness_profile`, linear between samples) over the
-    textured area, the base (z = 0) elsewhere on the plate, nothing off it. A node's depth is
-    the surface height at its centre less its lowest point, and it is reported (else -inf)
-    within its margin, as MuJoCo reports a contact: what
-    :func:`~sim_tactile.plates.height_at` gives, without its per-call set-up (tested equal)."""
-
-    compiled = False
-
-    def __init__(self, local, radius, margin, plate) -> None:
-        from ..plates import roughness_profile
-
-        self.local, self.radius, self.margin = local, radius, margin
-        self.px, self.pz = roughness_profile(plate)
-        self.area = (plate.area_length_m / 2, plate.area_width_m / 2)
-        self.size = (plate.length_m / 2, plate.width_m / 2)
-        self._x = np.empty(len(local))
-        self._y = np.empty(len(local))
-        self._z = np.empty(len(local))
-
-    @classmethod
-    def from_scene(cls, scene) -> ProfileCollider | None:
-        """The collider of a scene whose plate is a roughness plate, bound to the finger's
-        joints (as :meth:`PrimitiveCollider.from_scene`), or None."""
-        if scene.plate.texture.kind != "roughness":
-            return None
-        m = scene.m_col
-        bone = m.body("bone").id
-        nodes = np.flatnonzero(scene.node_of_geom >= 0)
-        nodes = nodes[np.argsort(scene.node_of_geom[nodes])]
-        if not np.allclose(m.geom_quat[nodes], [1, 0, 0, 0]) or not np.allclose(
-            m.body_quat[bone], [1, 0, 0, 0]
-        ):
-            return None
-        c = cls(
-            m.geom_pos[nodes].copy(),
-            m.geom_size[nodes, 0].copy(),
-            m.geom_margin[nodes].copy(),
-            scene.plate,
-        )
-        c.bone0 = np.array(m.body_pos[bone], dtype=np.float64)
-        c.jx, c.jz = int(scene.jx), int(scene.jz)
-        return c
-
-    def heights(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """The plate's surface height [m] at (x, y); NaN off the plate."""
-        inside = (np.abs(x) <= self.area[0]) & (np.abs(y) <= self.area[1])
-        z = np.where(inside, np.interp(x, self.px, self.pz), 0.0)
-        off = (np.abs(x) > self.size[0]) | (np.abs(y) > self.size[1])
-        return np.where(off, np.nan, z)
-
-    def depths_at(self, qpos: np.ndarray, pen: np.ndarray) -> bool:
-        """Fill ``pen`` with each node's depth [m] for the joints at ``qpos``; whether any
-        node is within its margin of the plate. One compiled loop, the same numbers as
-        :meth:`depths_numpy` bit for bit (tested)."""
-        return _profile_depths(
-            self.bone0[0] + qpos[self.jx],
-            self.bone0[1],
-            self.bone0[2] + qpos[self.jz],
-            self.local,
-            self.radius,
-            self.margin,
-            self.px,
-            self.pz,
-            self.area[0],
-            self.area[1],
-            self.size[0],
-            self.size[1],
-            pen,
-        )
-
-    def depths_numpy(self, qpos: np.ndarray, pen: np.ndarray) -> bool:
-        """:meth:`depths_at` in numpy: the reference of the compiled loop."""
-        np.add(self.bone0[0] + qpos[self.jx], self.local[:, 0], out=self._x)
-        np.add(self.bone0[1], self.local[:, 1], out=self._y)
-        np.add(self.bone0[2] + qpos[self.jz], self.local[:, 2], out=self._z)
-        d = self.heights(self._x, self._y) - (self._z - self.radius)
-        near = d >= -self.margin  # NaN (off the plate) is not near
-        pen[:] = np.where(near, d, -np.inf)
-        return bool(near.any())
-
-    def warnings(self) -> list[str]:
-        return []
-
-
-@numba.njit(cache=True)
-def interp_at(q, xp, fp, left, right):
-    """``np.interp(q, xp, fp, left, right)`` at one point, with numpy's arithmetic (the same
-    number bit for bit, tested): the knot found by bisection, the slope between its
-    neighbours, and numpy's care for exact knots and non-finite slopes."""
-    n = xp.size
-    if np.isnan(q):
-        return q
-    if q < xp[0]:
-        return left
-    if q > xp[n - 1]:
-        return right
-    j = np.searchsorted(xp, q, side="right") - 1
-    if j == n - 1 or xp[j] == q:
-        return fp[j]
-    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
-    v = slope * (q - xp[j]) + fp[j]
-    if np.isnan(v):
-        v = slope * (q - xp[j + 1]) + fp[j + 1]
-        if np.isnan(v) and fp[j] == fp[j + 1]:
-            v = fp[j]
-    return v
-
-
-@numba.njit(cache=True)
-def _profile_depths(x0, y0, z0, local, radius, margin, px, pz, ax, ay, sx, sy, pen):
-    """:meth:`ProfileCollider.depths_numpy` in one loop: each node's height-map depth within
-    its margin (the profile over the textured area ``|x| <= ax, |y| <= ay``, the base
-    elsewhere on the plate, nothing beyond ``sx, sy``), else -inf; whether any is near."""
-    near = False
-    for i in range(local.shape[0]):
-        x = x0 + local[i, 0]
-        y = y0 + local[i, 1]
-        z = z0 + local[i, 2]
-        if abs(x) > sx or abs(y) > sy:
-            pen[i] = -np.inf
-            continue
-        h = 0.0
-        if abs(x) <= ax and abs(y) <= ay:
-            h = interp_at(x, px, pz, pz[0], pz[pz.size - 1])
-        d = h - (z - radius[i])
-        if d >= -margin[i]:
-            pen[i] = d
-            near = True
-        else:
-            pen[i] = -np.inf
-    return near
-
-
 class PrimitiveCollider:
-    """Penetration depths of the skin's probe spheres against a static plate of boxes and
-    spheres. Built once per scene from the compiled collision model."""
+    """Penetration depths of the skin's probe spheres against a static plate of boxes,
+    spheres, upright cylinders and drafted ridges. Built once per scene from the compiled
+    collision model (and the plate's features, for the ridges MuJoCo holds as meshes).
+
+    A node's depth is its sphere's signed distance to the nearest plate geom, exact (tested
+    against MuJoCo's collider), but where its centre lies over an upright geom's footprint and
+    below that geom's top surface: there it is the depth below the top surface at the centre,
+    as the plate's height map has it (:func:`~sim_tactile.plates.height_at`), which the skin
+    model and the references it is measured against take."""
 
     compiled = True
 
-    def __init__(self, local, radius, margin, kind, pos, mat, size):
+    def __init__(self, local, radius, margin, kind, pos, mat, size, top=None):
         self.local = local  # (N, 3) node centres in the bone's frame
         self.radius = radius  # (N,)
         self.margin = margin  # (N,) node geom margins
         self.kind, self.pos, self.mat, self.size = kind, pos, mat, size
+        # a drafted ridge's top half-width (its kind _PRISM); unused by the other kinds
+        self.top = np.zeros(len(kind)) if top is None else np.asarray(top, dtype=np.float64)
         # broad phase: a grid of x-y cells, each listing the geoms whose footprint (grown by
         # the largest probe's reach) overlaps it
         reach = float((radius + margin).max()) if len(radius) else 0.0
@@ -308,6 +185,7 @@ class PrimitiveCollider:
             self.pos,
             self.mat,
             self.size,
+            self.top,
             self.origin,
             self.cell,
             self.shape,
@@ -317,10 +195,12 @@ class PrimitiveCollider:
 
     @classmethod
     def from_model(
-        cls, m: mujoco.MjModel, node_of_geom: np.ndarray, bone_body: int
+        cls, m: mujoco.MjModel, node_of_geom: np.ndarray, bone_body: int, plate=None
     ) -> PrimitiveCollider | None:
-        """The collider for ``m``'s plate, or None if the plate has a geom that is not a box
-        or sphere, or the skin nodes are not spheres fixed on an unrotated bone."""
+        """The collider for ``m``'s plate, or None if the plate has a geom that is not a box,
+        sphere or cylinder (or, given the ``plate`` whose features the model was built from, a
+        mesh that is one of its drafted ridges), or the skin nodes are not spheres fixed on an
+        unrotated bone."""
         nodes = np.flatnonzero(node_of_geom >= 0)
         order = np.argsort(node_of_geom[nodes])
         nodes = nodes[order]
@@ -334,30 +214,44 @@ class PrimitiveCollider:
         ):
             return None
         node_bits = int(np.bitwise_or.reduce(m.geom_contype[nodes]))
-        plate = [
+        plate_geoms = [
             g
             for g in range(m.ngeom)
             if node_of_geom[g] < 0
             and m.geom_bodyid[g] != bone_body
             and (int(m.geom_conaffinity[g]) & node_bits)
         ]
-        if any(m.geom_type[g] not in (_BOX, _SPHERE) for g in plate):
-            return None
         if any(
-            m.body_mocapid[m.geom_bodyid[g]] >= 0 or m.body_dofnum[m.geom_bodyid[g]] for g in plate
+            m.body_mocapid[m.geom_bodyid[g]] >= 0 or m.body_dofnum[m.geom_bodyid[g]]
+            for g in plate_geoms
         ):
             return None  # the plate must be static
         d = mujoco.MjData(m)
         mujoco.mj_kinematics(m, d)
-        idx = np.array(plate, dtype=np.int64)
+        n = len(plate_geoms)
+        kind = np.empty(n, dtype=np.int64)
+        pos, mat = np.empty((n, 3)), np.empty((n, 3, 3))
+        size, top = np.empty((n, 3)), np.zeros(n)
+        for k, g in enumerate(plate_geoms):
+            t = int(m.geom_type[g])
+            if t in (_BOX, _SPHERE, _CYLINDER):
+                kind[k], pos[k], size[k] = t, d.geom_xpos[g], m.geom_size[g]
+                mat[k] = d.geom_xmat[g].reshape(3, 3)
+                continue
+            ridge = _drafted_ridge(m, d, g, plate) if t == _PRISM else None
+            if ridge is None:
+                return None
+            kind[k], top[k] = _PRISM, ridge[3]
+            pos[k], mat[k], size[k] = ridge[0], ridge[1], ridge[2]
         return cls(
             local=m.geom_pos[nodes].copy(),
             radius=m.geom_size[nodes, 0].copy(),
             margin=m.geom_margin[nodes].copy(),
-            kind=m.geom_type[idx].astype(np.int64),
-            pos=d.geom_xpos[idx].copy(),
-            mat=d.geom_xmat[idx].reshape(-1, 3, 3).copy(),
-            size=m.geom_size[idx].copy(),
+            kind=kind,
+            pos=pos,
+            mat=mat,
+            size=size,
+            top=top,
         )
 
     @classmethod
@@ -366,7 +260,7 @@ class PrimitiveCollider:
         that :meth:`depths_at` reads the bone's pose from ``qpos``."""
         m = scene.m_col
         bone = m.body("bone").id
-        c = cls.from_model(m, scene.node_of_geom, bone)
+        c = cls.from_model(m, scene.node_of_geom, bone, scene.plate)
         if c is not None:
             c.bind(m.body_pos[bone], scene.jx, scene.jz)
         return c
@@ -389,11 +283,11 @@ class PrimitiveCollider:
 
     def y_invariant(self, bone_y: float) -> bool:
         """Whether every node's depth is independent of its y for the bone at ``bone_y``: all
-        plate geoms are unrotated boxes that reach past every node in y by more than their
-        smaller half-extent in x or z. Then a node's signed distance to each box does not
-        involve its y at all (the y-term is neither the largest inside nor nonzero outside),
-        so nodes with equal x, z, radius and margin get bit-identical depths."""
-        if not len(self.kind) or not (self.kind == _BOX).all():
+        plate geoms are unrotated boxes or drafted ridges that reach past every node in y by
+        more than their smaller half-extent in x or z. Then a node's signed distance to each
+        does not involve its y at all (the y-term is neither the largest inside nor nonzero
+        outside), so nodes with equal x, z, radius and margin get bit-identical depths."""
+        if not len(self.kind) or not np.isin(self.kind, (_BOX, _PRISM)).all():
             return False
         if not (self.mat == np.eye(3)).all():
             return False
@@ -414,6 +308,7 @@ class PrimitiveCollider:
             self.pos,
             self.mat,
             self.size,
+            self.top,
         )
 
     def depths(self, bone_pos: np.ndarray, pen: np.ndarray) -> bool:
@@ -429,14 +324,87 @@ def _half_extents(kind: np.ndarray, mat: np.ndarray, size: np.ndarray) -> np.nda
     for g in range(len(kind)):
         if kind[g] == _SPHERE:
             out[g] = size[g, 0]
+        elif kind[g] == _CYLINDER:
+            r, hz = size[g, 0], size[g, 1]
+            out[g] = np.abs(mat[g]) @ np.array([r, r, hz])
         else:
             out[g] = np.abs(mat[g]) @ size[g]
     return out
 
 
+def _drafted_ridge(m: mujoco.MjModel, d: mujoco.MjData, g: int, plate):
+    """A mesh geom that is one of ``plate``'s drafted ridges (by its name ``fNNNN``, as
+    :func:`~sim_tactile.plates.mjcf.plate_spec` names it) as ``(pos, mat, size, top)``: its
+    mid-height centre in the world, the plate body's frame (unrotated), its bottom half-widths
+    and half-height, its top half-width. None if it is not one, or the plate is rotated."""
+    name = m.geom(g).name
+    if plate is None or not (len(name) == 5 and name[0] == "f" and name[1:].isdigit()):
+        return None
+    fs = features(plate)
+    i = int(name[1:])
+    if i >= len(fs) or fs[i].kind != "prism":
+        return None
+    body = int(m.geom_bodyid[g])
+    xmat = d.xmat[body].reshape(3, 3)
+    if not (xmat == np.eye(3)).all():
+        return None
+    f = fs[i]
+    pos = d.xpos[body] + np.array([f.x, f.y, f.height_m / 2])
+    return pos, xmat.copy(), np.array([f.hx, f.hy, f.height_m / 2]), float(f.top_hx)
+
+
+@numba.njit(cache=True)
+def _segment_distance(u, v, ax, az, bx, bz):
+    """Distance from (u, v) to the segment from (ax, az) to (bx, bz)."""
+    ex, ez = bx - ax, bz - az
+    t = ((u - ax) * ex + (v - az) * ez) / (ex * ex + ez * ez)
+    t = min(max(t, 0.0), 1.0)
+    px, pz = u - ax - t * ex, v - az - t * ez
+    return math.sqrt(px * px + pz * pz)
+
+
+@numba.njit(cache=True)
+def _ridge_distance(lx, ly, lz, hx, hy, hz, tx):
+    """Signed distance from (lx, ly, lz) to a drafted ridge in its frame (centred at
+    mid-height; its cross-section in x-z a trapezoid from half-width ``hx`` at ``lz = -hz`` to
+    ``tx`` at ``lz = hz``, extruded over ``|ly| <= hy``), except over its footprint below its
+    top surface, where it is the (negative) height above that surface: the height map's depth."""
+    u = abs(lx)
+    # the top surface's height over the footprint at u
+    s = hz if u <= tx else hz - 2.0 * hz * (u - tx) / (hx - tx)
+    if u <= hx and abs(ly) <= hy and lz <= s:
+        return lz - s
+    # the cross-section's signed distance: its three edges on the u >= 0 side
+    db = math.sqrt(max(u - hx, 0.0) ** 2 + (lz + hz) ** 2)
+    dt = math.sqrt(max(u - tx, 0.0) ** 2 + (lz - hz) ** 2)
+    ds = _segment_distance(u, lz, hx, -hz, tx, hz)
+    d2 = min(db, dt, ds)
+    if abs(lz) <= hz and u <= hx + (tx - hx) * (lz + hz) / (2.0 * hz):
+        d2 = -d2
+    # extruded along y
+    wy = abs(ly) - hy
+    inside = min(max(d2, wy), 0.0)
+    ox, oy = max(d2, 0.0), max(wy, 0.0)
+    return inside + math.sqrt(ox * ox + oy * oy)
+
+
+@numba.njit(cache=True)
+def _cylinder_distance(lx, ly, lz, radius, hz, upright):
+    """Signed distance from (lx, ly, lz) to a cylinder in its frame (axis z, half-height
+    ``hz``), but over an upright one's footprint the height above its top face."""
+    qr = math.sqrt(lx * lx + ly * ly) - radius
+    if qr <= 0.0 and upright:
+        return lz - hz
+    qz = abs(lz) - hz
+    if qr > 0.0 or qz > 0.0:
+        ox, oz = max(qr, 0.0), max(qz, 0.0)
+        return math.sqrt(ox * ox + oz * oz)
+    return max(qr, qz)
+
+
 @numba.njit(cache=True)
 def depths_kernel(
-    bone, local, radius, margin, kind, pos, mat, size, origin, cell, shape, start, items, pen
+    bone, local, radius, margin, kind, pos, mat, size, top, origin, cell, shape, start, items, pen
 ):
     n = local.shape[0]
     near = False
@@ -459,6 +427,16 @@ def depths_kernel(
             dz = cz - pos[g, 2]
             if kind[g] == _SPHERE:
                 dist = math.sqrt(dx * dx + dy * dy + dz * dz) - size[g, 0] - r
+            elif kind[g] == _CYLINDER or kind[g] == _PRISM:
+                lx = mat[g, 0, 0] * dx + mat[g, 1, 0] * dy + mat[g, 2, 0] * dz
+                ly = mat[g, 0, 1] * dx + mat[g, 1, 1] * dy + mat[g, 2, 1] * dz
+                lz = mat[g, 0, 2] * dx + mat[g, 1, 2] * dy + mat[g, 2, 2] * dz
+                if kind[g] == _PRISM:
+                    dist = _ridge_distance(lx, ly, lz, size[g, 0], size[g, 1], size[g, 2], top[g])
+                else:
+                    upright = abs(mat[g, 2, 2] - 1.0) < 1e-12
+                    dist = _cylinder_distance(lx, ly, lz, size[g, 0], size[g, 1], upright)
+                dist -= r
             else:  # box: the centre in the box's frame, then the box's signed distance
                 lz = mat[g, 0, 2] * dx + mat[g, 1, 2] * dy + mat[g, 2, 2] * dz
                 qx = abs(mat[g, 0, 0] * dx + mat[g, 1, 0] * dy + mat[g, 2, 0] * dz) - size[g, 0]
@@ -484,9 +462,5 @@ def depths_kernel(
                         dist = inside - r
             if -dist > best:
                 best = -dist
-        if best >= -margin[i]:
-            pen[i] = best
-            near = True
-        else:
-            pen[i] = -np.inf
+        near |= report_depth(pen, i, best, margin[i])
     return near

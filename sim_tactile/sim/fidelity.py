@@ -448,9 +448,10 @@ def steps_per_sample(rate_hz: float, dt_s: float) -> int:
 def _varies_along_x_only(plate: Plate, finger) -> bool:
     """Whether the plate's features are box ridges along y across the whole textured width and
     the pad is flat: then the load under the pad varies along the slide only, but for the
-    pad's own edges. Drafted ridges (convex meshes) are left out: MuJoCo's mesh collider lost
-    them against the small probe spheres of 0.4 mm wide nodes (multilayer3/grating-9 gave a
-    flat signal), so they keep square nodes."""
+    pad's own edges. Drafted ridges are left out and keep square nodes: MuJoCo's mesh
+    collider, which collided them until the compiled collider took them, lost them against
+    the small probe spheres of 0.4 mm wide nodes (multilayer3/grating-9 gave a flat signal),
+    and their measured errors are of square grids."""
     if getattr(finger, "shape", None) != "flat":
         return False
     fs = features(plate)

@@ -41,7 +41,7 @@ from ..scene.elastic import subsurface_weights
 from ..scene.layered import layered_subsurface_weights
 from ..scene.nodes import SkinGrid
 from ..sensors import Finger, Sensor, resolve_sensor
-from .collide import interp_at
+from .height_collider import interp_at
 from .protocol import Protocol
 from .rig import ProbePass, ProbeRig
 from .simulate import SampleAverager, SimResult
@@ -359,7 +359,7 @@ def _check_rig_inputs(plate: Plate, sensor: Sensor, finger: Finger, protocol: Pr
 @numba.njit(cache=True)
 def _read_lines(xt, x, u, R, out):
     """``out[i] = np.interp(xt[i] - x, u, R[i], left=0, right=0)`` for every element, with
-    numpy's arithmetic (:func:`~.collide.interp_at`; the same numbers bit for bit, tested),
+    numpy's arithmetic (:func:`~.height_collider.interp_at`; the same numbers bit for bit, tested),
     in one call: the slide's steps had spent most of their time in 18 calls of
     ``np.interp`` each."""
     for i in range(xt.size):

@@ -38,7 +38,7 @@ _STIFFNESS_CHECK_STEPS = 50
 class StepOptions:
     """Which implementation of each part of a step runs (all fast by default).
 
-    primitive_collider: the compiled collider where the plate is made of boxes and spheres
+    primitive_collider: the compiled collider where the plate is made of features
         (else MuJoCo's collider, the reference);
     compiled_hold: the held step as one compiled call where the compiled collider serves
         (else the plain loop, the reference);
@@ -106,11 +106,11 @@ class Runner:
         self.n_slide_steps = 0
         self.max_pen_allowed = finger.thickness_m
         # The pad's lowest point starts at z0 (qpos 0); the plate's base surface is at 0. Where
-        # MuJoCo collides (meshes, cylinders, height fields), a node pressed into a feature
-        # narrower than the skin is thick, or deeper than half the base box, is measured to the
-        # nearest other face, so its depth is no longer read right (the compiled collider reads
-        # boxes as the height map does); the pad's own depth below the base is checked against
-        # both limits.
+        # MuJoCo collides (a plate neither compiled collider takes), a node pressed into a
+        # feature narrower than the skin is thick, or deeper than half the base box, is
+        # measured to the nearest other face, so its depth is no longer read right (the
+        # compiled colliders read the height map); the pad's own depth below the base is
+        # checked against both limits.
         self.z0 = z0_m
         self.max_depth = finger.thickness_m
         self.depth_limit = "the skin thickness"
