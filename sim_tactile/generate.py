@@ -80,7 +80,7 @@ def resolve(target: str, *, quick: bool, seed: int | None, data=None, log=None, 
     path = Path(target)
     if path.suffix.lower() in (".toml", ".json") or path.is_file():
         cfg = load_config(path)
-        ss, file_seed, name = config_slide_set(cfg, f"configuration file {path}")
+        ss, file_seed, name = config_slide_set(cfg, f"configuration file {path}", path.parent)
         if cal is not None:
             if ss.sensor != cal.sensor:
                 raise ConfigError(

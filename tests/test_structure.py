@@ -90,3 +90,23 @@ def test_functions_are_short():
                 if n > MAX_FUNCTION_LINES:
                     long.append(f"{p.relative_to(ROOT)}::{node.name} ({n} lines)")
     assert long == []
+
+
+def test_every_package_is_installed():
+    """pyproject.toml lists the packages (the top-level assets/ installs as
+    sim_tactile.assets): every package of the source tree must be among them, or a wheel
+    would leave it out."""
+    import tomllib
+
+    listed = set(
+        tomllib.loads((ROOT.parent / "pyproject.toml").read_text())["tool"]["setuptools"][
+            "packages"
+        ]
+    )
+    found = {
+        ".".join(p.relative_to(ROOT.parent).parent.parts)
+        for p in ROOT.rglob("__init__.py")
+        if "__pycache__" not in p.parts
+    }
+    assert found - listed == set()
+    assert "sim_tactile.assets" in listed and (ROOT.parent / "assets" / "__init__.py").is_file()

@@ -30,11 +30,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     )
     sensor = args.sensor
     if args.sensor_config is not None:
-        from ..sensors import get_sensor
+        from ..sensors import resolve_sensor
         from ..sensors.calibration import calibrated, load_calibration
 
         cal = load_calibration(args.sensor_config)
-        sensor = calibrated(get_sensor(args.sensor or cal.sensor), cal)
+        sensor = calibrated(resolve_sensor(args.sensor or cal.sensor), cal)
     res = simulate(
         args.plate,
         sensor or "grid3x3",
@@ -172,8 +172,8 @@ def _add_simulate(sub) -> None:
     sm.add_argument(
         "--sensor",
         default=None,
-        help="sensor: grid3x3 (default), multilayer3x3x2, biotac19, icub60, pvdf2, or a bare "
-        "layout dense-<pitch>mm",
+        help="sensor: grid3x3 (default), multilayer3x3x2, biotac19, icub60, pvdf2, a sensor "
+        "file (.toml: copy one of assets/sensors), or a bare layout dense-<pitch>mm",
     )
     sm.add_argument(
         "--sensor-config",

@@ -25,6 +25,7 @@ from pathlib import Path
 
 from .. import _validate as v
 from ..errors import ConfigError
+from ..toml_text import value as toml_value
 
 #: The file format's version (a reader refuses others).
 FORMAT = 1
@@ -142,7 +143,7 @@ class Calibration:
         for k, x in self.to_json().items():
             if x is None or (k.startswith("readout_") and self.readout_period == 1):
                 continue
-            lines.append(f"{k} = {_toml(x)}")
+            lines.append(f"{k} = {toml_value(x)}")
         return "\n".join(lines) + "\n"
 
     def write(self, path: Path | str) -> Path:
@@ -154,20 +155,6 @@ class Calibration:
         tmp.write_text(self.to_toml(), encoding="utf-8")
         tmp.replace(path)
         return path
-
-
-def _toml(x) -> str:
-    if isinstance(x, bool):
-        return "true" if x else "false"
-    if isinstance(x, str):
-        return '"' + x.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(x, int):
-        return str(x)
-    if isinstance(x, float):
-        return repr(float(x))
-    if isinstance(x, list):
-        return "[" + ", ".join(_toml(y) for y in x) + "]"
-    raise ConfigError(f"cannot write {x!r} to a calibration file")
 
 
 def load_calibration(path: Path | str) -> Calibration:

@@ -5,7 +5,8 @@
     name = "my-set"              # optional, a label
     seed = 0                     # integer >= 0
     plates = ["finger7/flat", "finger7/ridges-2"]   # >= 2 preset plates (the classes)
-    sensor = "grid3x3"           # a sensor (its layout, rate, transducer and pad)
+    sensor = "grid3x3"           # a sensor (its layout, rate, transducer and pad): a preset's
+                                 # name or a sensor file ("my4x4.toml", relative to this file)
     slides_per_plate = 100       # [2, 100000]
     quick_slides_per_plate = 2   # optional: the slides per plate under --quick
     fidelity = "auto"            # auto, L0, L1, L2
@@ -45,6 +46,7 @@ from .. import _validate as v
 from ..errors import ConfigError
 from ..plates import preset_names
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
+from ..sensors.files import load_sensor_file
 from ..sim.fidelity import FIDELITIES
 from ..sim.protocol import Protocol
 from ..sim.rig import ProbeRig
@@ -55,7 +57,7 @@ TOP_KEYS = {
     "name": "a label",
     "seed": "integer >= 0",
     "plates": "list of >= 2 preset plate names",
-    "sensor": "sensor name",
+    "sensor": "sensor name, or a sensor file (.toml)",
     "slides_per_plate": f"integer in [{SLIDES_RANGE[0]}, {SLIDES_RANGE[1]}]",
     "quick_slides_per_plate": "integer in [2, slides_per_plate]",
     "fidelity": ", ".join(FIDELITIES),
@@ -88,16 +90,19 @@ def load_config(path: str | Path) -> dict:
     return cfg
 
 
-def config_slide_set(cfg: dict, where: str = "configuration") -> tuple[SlideSet, int, str]:
+def config_slide_set(
+    cfg: dict, where: str = "configuration", base_dir: Path | None = None
+) -> tuple[SlideSet, int, str]:
     """Validate a configuration (from :func:`load_config`) and build its slide set; returns
-    ``(slide_set, seed, name)``. Every error names the parameter and its valid values."""
+    ``(slide_set, seed, name)``. Every error names the parameter and its valid values. Files
+    it names (a sensor file) are found relative to ``base_dir`` (the file's folder)."""
     try:
-        return _slide_set(cfg)
+        return _slide_set(cfg, base_dir)
     except ConfigError as exc:
         raise ConfigError(f"{where}: {exc}") from None
 
 
-def _slide_set(cfg: dict) -> tuple[SlideSet, int, str]:
+def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
     unknown = sorted(set(cfg) - set(TOP_KEYS))
     if unknown:
         raise ConfigError(
@@ -115,7 +120,7 @@ def _slide_set(cfg: dict) -> tuple[SlideSet, int, str]:
     bad = [p for p in plates if p not in preset_names()]
     if bad:
         raise ConfigError(f"plate {bad[0]!r} is not a preset; valid: {', '.join(preset_names())}")
-    sensor = v.one_of("sensor", cfg["sensor"], sensor_names())
+    sensor, spec = _sensor(cfg["sensor"], base_dir)
     name = cfg.get("name", "")
     if not isinstance(name, str):
         raise ConfigError(f"name must be a string, got {name!r}")
@@ -129,11 +134,17 @@ def _slide_set(cfg: dict) -> tuple[SlideSet, int, str]:
     paper_stack = cfg.get("paper_stack", False)
     if not isinstance(paper_stack, bool):
         raise ConfigError(f"paper_stack must be true or false, got {paper_stack!r}")
-    finger = _finger(_table(cfg, "finger"), sensor)
+    base = spec if spec is not None else get_sensor(sensor)
+    finger = _finger(_table(cfg, "finger"), base)
     if paper_stack:
+        if spec is not None:
+            raise ConfigError(
+                "paper_stack = true takes a preset sensor's paper stack; a sensor file "
+                "gives its own ([pad.stack])"
+            )
         if finger is not None:
             raise ConfigError("paper_stack = true and [finger] both set the skin; give one")
-        finger = get_sensor(sensor).with_paper_stack().finger
+        finger = base.with_paper_stack().finger
     rig = None
     if "rig" in cfg:
         try:
@@ -150,8 +161,21 @@ def _slide_set(cfg: dict) -> tuple[SlideSet, int, str]:
         ideal=ideal,
         finger=finger,
         rig=rig,
+        sensor_spec=spec,
     )
     return ss, seed, name
+
+
+def _sensor(value, base_dir: Path | None):
+    """``(name, definition)`` of the configuration's ``sensor``: a preset's name (definition
+    None), or a sensor file (``.toml``, relative to the configuration file's folder)."""
+    if isinstance(value, str) and value.lower().endswith(".toml"):
+        path = Path(value)
+        if not path.is_absolute() and base_dir is not None:
+            path = base_dir / path
+        spec = load_sensor_file(path)
+        return spec.name, spec
+    return v.one_of("sensor", value, [*sensor_names(), "<a sensor file>.toml"]), None
 
 
 def _table(cfg: dict, key: str) -> dict:
@@ -198,11 +222,10 @@ def _protocol(proto_t: dict, rand_t: dict) -> Protocol:
     return proto
 
 
-def _finger(finger_t: dict, sensor: str) -> Finger | None:
-    """The sensor's pad with the fields of ``[finger]`` changed (None: no change)."""
+def _finger(finger_t: dict, base) -> Finger | None:
+    """The sensor ``base``'s pad with the fields of ``[finger]`` changed (None: no change)."""
     if not finger_t:
         return None
-    base = get_sensor(sensor)
     names = [f.name for f in fields(base.finger)]
     bad = sorted(set(finger_t) - set(names))
     if bad:

@@ -11,7 +11,7 @@ is cached under its job's content key (:meth:`~.jobs.SlideJob.key`): a second ru
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -41,7 +41,8 @@ class SlideSet:
     """The simulated data of a task (see the module docstring).
 
     plates: preset plate names, one class each (class names: the part after ``/``).
-    sensor: a sensor name of :mod:`sim_tactile.sensors` (its layout, pad, transducer, rate).
+    sensor: a sensor name of :mod:`sim_tactile.sensors` (its layout, pad, transducer, rate),
+        or the name of ``sensor_spec``.
     protocol: nominal protocol with its per-slide jitters; ``duration_s`` None = the time to
         cross the largest textured area at the nominal speed (every slide gets that window);
         ``rate_hz`` None = the sensor's.
@@ -55,6 +56,8 @@ class SlideSet:
     rig: the slides are made on this probe rig (:mod:`~sim_tactile.sim.rig`: the plate's
         texture on a probe sliding over the sensor, which lies on a bed; ``finger`` is then the
         sensor's skin and ``protocol.duration_s`` the window), not by the finger scene.
+    sensor_spec: the sensor's whole definition where it is not a preset (a sensor file's,
+        :mod:`~sim_tactile.sensors.files`); :meth:`describe` records it whole either way.
     """
 
     plates: tuple[str, ...]
@@ -69,6 +72,7 @@ class SlideSet:
     calibration: Calibration | None = None
     rig: ProbeRig | None = None
     pitch_m: float | None = None
+    sensor_spec: Sensor | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if self.pitch_m is not None:
@@ -80,10 +84,16 @@ class SlideSet:
         for p in self.plates:
             if p not in preset_names():
                 raise ConfigError(f"plate {p!r} is not a preset; valid: {preset_names()}")
-        if self.sensor not in sensor_names():
+        if self.sensor_spec is not None:
+            if self.sensor_spec.name != self.sensor:
+                raise ConfigError(
+                    f"sensor {self.sensor!r} names another sensor than its definition's "
+                    f"({self.sensor_spec.name!r})"
+                )
+        elif self.sensor not in sensor_names():
             raise ConfigError(f"sensor {self.sensor!r} is not known; valid: {sensor_names()}")
         if self.calibration is not None:
-            calibrated(get_sensor(self.sensor), self.calibration)  # fits this sensor
+            calibrated(self.base_sensor(), self.calibration)  # fits this sensor
         v.integer("slides", self.slides, *SLIDES_RANGE)
         v.integer("quick_slides", self.quick_slides, SLIDES_RANGE[0], self.slides)
         if self.quick_plates is not None:
@@ -97,8 +107,13 @@ class SlideSet:
     def class_names(self) -> tuple[str, ...]:
         return tuple(class_name(p) for p in self.plates)
 
+    def base_sensor(self) -> Sensor:
+        """The sensor before a calibration: ``sensor_spec`` (a sensor file's), else the
+        preset named ``sensor``."""
+        return self.sensor_spec if self.sensor_spec is not None else get_sensor(self.sensor)
+
     def sensor_def(self) -> Sensor:
-        sensor = get_sensor(self.sensor)
+        sensor = self.base_sensor()
         return sensor if self.calibration is None else calibrated(sensor, self.calibration)
 
     def pad(self) -> Finger:
