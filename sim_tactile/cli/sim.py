@@ -168,7 +168,11 @@ def _add_simulate(sub) -> None:
     sm = add_command(
         sub, "simulate", cmd_simulate, "press a finger on a plate, slide it, record the taxels"
     )
-    sm.add_argument("--plate", required=True, help="preset plate name")
+    sm.add_argument(
+        "--plate",
+        required=True,
+        help="preset plate name, or a plate file (.toml: copy one of assets/plates)",
+    )
     sm.add_argument(
         "--sensor",
         default=None,

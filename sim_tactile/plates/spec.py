@@ -341,6 +341,8 @@ class Plate:
             raise ConfigError(
                 f"texture.kind = {kind!r} is not valid; valid: {', '.join(_TEXTURES)}"
             )
+        if kind == "grating" and tex.get("width_m") is not None and "duty" not in tex:
+            tex["duty"] = None  # a width given, the default duty does not apply (TOML has no null)
         try:
             texture = _TEXTURES[kind](**tex)
             return cls(texture=texture, name=name, **p)

@@ -4,7 +4,8 @@
 
     name = "my-set"              # optional, a label
     seed = 0                     # integer >= 0
-    plates = ["finger7/flat", "finger7/ridges-2"]   # >= 2 preset plates (the classes)
+    plates = ["finger7/flat", "finger7/ridges-2"]   # >= 2 plates (the classes): preset names
+                                 # or plate files ("my-plate.toml", relative to this file)
     sensor = "grid3x3"           # a sensor (its layout, rate, transducer and pad): a preset's
                                  # name or a sensor file ("my4x4.toml", relative to this file)
     slides_per_plate = 100       # [2, 100000]
@@ -44,7 +45,7 @@ from pathlib import Path
 
 from .. import _validate as v
 from ..errors import ConfigError
-from ..plates import preset_names
+from ..plates import get_plate, preset_names
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
 from ..sensors.files import load_sensor_file
 from ..sim.fidelity import FIDELITIES
@@ -56,7 +57,7 @@ from .slide_set import SLIDES_RANGE, SlideSet
 TOP_KEYS = {
     "name": "a label",
     "seed": "integer >= 0",
-    "plates": "list of >= 2 preset plate names",
+    "plates": "list of >= 2 preset plate names or plate files (.toml)",
     "sensor": "sensor name, or a sensor file (.toml)",
     "slides_per_plate": f"integer in [{SLIDES_RANGE[0]}, {SLIDES_RANGE[1]}]",
     "quick_slides_per_plate": "integer in [2, slides_per_plate]",
@@ -114,12 +115,12 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
             raise ConfigError(f"{key} is missing ({TOP_KEYS[key]})")
     plates = cfg["plates"]
     if not isinstance(plates, list) or not all(isinstance(p, str) for p in plates):
-        raise ConfigError(f"plates must be a list of preset plate names, got {plates!r}")
+        raise ConfigError(
+            f"plates must be a list of preset plate names or plate files, got {plates!r}"
+        )
+    plates = [_plate(p, base_dir) for p in plates]
     if len(plates) < 2 or len(set(plates)) != len(plates):
         raise ConfigError(f"plates must name at least 2 distinct plates, got {plates}")
-    bad = [p for p in plates if p not in preset_names()]
-    if bad:
-        raise ConfigError(f"plate {bad[0]!r} is not a preset; valid: {', '.join(preset_names())}")
     sensor, spec = _sensor(cfg["sensor"], base_dir)
     name = cfg.get("name", "")
     if not isinstance(name, str):
@@ -164,6 +165,24 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         sensor_spec=spec,
     )
     return ss, seed, name
+
+
+def _plate(value: str, base_dir: Path | None) -> str:
+    """A preset plate's name, or a plate file's absolute path (``.toml``, relative to the
+    configuration file's folder), checked."""
+    if value.lower().endswith(".toml"):
+        path = Path(value)
+        if not path.is_absolute() and base_dir is not None:
+            path = base_dir / path
+        path = path.resolve()
+        get_plate(str(path))  # it must read
+        return str(path)
+    if value not in preset_names():
+        raise ConfigError(
+            f"plate {value!r} is not a preset; valid: {', '.join(preset_names())}, or a plate "
+            "file (.toml)"
+        )
+    return value
 
 
 def _sensor(value, base_dir: Path | None):

@@ -32,7 +32,10 @@ SLIDES_RANGE = (2, 100_000)
 
 
 def class_name(plate: str) -> str:
-    """A plate's class name: the part of its preset name after the family."""
+    """A plate's class name: the part of its name after the family (a plate file's name is
+    its ``name`` key, else the file's name)."""
+    if plate.lower().endswith(".toml"):
+        plate = get_plate(plate).name
     return plate.split("/", 1)[-1]
 
 
@@ -82,8 +85,13 @@ class SlideSet:
         if len(self.plates) < 2:
             raise ConfigError(f"a task needs at least 2 plates, got {len(self.plates)}")
         for p in self.plates:
-            if p not in preset_names():
+            if p.lower().endswith(".toml"):
+                get_plate(p)  # a plate file: it must read
+            elif p not in preset_names():
                 raise ConfigError(f"plate {p!r} is not a preset; valid: {preset_names()}")
+        names = [class_name(p) for p in self.plates]
+        if len(set(names)) != len(names):
+            raise ConfigError(f"two plates share a class name: {names}; valid: distinct names")
         if self.sensor_spec is not None:
             if self.sensor_spec.name != self.sensor:
                 raise ConfigError(
