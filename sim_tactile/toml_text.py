@@ -65,3 +65,34 @@ def _table(d: dict, path: list[str], lines: list[str]) -> None:
                 lines.append("")
                 lines.append("[[" + ".".join(_key(p) for p in [*path, k]) + "]]")
                 _table(y, [*path, k], lines)
+
+
+def read_file(path, what: str) -> dict:
+    """A user's TOML file as data (``what``: how errors name it, e.g. "sensor file"): it must
+    end in .toml, exist and parse."""
+    import tomllib
+    from pathlib import Path
+
+    path = Path(path)
+    if path.suffix.lower() != ".toml":
+        raise ConfigError(f"{what} {str(path)!r}: valid: a file ending in .toml")
+    if not path.is_file():
+        raise ConfigError(f"{what} {str(path)!r} does not exist")
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{what} {str(path)!r} is not valid TOML: {exc}") from None
+
+
+def write_file(data: dict, path, what: str, header: str = ""):
+    """Write ``data`` as a TOML file at ``path`` (ending in .toml), to a temporary name first
+    so that a failed write leaves nothing half written; the path."""
+    from pathlib import Path
+
+    path = Path(path)
+    if path.suffix != ".toml":
+        raise ConfigError(f"{what} {str(path)!r}: valid: a name ending in .toml")
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(dumps(data, header), encoding="utf-8")
+    tmp.replace(path)
+    return path

@@ -22,11 +22,10 @@ Every value is checked (:class:`~.spec.Plate`); an error names the file and the 
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 
 from ..errors import ConfigError
-from ..toml_text import dumps
+from ..toml_text import read_file, write_file
 from .spec import Plate
 
 FORMAT = 1
@@ -34,17 +33,8 @@ FORMAT = 1
 
 def load_plate_file(path: str | Path) -> Plate:
     """The :class:`~.spec.Plate` of a plate parameter file, every value checked."""
-    path = Path(path)
-    where = f"plate file {str(path)!r}"
-    if path.suffix.lower() != ".toml":
-        raise ConfigError(f"{where}: valid: a file ending in .toml")
-    if not path.is_file():
-        raise ConfigError(f"{where} does not exist")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{where} is not valid TOML: {exc}") from None
-    return plate_from_data(data, path.stem, where)
+    data = read_file(path, "plate file")
+    return plate_from_data(data, Path(path).stem, f"plate file {str(path)!r}")
 
 
 def plate_from_data(data: dict, default_name: str, where: str = "plate") -> Plate:
@@ -74,10 +64,4 @@ def plate_to_data(plate: Plate) -> dict:
 
 def write_plate_file(plate: Plate, path: str | Path, header: str = "") -> Path:
     """Write ``plate`` as a plate file (to a temporary name first)."""
-    path = Path(path)
-    if path.suffix != ".toml":
-        raise ConfigError(f"plate file {str(path)!r}: valid: a name ending in .toml")
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(dumps(plate_to_data(plate), header), encoding="utf-8")
-    tmp.replace(path)
-    return path
+    return write_file(plate_to_data(plate), path, "plate file", header)

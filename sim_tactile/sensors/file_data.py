@@ -8,8 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..toml_text import dumps
+from ..toml_text import write_file
 from .files import FORMAT, TRANSDUCERS, sensor_from_data
 from .layouts import Layout, grid_layout
 
@@ -82,13 +81,7 @@ def sensor_from_record(d: dict):
 def write_sensor_file(sensor, path: str | Path, header: str = "") -> Path:
     """Write ``sensor`` as a sensor file (to a temporary name first: a failed write leaves
     nothing half written)."""
-    path = Path(path)
-    if path.suffix != ".toml":
-        raise ConfigError(f"sensor file {str(path)!r}: valid: a name ending in .toml")
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(dumps(sensor_to_data(sensor), header), encoding="utf-8")
-    tmp.replace(path)
-    return path
+    return write_file(sensor_to_data(sensor), path, "sensor file", header)
 
 
 def _layout_data(lay: Layout) -> dict:

@@ -52,7 +52,6 @@ sensor can be re-created without the file (:func:`~.file_data.sensor_from_record
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import fields
 from pathlib import Path
 
@@ -60,6 +59,7 @@ import numpy as np
 
 from .. import _validate as v
 from ..errors import ConfigError
+from ..toml_text import read_file
 from .layouts import Layout, grid_layout
 from .pad import Finger
 from .presets import PRESETS, preset_data, preset_file
@@ -92,16 +92,8 @@ TRANSDUCERS = {
 
 def load_sensor_file(path: str | Path):
     """The :class:`~sim_tactile.sensors.Sensor` of a sensor file (TOML), every value checked."""
-    path = Path(path)
-    if path.suffix.lower() != ".toml":
-        raise ConfigError(f"sensor file {str(path)!r}: valid: a file ending in .toml")
-    if not path.is_file():
-        raise ConfigError(f"sensor file {str(path)!r} does not exist")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"sensor file {str(path)!r} is not valid TOML: {exc}") from None
-    return sensor_from_data(data, default_name=path.stem, where=f"sensor file {str(path)!r}")
+    data = read_file(path, "sensor file")
+    return sensor_from_data(data, default_name=Path(path).stem, where=f"sensor file {str(path)!r}")
 
 
 def sensor_from_data(data: dict, default_name: str = "sensor", where: str = "sensor"):
