@@ -17,7 +17,7 @@ def _task_options(args: argparse.Namespace) -> dict:
         "data": args.data,
         "classifiers": args.classifiers,
         "repeats": args.repeats,
-        "seed": args.seed,
+        "seed": 0 if args.seed is None else args.seed,
         "log": log,
         "store": args.store,
     }
@@ -29,6 +29,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     saved report by more than ``--tolerance`` or is missing."""
     from ..tasks import run_task
     from ..tasks.baseline import check_tolerance, compare_baseline, load_baseline, save_baseline
+    from ..tasks.config_task import config_task, is_config_path
     from ..tasks.methods import import_method
     from ..tasks.report import Report
 
@@ -42,13 +43,17 @@ def cmd_run(args: argparse.Namespace) -> int:
         methods[m.name] = m
     base = None
     if args.baseline is not None:
-        base = load_baseline(args.baseline, args.task, args.quick)
+        task_id = args.task
+        if is_config_path(task_id):
+            task_id = config_task(task_id)[0].id
+        base = load_baseline(args.baseline, task_id, args.quick)
     report = run_task(
         args.task,
         args.out,
         sensor_config=args.sensor_config,
         methods=methods or None,
-        **_task_options(args),
+        # a configuration file's own seed unless --seed is given (as generate takes it)
+        **(_task_options(args) | {"seed": args.seed}),
     )
     if args.save_baseline is not None:
         log(f"baseline written: {save_baseline(report, args.save_baseline)}")
@@ -87,7 +92,12 @@ def _add_task_options(p: argparse.ArgumentParser, quick_help: str) -> None:
         help="comma-separated names (default: the task's; none: no built-in row)",
     )
     p.add_argument("--repeats", type=int, default=None, help="splits per classifier")
-    p.add_argument("--seed", type=int, default=0, help="seed of the splits and models")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        help="seed of the splits and models (default 0; a configuration file's own seed)",
+    )
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument(
         "--store", default=None, help="read the data from a store made by 'generate TASK'"
@@ -97,7 +107,11 @@ def _add_task_options(p: argparse.ArgumentParser, quick_help: str) -> None:
 def add_parsers(sub) -> None:
     rn = add_command(sub, "run", cmd_run, "run a benchmark task's evaluation protocol and report")
     add_sensor_config(rn)
-    rn.add_argument("task", help="task id, e.g. finger7-v1, biotac20-real-v1")
+    rn.add_argument(
+        "task",
+        help="task id, e.g. finger7-v1, biotac20-real-v1, or a configuration file of "
+        "'generate' (.toml / .json), scored as its [evaluate] table says",
+    )
     _add_task_options(rn, "the task's quick data, fewer epochs and repeats (about a minute)")
     rn.add_argument(
         "--method",

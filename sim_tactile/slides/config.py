@@ -28,6 +28,8 @@
 
     paper_stack = false          # optional: the skin its paper describes (layers on their
                                  # backing, sensors.paper_stacks) instead of the half-space
+    [evaluate]                   # optional: how `sim-tactile run FILE` scores the set
+    classifiers = ["svm-raw", "svm-spike"]          # (sim_tactile.tasks.config_task)
     [rig]                        # optional: slides on the probe rig (sim.rig.ProbeRig:
     node_pitch_m = 0.25e-3       # node_pitch_m, probe_mass_kg, margin_m, direction,
                                  # pass_at); needs protocol.duration_s
@@ -68,6 +70,7 @@ TOP_KEYS = {
     "finger": "table",
     "paper_stack": "true or false",
     "rig": "table (the probe rig)",
+    "evaluate": "table: how 'sim-tactile run FILE' scores the set (classifiers, split, repeats)",
 }
 #: The keys of ``[randomise]``: the protocol's per-slide jitters.
 RANDOMISE = ("speed_jitter", "force_jitter", "offset_jitter_m")

@@ -30,6 +30,8 @@ from ..records import TactileDataset
 from ..sensors.calibration import load_calibration
 from ..slides import SlideSet
 from ..slides.plan import task_slide_config
+from .config_task import PREFIX as CONFIG_PREFIX
+from .config_task import config_task, is_config_path
 from .methods import Method, as_methods, classify_methods, method_row
 from .precompute import Precomputed
 from .registry import DataRequest, Run, TaskSpec, get_task, with_calibration
@@ -106,7 +108,8 @@ def task_data(spec: TaskSpec, req: DataRequest) -> TactileDataset:
     path = req.store
     st = open_store(path, spec.id if spec.id in parts_of(path) else None)
     cfg = st.config
-    if cfg.get("task") != spec.id or bool(cfg.get("quick")) != req.quick:
+    task = None if spec.id.startswith(CONFIG_PREFIX) else spec.id
+    if cfg.get("task") != task or bool(cfg.get("quick")) != req.quick:
         raise StoreError(
             f"{st.path} holds {cfg.get('task') or 'a configuration file'}'s "
             f"{'quick ' if cfg.get('quick') else ''}data, not {spec.id}"
@@ -114,7 +117,8 @@ def task_data(spec: TaskSpec, req: DataRequest) -> TactileDataset:
             f"{spec.id}{' --quick' if req.quick else ''} --out DIR.zarr'"
         )
     if isinstance(spec.get_data, SlideSet):
-        want, code = task_slide_config(spec.get_data, spec.id, req.quick, req.seed)
+        task = None if spec.id.startswith(CONFIG_PREFIX) else spec.id  # a file's: no task
+        want, code = task_slide_config(spec.get_data, task, req.quick, req.seed)
         if st.config_hash != want:
             raise StoreError(
                 f"{st.path} was generated with another configuration (hash {st.config_hash}, "
@@ -183,20 +187,22 @@ def run_task(
     data: str | Path | None = None,
     classifiers: Sequence[str] | str | None = None,
     repeats: int | None = None,
-    seed: int = 0,
+    seed: int | None = 0,
     log: Callable[[str], None] | None = None,
     store: str | Path | None = None,
     sensor_config: str | Path | None = None,
     methods=None,
 ) -> dict:
     """Run ``task_id`` and write its report into ``out_dir``; returns the report as JSON data.
+    ``task_id`` may also be a configuration file (``.toml`` / ``.json``, :mod:`.config_task`).
 
     Args:
         quick: the task's quick settings (fewer epochs, repeats and time points).
         data: folder of the real data set (tasks ``*-real-v1``).
         classifiers: names (list or ``"a,b"``) instead of the task's default set.
         repeats: number of splits for every classifier instead of the task's numbers.
-        seed: seeds the splits and every model.
+        seed: seeds the splits and every model (None: 0, or a configuration file's seed,
+            which then also seeds its slides, as ``generate`` does).
         store: read the data from this store (``sim-tactile generate``) instead.
         sensor_config: a calibration file (``sim-tactile calibrate``) for the task's sensor.
         methods: the user's methods, name -> estimator or (encoder, estimator)
@@ -204,7 +210,12 @@ def run_task(
     """
     t_start = time.perf_counter()
     log = log or stderr_log
-    spec = get_task(task_id)
+    if is_config_path(task_id):
+        spec, file_seed = config_task(task_id)
+        seed = file_seed if seed is None else seed
+    else:
+        spec = get_task(task_id)
+        seed = 0 if seed is None else seed
     if sensor_config is not None:
         spec = with_calibration(spec, load_calibration(sensor_config))
     seed = integer("seed", seed, 0, None)
