@@ -146,14 +146,30 @@ def _library_version(dist: str) -> str:
 
 
 @lru_cache(maxsize=1)
+@lru_cache(maxsize=1)
+def blas_controller():
+    """threadpoolctl's view of this process's thread pools, taken once (a fresh look scans
+    the loaded libraries, 2-3 ms: a slide of roughness8 took two), after numpy's and scipy's
+    BLAS libraries are loaded."""
+    import numpy  # noqa: F401
+    import scipy.linalg  # noqa: F401
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
+def one_blas_thread():
+    """A context manager: the BLAS libraries run on one thread inside it (a worker process
+    simulates on one core; BLAS's own threads would only contend)."""
+    return blas_controller().limit(limits=1, user_api="blas")
+
+
 def blas_kernel() -> str:
     """The BLAS library's kernel in this process (OpenBLAS picks one by CPU: ``Haswell``,
     ``SkylakeX``, ...; ``"unknown"`` when threadpoolctl cannot tell). Arrays a BLAS call
     makes on one kernel differ from another's in their last bits, so what is cached on disk
     from them is keyed by it."""
-    from threadpoolctl import threadpool_info
-
-    found = {i.get("architecture") for i in threadpool_info() if i.get("user_api") == "blas"}
+    found = {i.get("architecture") for i in blas_controller().info() if i.get("user_api") == "blas"}
     found.discard(None)
     return "+".join(sorted(found)) or "unknown"
 

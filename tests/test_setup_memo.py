@@ -3,11 +3,14 @@ for bit whether their set-up was computed or kept."""
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 import pytest
 
 from sim_tactile import cache as cache_module
 from sim_tactile.cache import ArrayMemo, array_digest, setup_memo
+from sim_tactile.scene import model as model_module
 from sim_tactile.sim import skin as skin_module
 from sim_tactile.sim.protocol import Protocol
 from sim_tactile.sim.rig_sim import _read_lines
@@ -16,10 +19,11 @@ from sim_tactile.sim.simulate import simulate
 
 @pytest.fixture(autouse=True)
 def fresh_memo(monkeypatch):
-    """Each test starts with nothing kept in the process."""
+    """Each test starts with nothing kept in the process (set-up arrays and scene models)."""
     memo = ArrayMemo(cache_module.SETUP_MEMO_BYTES)
     monkeypatch.setattr(cache_module, "SETUP", memo)
     monkeypatch.setattr(skin_module, "_MEMO", memo)
+    monkeypatch.setattr(model_module, "SCENES", OrderedDict())
     return memo
 
 
@@ -67,10 +71,12 @@ def test_slides_are_equal_bit_for_bit_with_their_set_up_computed_or_kept(
     proto = Protocol(duration_s=0.25)
     first = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
     assert len(fresh_memo) >= 2  # the weights and the skin were kept
+    assert len(model_module.SCENES) == 1  # and the compiled models
     again = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
     fresh = ArrayMemo(cache_module.SETUP_MEMO_BYTES)  # and computed anew
     monkeypatch.setattr(cache_module, "SETUP", fresh)
     monkeypatch.setattr(skin_module, "_MEMO", fresh)
+    monkeypatch.setattr(model_module, "SCENES", OrderedDict())
     anew = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
     assert first.data.max() > 0
     for r in (again, anew):
@@ -91,6 +97,32 @@ def test_a_softer_skin_is_never_served_the_kept_weights(fresh_memo):
     b = simulate("finger7/ridges-4", soft, **kw).recording
     assert len(fresh_memo) > n  # its own skin kept beside the first
     assert a.data.tobytes() != b.data.tobytes()
+
+
+def test_a_slide_places_a_copy_of_the_kept_models_never_them(fresh_memo, cache):
+    """Each scene takes copies of the kept models and places its bone and time step there;
+    another margin or pad is another entry."""
+    from sim_tactile.plates import get_plate
+    from sim_tactile.scene.model import build_scene
+    from sim_tactile.scene.nodes import skin_grid
+    from sim_tactile.sensors import Finger, get_layout
+
+    f = Finger()
+    grid = skin_grid(f, 1e-3)
+    kw = dict(z_damping=1.0, cache=cache)
+    args = (get_plate("finger7/ridges-4"), f, grid, get_layout("grid3x3"))
+    a = build_scene(*args, dt_s=1e-3, x0_m=-0.02, z0_m=1e-3, y0_m=2e-4, **kw)
+    b = build_scene(*args, dt_s=2e-3, x0_m=-0.01, z0_m=2e-3, **kw)
+    (kept,) = model_module.SCENES.values()
+    bone = kept[0].body("bone").id
+    assert a.m_col is not kept[0] and b.m_dyn is not kept[1]
+    assert kept[0].body_pos[bone].tolist() == [0.0, 0.0, 0.0]  # the kept model untouched
+    assert a.m_col.body_pos[bone].tolist() == [-0.02, 2e-4, 1e-3] and a.m_dyn.opt.timestep == 1e-3
+    assert b.m_dyn.body_pos[bone].tolist() == [-0.01, 0.0, 2e-3] and b.m_col.opt.timestep == 2e-3
+    build_scene(*args, dt_s=1e-3, x0_m=0.0, z0_m=1e-3, node_margin_m=1e-4, **kw)
+    softer = (args[0], Finger(young_pa=0.2e6), grid, args[3])
+    build_scene(*softer, dt_s=1e-3, x0_m=0.0, z0_m=1e-3, **kw)
+    assert len(model_module.SCENES) == 3
 
 
 def test_the_rig_reads_its_lines_as_numpy_interpolates_them():

@@ -245,3 +245,31 @@ def test_the_compiled_held_step_on_ridges_and_cylinders(plate, cache):
     assert slow.meta["skin_problem"] == "full problem"
     assert fast.data.max() > 0.05
     np.testing.assert_allclose(fast.data, slow.data, rtol=SLIDE_RTOL, atol=SLIDE_ATOL_N)
+
+
+@pytest.mark.parametrize(
+    "reference",
+    [StepOptions(compiled_hold=False), StepOptions(reduce_skin=False)],
+    ids=["plain-loop", "full-problem"],
+)
+def test_the_compiled_held_step_on_a_rough_plate(reference, cache):
+    """The rough plates' profile collider in the compiled held step (the pvdf2 fingertip is
+    mirror-symmetric: a halved solve) against the plain loop and the full problem."""
+
+    def run(options):
+        return simulate(
+            "roughness8/ra-50",
+            "pvdf2",
+            protocol=Protocol(duration_s=0.2),
+            ideal=True,
+            seed=3,
+            options=options,
+            cache=cache,
+        ).recording
+
+    fast, slow = run(StepOptions()), run(reference)
+    assert "mirror-halved" in fast.meta["skin_problem"]
+    assert "mirror" not in slow.meta["skin_problem"]
+    assert np.abs(fast.data).max() > 1e-3
+    np.testing.assert_allclose(fast.data, slow.data, rtol=SLIDE_RTOL, atol=SLIDE_ATOL_N)
+    np.testing.assert_allclose(fast.meta["normal_force_n"], slow.meta["normal_force_n"], rtol=1e-6)

@@ -17,6 +17,8 @@ would still be solved as constraints in MuJoCo 4.0, and static bodies do not col
 
 from __future__ import annotations
 
+import copy
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import mujoco
@@ -101,6 +103,99 @@ def _taxel_weights(grid, layout, finger, slide_dir) -> np.ndarray:
     return W
 
 
+#: The compiled models a process keeps, by content (:func:`_models`): a worker makes tens of
+#: slides of one scene, and composing and compiling its MJCF took a third of a roughness8
+#: slide. Least recently used dropped past this many.
+SCENES_KEPT = 8
+SCENES: OrderedDict[str, tuple] = OrderedDict()
+
+
+def _models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:
+    """``(m_col, m_dyn, node_of_geom, jx, jz)`` of the scene with the bone at the origin
+    and MuJoCo's default time step, kept in :data:`SCENES` under the content key of
+    everything they depend on: the plate's MJCF artefact (its parameters and the code that
+    writes it), the pad, the node grid, the damping, the margin and this module's source."""
+    from ..hashing import code_version, content_hash
+    from ..plates.build import artefact_key
+
+    key = content_hash(
+        {
+            "mjcf": artefact_key(plate, "mjcf"),
+            "finger": finger.to_json(),
+            "grid": [array_digest(grid.xy), array_digest(grid.z), list(grid.pitch_xy)],
+            "z_damping": z_damping,
+            "margin": node_margin_m,
+            "code": code_version(__name__, libraries=("mujoco",)),
+        }
+    )
+    kept = SCENES.pop(key, None)
+    if kept is None:
+        kept = _compile_models(plate, finger, grid, z_damping, node_margin_m, cache)
+    SCENES[key] = kept
+    while len(SCENES) > SCENES_KEPT:
+        SCENES.popitem(last=False)
+    return kept
+
+
+def _compile_models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:
+    xml = build_plate(plate, kinds=("mjcf",), cache=cache).files["mjcf"].read_text()
+    spec = mujoco.MjSpec.from_string(xml)
+    spec.modelname = f"sim_tactile {plate.name or plate.hash}"
+    spec.option.gravity = (0.0, 0.0, 0.0)  # the press force is the applied normal force
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    for g in spec.geoms:  # the plate: collide with skin nodes only
+        g.contype = 0
+        g.conaffinity = NODE_BIT
+    bone = spec.worldbody.add_body(name="bone", pos=(0.0, 0.0, 0.0))
+    bone.add_joint(name="slide_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=(1, 0, 0))
+    bone.add_joint(
+        name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=(0, 0, 1), damping=z_damping
+    )
+    px, py = finger.patch_m
+    bone.add_geom(
+        name="bone",
+        type=_T.mjGEOM_BOX,
+        size=(px / 2, py / 2, finger.thickness_m / 2),
+        pos=(0, 0, finger.thickness_m * 1.5),
+        mass=finger.bone_mass_kg,
+        contype=0,
+        conaffinity=0,
+        rgba=(0.85, 0.75, 0.65, 1),
+    )
+    r = PROBE_RADIUS_FRACTION * min(grid.pitch_xy)
+    for i, ((x, y), z) in enumerate(zip(grid.xy, grid.z, strict=True)):
+        bone.add_geom(
+            name=f"node{i}",
+            type=_T.mjGEOM_SPHERE,
+            size=(r, 0, 0),
+            pos=(x, y, z + r),
+            contype=NODE_BIT,
+            conaffinity=0,
+            density=0.0,
+            group=3,
+            margin=node_margin_m,
+        )
+    spec.add_actuator(
+        name="slide",
+        target="slide_x",
+        trntype=mujoco.mjtTrn.mjTRN_JOINT,
+        gaintype=mujoco.mjtGain.mjGAIN_FIXED,
+        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
+        gainprm=[SLIDE_KV] + [0] * 9,
+        biasprm=[0, 0, -SLIDE_KV] + [0] * 7,
+    )
+    m_col = spec.compile()
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+    m_dyn = spec.compile()
+    node_of_geom = np.full(m_col.ngeom, -1, dtype=np.int64)
+    g0 = mujoco.mj_name2id(m_col, mujoco.mjtObj.mjOBJ_GEOM, "node0")
+    node_of_geom[g0 : g0 + grid.n] = np.arange(grid.n)
+    node_of_geom.flags.writeable = False
+    jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]
+    jz = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "press_z")]
+    return m_col, m_dyn, node_of_geom, int(jx), int(jz)
+
+
 def build_scene(
     plate: Plate,
     finger: Finger,
@@ -119,66 +214,19 @@ def build_scene(
     """Compose the plate's MJCF with the finger; x0, y0, z0 place the pad's lowest point.
     ``node_margin_m``: the collider reports nodes this far above the plate too (with their
     positive distance); it must be compiled in, as MuJoCo's broad phase sizes its bounding
-    boxes from it."""
-    xml = build_plate(plate, kinds=("mjcf",), cache=cache).files["mjcf"].read_text()
-    spec = mujoco.MjSpec.from_string(xml)
-    spec.modelname = f"sim_tactile {plate.name or plate.hash}"
-    spec.option.timestep = dt_s
-    spec.option.gravity = (0.0, 0.0, 0.0)  # the press force is the applied normal force
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    for g in spec.geoms:  # the plate: collide with skin nodes only
-        g.contype = 0
-        g.conaffinity = NODE_BIT
-    bone = spec.worldbody.add_body(name="bone", pos=(x0_m, 0.0, z0_m))
-    bone.add_joint(name="slide_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=(1, 0, 0))
-    bone.add_joint(
-        name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=(0, 0, 1), damping=z_damping
+    boxes from it.
+
+    The compiled models of a plate, pad, node grid, damping and margin are kept in this
+    process (:data:`SCENES`, by content) and each slide takes copies, placed at its own start
+    and time step: what a slide sets after compiling (the bone's position, the time step) is
+    what the compiler would have copied in (the same models, bit for bit, tested)."""
+    m_col, m_dyn, node_of_geom, jx, jz = _models(
+        plate, finger, grid, z_damping, node_margin_m, cache
     )
-    px, py = finger.patch_m
-    bone.add_geom(
-        name="bone",
-        type=_T.mjGEOM_BOX,
-        size=(px / 2, py / 2, finger.thickness_m / 2),
-        pos=(0, 0, finger.thickness_m * 1.5),
-        mass=finger.bone_mass_kg,
-        contype=0,
-        conaffinity=0,
-        rgba=(0.85, 0.75, 0.65, 1),
-    )
-    r = PROBE_RADIUS_FRACTION * min(grid.pitch_xy)
-    first = None
-    for i, ((x, y), z) in enumerate(zip(grid.xy, grid.z, strict=True)):
-        g = bone.add_geom(
-            name=f"node{i}",
-            type=_T.mjGEOM_SPHERE,
-            size=(r, 0, 0),
-            pos=(x, y, z + r),
-            contype=NODE_BIT,
-            conaffinity=0,
-            density=0.0,
-            group=3,
-            margin=node_margin_m,
-        )
-        first = first if first is not None else g
-    spec.add_actuator(
-        name="slide",
-        target="slide_x",
-        trntype=mujoco.mjtTrn.mjTRN_JOINT,
-        gaintype=mujoco.mjtGain.mjGAIN_FIXED,
-        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
-        gainprm=[SLIDE_KV] + [0] * 9,
-        biasprm=[0, 0, -SLIDE_KV] + [0] * 7,
-    )
-    m_col = spec.compile()
-    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
-    m_dyn = spec.compile()
-    node_of_geom = np.full(m_col.ngeom, -1, dtype=np.int64)
-    g0 = mujoco.mj_name2id(m_col, mujoco.mjtObj.mjOBJ_GEOM, "node0")
-    node_of_geom[g0 : g0 + grid.n] = np.arange(grid.n)
-    W = taxel_weights(grid, layout, finger, slide_dir)
-    jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]
-    jz = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "press_z")]
-    # the offset across the slide, set in both compiled models (as the slide's own offset)
+    m_col, m_dyn = copy.copy(m_col), copy.copy(m_dyn)
     for m in (m_col, m_dyn):
-        m.body_pos[m.body("bone").id, 1] = y0_m
+        m.opt.timestep = dt_s
+        # the start, and the offset across the slide (as the slide's own)
+        m.body_pos[m.body("bone").id] = (x0_m, y0_m, z0_m)
+    W = taxel_weights(grid, layout, finger, slide_dir)
     return Scene(plate, finger, grid, layout, m_col, m_dyn, node_of_geom, W, int(jx), int(jz))

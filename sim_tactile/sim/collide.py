@@ -265,6 +265,11 @@ class PrimitiveCollider:
             c.bind(m.body_pos[bone], scene.jx, scene.jz)
         return c
 
+    @property
+    def kernel(self):
+        """The compiled depth map: ``kernel(bone, *arrays, pen) -> near``."""
+        return depths_kernel
+
     def bind(self, bone0: np.ndarray, jx: int, jz: int) -> None:
         """Read the bone's world position as ``bone0 + (qpos[jx], 0, qpos[jz])``."""
         self.bone0 = np.array(bone0, dtype=np.float64)

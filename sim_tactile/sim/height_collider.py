@@ -23,18 +23,49 @@ class ProfileCollider:
     within its margin, as MuJoCo reports a contact: what
     :func:`~sim_tactile.plates.height_at` gives, without its per-call set-up (tested equal)."""
 
-    compiled = False
+    #: the held step may run it in one compiled call (:class:`~.held.CompiledHeldStep`,
+    #: through :attr:`kernel` and :attr:`arrays`)
+    compiled = True
 
-    def __init__(self, local, radius, margin, plate) -> None:
-        from ..plates import roughness_profile
-
+    def __init__(self, local, radius, margin, plate=None, profile=None) -> None:
         self.local, self.radius, self.margin = local, radius, margin
-        self.px, self.pz = roughness_profile(plate)
-        self.area = (plate.area_length_m / 2, plate.area_width_m / 2)
-        self.size = (plate.length_m / 2, plate.width_m / 2)
+        if profile is None:
+            from ..plates import roughness_profile
+
+            px, pz = roughness_profile(plate)
+            area = (plate.area_length_m / 2, plate.area_width_m / 2)
+            size = (plate.length_m / 2, plate.width_m / 2)
+            profile = (px, pz, *area, *size)
+        self.profile = profile
+        self.px, self.pz = profile[0], profile[1]
+        self.area, self.size = profile[2:4], profile[4:6]
         self._x = np.empty(len(local))
         self._y = np.empty(len(local))
         self._z = np.empty(len(local))
+        #: the arguments of :attr:`kernel` after the bone's position, in its order
+        self.arrays = (local, radius, margin, *profile)
+
+    @property
+    def kernel(self):
+        """The compiled depth map: ``kernel(bone, *arrays, pen) -> near``."""
+        return profile_depths_kernel
+
+    def subset(self, nodes: np.ndarray) -> ProfileCollider:
+        """The same collider for the nodes ``nodes`` only (their order)."""
+        c = ProfileCollider(
+            self.local[nodes], self.radius[nodes], self.margin[nodes], profile=self.profile
+        )
+        for k in ("bone0", "jx", "jz"):
+            if hasattr(self, k):
+                setattr(c, k, getattr(self, k))
+        return c
+
+    def y_invariant(self, bone_y: float) -> bool:
+        """Whether every node's depth is independent of its y for the bone at ``bone_y``:
+        every node lies inside the textured area's y extent (the profile varies along x
+        only), so nodes with equal x, z, radius and margin get bit-identical depths."""
+        y = bone_y + self.local[:, 1]
+        return bool(len(y)) and float(np.abs(y).max()) < min(self.area[1], self.size[1])
 
     @classmethod
     def from_scene(cls, scene) -> ProfileCollider | None:
@@ -75,15 +106,7 @@ class ProfileCollider:
             self.bone0[0] + qpos[self.jx],
             self.bone0[1],
             self.bone0[2] + qpos[self.jz],
-            self.local,
-            self.radius,
-            self.margin,
-            self.px,
-            self.pz,
-            self.area[0],
-            self.area[1],
-            self.size[0],
-            self.size[1],
+            *self.arrays,
             pen,
         )
 
@@ -143,6 +166,15 @@ def _profile_depths(x0, y0, z0, local, radius, margin, px, pz, ax, ay, sx, sy, p
             h = interp_at(x, px, pz, pz[0], pz[pz.size - 1])
         near |= report_depth(pen, i, h - (z - radius[i]), margin[i])
     return near
+
+
+@numba.njit(cache=True)
+def profile_depths_kernel(bone, local, radius, margin, px, pz, ax, ay, sx, sy, pen):
+    """:func:`_profile_depths` for the bone at world position ``bone`` (3,): the depth kernel
+    of :class:`ProfileCollider` in the compiled held step (the same sums, bit for bit)."""
+    return _profile_depths(
+        bone[0], bone[1], bone[2], local, radius, margin, px, pz, ax, ay, sx, sy, pen
+    )
 
 
 @numba.njit(cache=True, inline="always")

@@ -8,15 +8,16 @@ the taxel loads there. One step, two implementations with the same interface
 (``step(qpos, total, taxel_out) -> (force, deepest node)``), tested equal:
 
 - :class:`HeldStep`: the plain loop, over any collider and any skin model: the reference,
-  and the path of plates that MuJoCo must collide (meshes, cylinders, height fields);
-- :class:`CompiledHeldStep`: the whole step in one numba call (:func:`_held_kernel`) with the
-  compiled collider, so no step pays Python's per-call costs more than once, on the smallest
-  exact problem:
+  and the path of the spectral skin and of plates that MuJoCo must collide;
+- :class:`CompiledHeldStep`: the whole step in one numba call (:func:`_held_kernel`) with a
+  compiled collider (the plate's features, or the rough plates' profile), so no step pays
+  Python's per-call costs more than once, on the smallest exact problem:
 
-  - **columns** (:meth:`PrimitiveCollider.y_invariant`): when every plate geom is a box that
-    runs past the whole pad in y (ridges across the slide), a node's depth does not depend on
-    its y; the collider computes one node per distinct (x, z, radius, margin), the rest are
-    copies (bit-identical);
+  - **columns** (:meth:`PrimitiveCollider.y_invariant`, :meth:`ProfileCollider.y_invariant`):
+    when every plate geom is a box or drafted ridge that runs past the whole pad in y
+    (ridges across the slide), or the pad lies inside a rough profile's y extent, a node's
+    depth does not depend on its y; the collider computes one node per distinct (x, z,
+    radius, margin), the rest are copies (bit-identical);
   - **mirror** halving: when, in addition, the node grid is symmetric about the pad's centre
     line (nodes at y and -y alike), the depth map, and so the unique contact solution, are
     symmetric. The solve then runs on the nodes with y >= 0 only. Its unknowns are the summed
@@ -40,6 +41,7 @@ from ..errors import PhysicsError
 from . import contact
 from .collide import PrimitiveCollider, depths_kernel
 from .contact.kernels import NO_K, force_loop, force_same_set
+from .height_collider import ProfileCollider, profile_depths_kernel
 from .skin import CoupledSkin, SkinModel, SpectralSkin
 
 #: Collision queries one step may take before it gives up (the pad falling through).
@@ -123,7 +125,7 @@ class CompiledHeldStep:
 
     def __init__(
         self,
-        collider: PrimitiveCollider,
+        collider: PrimitiveCollider | ProfileCollider,
         skin: SkinModel,
         W: np.ndarray,
         area_m2: float,
@@ -143,7 +145,7 @@ class CompiledHeldStep:
         mult = np.ones(n)
         if self.columns:
             mirror = _mirror_of(collider)
-            if mirror is not None and (not coupled or _mirror_symmetric(C, mirror)):
+            if mirror is not None and (not coupled or _symmetric(skin, mirror)):
                 self.mirrored = True
                 nodes = np.flatnonzero(collider.local[:, 1] >= 0.0)
                 pair = mirror[nodes]
@@ -171,6 +173,7 @@ class CompiledHeldStep:
         else:
             self.group = np.arange(self.n, dtype=np.int64)
         self.probe = sub
+        self._probe = _probe_args(sub)
         self.n_probes = len(sub.radius)
         self.pen = np.empty(self.n)
         self.f = np.zeros(self.n)
@@ -188,7 +191,7 @@ class CompiledHeldStep:
 
     def depths(self, bone: np.ndarray) -> bool:
         """The reduced depth map at the bone's world position into ``pen``."""
-        near = depths_kernel(bone, *self.probe.arrays, self._small)
+        near = self.probe.kernel(bone, *self.probe.arrays, self._small)
         np.take(self._small, self.group, out=self.pen)
         return near
 
@@ -200,7 +203,7 @@ class CompiledHeldStep:
         K = s.K if s.K is not None else NO_K
         st, force, top, M2, S2, updates, rebuilds, rowsum2 = _held_kernel(
             (self.bone0, qpos, self.jx, jz),
-            self.probe.arrays,
+            self._probe,
             self._reduced,
             (self.winkler_k, C, K, s.floor, s.symmetric),
             (M, S, in_set, rowsum, s.updates, s.refresh),
@@ -246,12 +249,61 @@ def _mirror_symmetric(C: np.ndarray, mirror: np.ndarray) -> bool:
     return bool(np.allclose(C[np.ix_(mirror, mirror)], C, rtol=_SYM_RTOL, atol=0.0))
 
 
+def _symmetric(skin: CoupledSkin, mirror: np.ndarray) -> bool:
+    """:func:`_mirror_symmetric` of the skin's compliance, kept in this process under the
+    skin's content key when it has one (every slide of a scene asks of the same skin)."""
+    if skin.key is None:
+        return _mirror_symmetric(skin.C, mirror)
+    parts = {"skin": skin.key, "mirror": array_digest(mirror)}
+    compute = lambda: (np.array([_mirror_symmetric(skin.C, mirror)]),)  # noqa: E731
+    return bool(setup_memo("mirror symmetry of a skin", parts, compute, (__name__,))[0][0])
+
+
+#: Placeholders for the arrays of the collider a held step does not use (typed as the real
+#: ones, so that the compiled step has one signature per collider).
+_NO_PRIMITIVE = (
+    np.zeros((0, 3)),
+    np.zeros(0),
+    np.zeros(0),
+    np.zeros(0, np.int64),
+    np.zeros((0, 3)),
+    np.zeros((0, 3, 3)),
+    np.zeros((0, 3)),
+    np.zeros(0),
+    np.zeros(2),
+    1.0,
+    np.ones(2, np.int64),
+    np.zeros(1, np.int64),
+    np.zeros(0, np.int64),
+)
+_NO_PROFILE = (
+    np.zeros((0, 3)),
+    np.zeros(0),
+    np.zeros(0),
+    np.zeros(2),
+    np.zeros(2),
+    1.0,
+    1.0,
+    1.0,
+    1.0,
+)
+
+
+def _probe_args(c) -> tuple:
+    """``(profile, primitive arrays, profile arrays)`` of :func:`_held_kernel`'s ``probe``."""
+    if isinstance(c, ProfileCollider):
+        return (True, _NO_PRIMITIVE, tuple(float(a) if np.ndim(a) == 0 else a for a in c.arrays))
+    return (False, c.arrays, _NO_PROFILE)
+
+
 @numba.njit(cache=True)
 def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     """:meth:`CompiledHeldStep.step`. The arguments, grouped:
 
     - ``pose``: ``(bone0, qpos, jx, jz)``, the bone's rest position and the joints;
-    - ``probe``: the collider's arrays (:attr:`PrimitiveCollider.arrays`);
+    - ``probe``: ``(profile, primitive arrays, profile arrays)``: which collider's depth map
+      (:func:`~.collide.depths_kernel` or :func:`~.height_collider.profile_depths_kernel`)
+      and the arrays of each (:func:`_probe_args`; the other's are empty placeholders);
     - ``reduced``: ``(small, group, mult)``: the probes' depths, each node's probe, the nodes
       each reduced node stands for;
     - ``skin``: ``(winkler_k, C, K, floor, sym)``: the Winkler stiffness (> 0 for L0), else
@@ -279,7 +331,10 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
         bone[0] = bone0[0] + qpos[jx]
         bone[1] = bone0[1]
         bone[2] = bone0[2] + qpos[jz]
-        near = depths_kernel(bone, *probe, small)
+        if probe[0]:
+            near = profile_depths_kernel(bone, *probe[2], small)
+        else:
+            near = depths_kernel(bone, *probe[1], small)
         for i in range(n):
             pen[i] = small[group[i]]
         if not near:  # nothing within the margin: sink by most of it and look again

@@ -100,7 +100,7 @@ def press(
     half-space, or the finger's stack), L0 the Winkler bed. A finger with ``skin_tractions``
     is read as if sliding along ``slide_dir`` (a unit vector in the pad's plane): its skin
     carries the sliding friction against it, and buried taxels read that stress."""
-    from threadpoolctl import threadpool_limits
+    from ..hashing import one_blas_thread
 
     v.in_range("force_n", force_n, 1e-4, 100.0, unit="N")
     v.in_range("readout_pitch_m", readout_pitch_m, 20e-6, 5e-3, unit="m")
@@ -138,7 +138,7 @@ def press(
     hold = HeldStep(make_collider(scene), skin, scene.W, grid.area_m2, margin)
     qpos = np.zeros(scene.m_col.nq)
     taxel = np.zeros(layout.n)
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         total, top = hold.step(qpos, scene.jz, force_n / grid.area_m2, taxel)
     if top > finger.thickness_m:
         raise PhysicsError(

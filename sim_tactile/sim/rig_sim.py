@@ -303,11 +303,11 @@ def simulate_rig(
 def _face(plate, finger, grid, proto, layout, pas):
     """The probe face's contact (pressure [Pa], approach [m], the skin's description) and the
     elements' reading lines ``u, R`` (:func:`reading_lines`) out to the pass's reach."""
-    from threadpoolctl import threadpool_limits
+    from ..hashing import one_blas_thread
 
     y_rel = layout.positions[:, 1] - proto.offset_y_m
     reach = abs(pas.x_from_m) + float(np.max(np.abs(layout.positions[:, 0])))
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         p, approach, what = probe_contact(plate, finger, grid, proto.force_n)
         u, R = reading_lines(
             grid, p * grid.area_m2, finger, layout.sizes, layout.depth_m, y_rel, reach

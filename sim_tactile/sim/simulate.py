@@ -89,9 +89,9 @@ def simulate(
 
     BLAS runs single-threaded inside: the skin's systems are small, and threads only contend.
     """
-    from threadpoolctl import threadpool_limits
+    from ..hashing import one_blas_thread
 
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         return _simulate(
             plate,
             sensor,
