@@ -351,11 +351,18 @@ def _stress_remainder_hat(stack: Stack, depth_m: float) -> tuple[callable, float
     return _radial_stress(stack, depth_m, length, "normal"), length
 
 
-def _fft_taxel_weights(hat, length, node_xy, hx, hy, taxel_xy, tx, ty, ms) -> np.ndarray:
+def _fft_taxel_weights(
+    hat, length, node_xy, hx, hy, taxel_xy, tx, ty, ms, table_key=None, reach_quantum_m=None
+) -> np.ndarray:
     """(len(ms), N): taxel ms's reading of a unit load spread over each node's patch, for a
     stress whose 2D transform at (kx, ky) is ``hat(KX, KY)`` and falls off as
-    exp(-|k| length); one FFT over every node-taxel offset, read by cubic interpolation."""
-    from scipy.fft import ifft2, next_fast_len
+    exp(-|k| length); one FFT over every node-taxel offset, read by cubic interpolation.
+
+    With ``reach_quantum_m``, the table reaches the offsets rounded up to a multiple of it,
+    and is kept in this process under ``table_key`` (JSON data naming the stress: what
+    ``hat`` computes) with its grid: the readings of taxels whose offsets differ by less than
+    the quantum (a probe's random offset across the slide) come from one table."""
+    from scipy.fft import next_fast_len
     from scipy.ndimage import map_coordinates
 
     dx = taxel_xy[ms, None, 0] - node_xy[None, :, 0]
@@ -363,6 +370,9 @@ def _fft_taxel_weights(hat, length, node_xy, hx, hy, taxel_xy, tx, ty, ms) -> np
     step = np.pi * length / FFT_DECAY
     reach_x = np.abs(dx).max() + FFT_MARGIN * length
     reach_y = np.abs(dy).max() + FFT_MARGIN * length
+    if reach_quantum_m is not None:
+        reach_x = float(np.ceil(reach_x / reach_quantum_m) * reach_quantum_m)
+        reach_y = float(np.ceil(reach_y / reach_quantum_m) * reach_quantum_m)
     nx = next_fast_len(int(np.ceil(2 * reach_x / step)))
     ny = next_fast_len(int(np.ceil(2 * reach_y / step)))
     if max(nx, ny) > _FFT_MAX_SIDE:
@@ -372,6 +382,32 @@ def _fft_taxel_weights(hat, length, node_xy, hx, hy, taxel_xy, tx, ty, ms) -> np
             f"most {_FFT_MAX_SIDE} a side (deeper taxels, a thicker top layer, or a smaller pad)"
         )
     sx_, sy_ = 2 * reach_x / nx, 2 * reach_y / ny
+    grid = (nx, ny, sx_, sy_, hx, hy, tx, ty)
+    coords = np.array([dx.ravel() / sx_ + nx // 2, dy.ravel() / sy_ + ny // 2])
+    if reach_quantum_m is None:
+        F = _fft_table(hat, grid)
+        return map_coordinates(F, coords, order=3, mode="grid-wrap").reshape(dx.shape)
+    from ..cache import setup_memo
+
+    parts = {"stress": table_key, "grid": [float(g) for g in grid]}
+    (coef,) = setup_memo(
+        "a taxel's stress table, spline coefficients",
+        parts,
+        lambda: (_spline(_fft_table(hat, grid)),),
+        (__name__,),
+    )
+    return map_coordinates(coef, coords, order=3, mode="grid-wrap", prefilter=False).reshape(
+        dx.shape
+    )
+
+
+def _fft_table(hat, grid) -> np.ndarray:
+    """The reading of a unit load on a node patch at every offset of the grid ``(nx, ny,
+    sx, sy, hx, hy, tx, ty)``, fftshifted: offset (x, y) at (x / sx + nx // 2, y / sy + ny //
+    2)."""
+    from scipy.fft import ifft2
+
+    nx, ny, sx_, sy_, hx, hy, tx, ty = grid
     kx = 2 * np.pi * np.fft.fftfreq(nx, sx_)
     ky = 2 * np.pi * np.fft.fftfreq(ny, sy_)
     KX, KY = np.meshgrid(kx, ky, indexing="ij")
@@ -382,10 +418,15 @@ def _fft_taxel_weights(hat, length, node_xy, hx, hy, taxel_xy, tx, ty, ms) -> np
         * np.sinc(KY * hy / np.pi)
     )
     F = np.real(ifft2(hat(KX, KY) * boxes)) * (tx * ty) / (sx_ * sy_)
-    F = np.fft.fftshift(F)
-    # offset (x, y) sits at index (x / sx_ + nx // 2, y / sy_ + ny // 2) of the shifted grid
-    coords = np.array([dx.ravel() / sx_ + nx // 2, dy.ravel() / sy_ + ny // 2])
-    return map_coordinates(F, coords, order=3, mode="grid-wrap").reshape(dx.shape)
+    return np.fft.fftshift(F)
+
+
+def _spline(F: np.ndarray) -> np.ndarray:
+    """The cubic spline coefficients :func:`scipy.ndimage.map_coordinates` would make of
+    ``F`` (periodic), made once for many readings."""
+    from scipy.ndimage import spline_filter
+
+    return spline_filter(F, order=3, output=np.float64, mode="grid-wrap")
 
 
 def _groups(taxel_size, depth_m):
@@ -404,20 +445,33 @@ def layered_subsurface_weights(
     depth_m: np.ndarray,
     stack: Stack,
     pitch_y_m: float | None = None,
+    reach_quantum_m: float | None = None,
 ) -> np.ndarray:
     """(M, N) weights W, taxel loads [N] = W @ node loads [N], on ``stack``: Boussinesq's
     weights of the top layer (:func:`~sim_tactile.scene.elastic.subsurface_weights`) plus the
     stack's remainder of the vertical stress averaged over each node's patch and integrated
     over each taxel. The remainder's transform times the taxel's and the patch's box
     transforms is brought back to real space by one FFT per taxel size and depth, and read
-    at each node-taxel offset by cubic interpolation."""
+    at each node-taxel offset by cubic interpolation. ``reach_quantum_m``: see
+    :func:`_fft_taxel_weights` (the tables are then kept in the process, by content)."""
     from .elastic import subsurface_weights
 
     W = subsurface_weights(node_xy, pitch_m, taxel_xy, taxel_size, depth_m, pitch_y_m=pitch_y_m)
     hx, hy = pitch_m / 2, (pitch_y_m or pitch_m) / 2
     for (d, tx, ty), ms in _groups(taxel_size, depth_m).items():
         f, length = _stress_remainder_hat(stack, d)
+        key = {"stack": stack.to_json(), "depth_m": d, "length_m": length, "kind": "normal"}
         W[ms] += _fft_taxel_weights(
-            lambda KX, KY, f=f: f(np.hypot(KX, KY)), length, node_xy, hx, hy, taxel_xy, tx, ty, ms
+            lambda KX, KY, f=f: f(np.hypot(KX, KY)),
+            length,
+            node_xy,
+            hx,
+            hy,
+            taxel_xy,
+            tx,
+            ty,
+            ms,
+            table_key=key,
+            reach_quantum_m=reach_quantum_m,
         )
     return W

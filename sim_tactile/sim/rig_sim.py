@@ -147,13 +147,22 @@ def reading_lines(
     return u, R
 
 
+#: The stack's stress tables reach the elements' offsets rounded up to this [m], and a
+#: process keeps them: every slide of a task draws its own offset across the slide, and one
+#: table now serves the slides whose offsets round alike (most of a slide's time had gone
+#: into making the table again).
+REACH_QUANTUM_M = 2e-3
+
+
 def _weights(nodes, grid, taxel_xy, sizes, depths, stack) -> np.ndarray:
     """(M, N) readings of the taxels from unit loads on the nodes' patches: the stack's,
     else the half-space's."""
     h, hy = grid.pitch_xy
     if stack is None:
         return subsurface_weights(nodes, h, taxel_xy, sizes, depths, pitch_y_m=hy)
-    return layered_subsurface_weights(nodes, h, taxel_xy, sizes, depths, stack, pitch_y_m=hy)
+    return layered_subsurface_weights(
+        nodes, h, taxel_xy, sizes, depths, stack, pitch_y_m=hy, reach_quantum_m=REACH_QUANTUM_M
+    )
 
 
 def rig_model(plate: Plate, sensor: Sensor, rig: ProbeRig, x0_m: float, y0_m: float, dt_s: float):
