@@ -42,6 +42,7 @@ import numpy as np
 from scipy import fft
 
 from ...errors import PhysicsError
+from . import cg_kernels
 
 #: Convergence of the conjugate-gradient iteration: the pressures' change in one iteration,
 #: summed over the nodes, relative to their sum (Polonsky and Keer's criterion). At 1e-10
@@ -112,6 +113,9 @@ class Spectral:
     ``[j, i]``: nodes ``i`` pitches apart along x and ``j`` along y; even in each axis) on a
     lattice of ``nx`` by ``ny`` nodes numbered row by row (``index = iy * nx + ix``, as
     :func:`~sim_tactile.scene.nodes.skin_grid` numbers them)."""
+
+    #: the iteration's vector work in compiled calls (False: numpy, the reference)
+    compiled = True
 
     def __init__(self, table: np.ndarray, tol: float = TOL, max_iter: int = MAX_ITER):
         table = np.asarray(table, dtype=np.float64)
@@ -200,6 +204,7 @@ class Spectral:
         sub = self._blocks.pop(shape, None)
         if sub is None:
             sub = Spectral(self.table[: shape[0], : shape[1]], self.tol, self.max_iter)
+            sub.compiled = self.compiled
         self._blocks[shape] = sub  # most recently used last
         while len(self._blocks) > BLOCKS_KEPT:
             del self._blocks[next(iter(self._blocks))]
@@ -252,7 +257,83 @@ class Spectral:
     def _cg(self, p, pen_ok, ok, total, budget, join_share=None):
         """Iterate from ``p``: ``(p, iterations, change)``, ``p`` None if ``budget``
         iterations did not converge or the iteration cycles; ``join_share``: at most that
-        share of the set's nodes join in one iteration."""
+        share of the set's nodes join in one iteration. The vector work in compiled calls
+        (:mod:`.cg_kernels`); with ``join_share``, and as the reference, :meth:`_cg_numpy`."""
+        if join_share is not None or not self.compiled:
+            return self._cg_numpy(p, pen_ok, ok, total, budget, join_share)
+        held = total is not None
+        if held:
+            p = p * (total / p.sum())
+        else:
+            p = p.copy()
+        new = np.empty(self.n)
+        g = np.empty(self.n)
+        t = np.zeros(self.n)
+        g_old, delta = 1.0, 0.0
+        scale = total if held else -1.0
+        total_f = float(total) if held else 0.0
+        change = np.inf
+        gap_tol = 1e-9 * max(float(np.abs(pen_ok).max()), 1e-12)
+        u = None  # C p, carried between iterations
+        stuck = 0
+        for it in range(1, budget + 1):
+            if not p.max() > 0.0:  # every node let go (the pad at its place above the plate)
+                return p, it, 0.0
+            if u is None or it % REFRESH_EVERY == 0:  # by FFT
+                u = self.apply(p)
+            G, _ = cg_kernels.gradient(u, pen_ok, p, g, held)
+            cg_kernels.direction(g, p, t, delta * G / g_old)
+            g_old = G if G > 0 else 1.0
+            r_raw = self.apply(t)
+            st, delta, ch, carried, scale = cg_kernels.step(
+                r_raw,
+                t,
+                g,
+                p,
+                new,
+                u,
+                ok,
+                held,
+                total_f,
+                G,
+                ROUNDING,
+                DIRECT_MAX,
+                self.table,
+                self.nx,
+                scale,
+            )
+            if st == 1:  # no direction left on the set: solved, unless nodes off it overlap
+                join = (p == 0) & (g < -gap_tol) & ok
+                if not join.any():
+                    return p, it, 0.0
+                p = p.copy()
+                p[join] = -g[join] / self.diag
+                if held:
+                    p *= total / p.sum()
+                t = np.zeros(self.n)
+                delta = 0.0
+                u = None
+                continue
+            if not carried:
+                u = None  # taken again by FFT at the next iteration
+            p, new = new, p
+            change = ch
+            verdict, stuck = self._judge(change, stuck)
+            if verdict:
+                return (p if verdict == 1 else None), it, change
+        return None, budget, change
+
+    def _judge(self, change: float, stuck: int) -> tuple[int, int]:
+        """``(verdict, stuck)`` after an iteration that changed the pressures by ``change``:
+        1 converged, 2 cycling (:data:`CYCLE_ITER` large changes running), else 0."""
+        if change < self.tol:
+            return 1, stuck
+        stuck = stuck + 1 if change > CYCLE_CHANGE else 0
+        return (2 if stuck >= CYCLE_ITER else 0), stuck
+
+    def _cg_numpy(self, p, pen_ok, ok, total, budget, join_share=None):
+        """:meth:`_cg` in numpy: the reference of the compiled iteration, and the path of
+        the start that lets few nodes join at a time."""
         if total is not None:
             p = p * (total / p.sum())
         t = np.zeros(self.n)
@@ -318,11 +399,9 @@ class Spectral:
             if scale is None:
                 scale = max(float(p.sum()), 1e-300)
             change = float(np.abs(p - p_old).sum()) / max(float(p.sum()), scale * 1e-12)
-            if change < self.tol:
-                return p, it, change
-            stuck = stuck + 1 if change > CYCLE_CHANGE else 0
-            if stuck >= CYCLE_ITER:
-                return None, it, change
+            verdict, stuck = self._judge(change, stuck)
+            if verdict:
+                return (p if verdict == 1 else None), it, change
         return None, budget, change
 
     def _carry(self, u, tau, r_raw, line, p):
