@@ -175,12 +175,15 @@ print(json.dumps({"simulated": stats["slides_simulated"], "ridges": recs[-1].dat
 
 @pytest.mark.slow
 def test_an_edited_preset_is_simulated_again(tmp_path):
-    """Edit a preset's ridge width in a copy of the package: the slides are simulated again
-    (their key holds the plate's parameters and the source of every module that makes them),
-    while an edit to a module no slide imports keeps them cached."""
+    """Edit a preset's ridge height in a copy of the package and its assets: that plate's
+    slides are simulated again (their key holds the plate's parameters and the source of
+    every module that makes them) and the other plate's are not, while an edit to a module
+    no slide imports keeps them all cached."""
     src = Path(sim_tactile.__file__).parent
     pkg = tmp_path / "copy" / "sim_tactile"
     shutil.copytree(src, pkg)  # with its compiled caches (mtimes kept: numba reuses them)
+    # the presets' files, where the copy imports them from (sim_tactile.assets)
+    shutil.copytree(src.parent / "assets", pkg / "assets")
     env = {**os.environ, "PYTHONPATH": str(pkg.parent), "SIM_TACTILE_CACHE": str(tmp_path / "c")}
 
     def run() -> dict:
@@ -196,11 +199,11 @@ def test_an_edited_preset_is_simulated_again(tmp_path):
     learn = pkg / "learn" / "src.py"
     learn.write_text(learn.read_text() + "\n# an edit no slide can see\n")
     assert run()["simulated"] == 0
-    presets = pkg / "plates" / "presets.py"
-    text = presets.read_text()
-    old = "Ridges(count=n, width_m=2.5 * MM, height_m=2.5 * MM)"
+    preset = pkg / "assets" / "plates" / "finger7" / "ridges-2.toml"
+    text = preset.read_text()
+    old = "height_m = 0.0025"
     assert old in text
-    presets.write_text(text.replace(old, "Ridges(count=n, width_m=2.5 * MM, height_m=1.0 * MM)"))
+    preset.write_text(text.replace(old, "height_m = 0.001"))
     edited = run()
-    assert edited["simulated"] == 4
+    assert edited["simulated"] == 2  # the ridges' two slides; flat's are kept
     assert edited["ridges"] != first["ridges"]  # and the lower ridges read differently
