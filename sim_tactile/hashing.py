@@ -146,7 +146,6 @@ def _library_version(dist: str) -> str:
 
 
 @lru_cache(maxsize=1)
-@lru_cache(maxsize=1)
 def blas_controller():
     """threadpoolctl's view of this process's thread pools, taken once (a fresh look scans
     the loaded libraries, 2-3 ms: a slide of roughness8 took two), after numpy's and scipy's
@@ -164,6 +163,7 @@ def one_blas_thread():
     return blas_controller().limit(limits=1, user_api="blas")
 
 
+@lru_cache(maxsize=1)
 def blas_kernel() -> str:
     """The BLAS library's kernel in this process (OpenBLAS picks one by CPU: ``Haswell``,
     ``SkylakeX``, ...; ``"unknown"`` when threadpoolctl cannot tell). Arrays a BLAS call
