@@ -101,9 +101,7 @@ def step(r_raw, t, g, p, new, u, ok, held, total, G, rounding, direct_max, table
     if carried:
         for i in range(n):
             u[i] = u[i] - tau * r_raw[i]
-        u2 = u.reshape(u.shape[0] // nx, nx)
-        for k in range(n_moved):
-            _add_column(u2, table, moved[k], dmove[k], nx)
+        add_columns(u.reshape(u.shape[0] // nx, nx), table, moved[:n_moved], dmove[:n_moved], nx)
     if held:
         tot = 0.0
         for i in range(n):
@@ -126,11 +124,14 @@ def step(r_raw, t, g, p, new, u, ok, held, total, G, rounding, direct_max, table
 
 
 @numba.njit(cache=True)
-def _add_column(u, table, node, dp, nx):
-    """``u += C[:, node] dp`` on the lattice (``u`` and ``table`` as (ny, nx))."""
-    jy, jx = node // nx, node % nx
+def add_columns(u, table, nodes, dp, nx):
+    """``u += C[:, nodes] @ dp`` on the lattice: each node's column is the kernel ``table``
+    shifted to it (``u`` and ``table`` as (ny, nx))."""
     ny = u.shape[0]
-    for iy in range(ny):
-        row = table[abs(iy - jy)]
-        for ix in range(nx):
-            u[iy, ix] += dp * row[abs(ix - jx)]
+    for k in range(nodes.size):
+        jy, jx = divmod(nodes[k], nx)
+        d = dp[k]
+        for iy in range(ny):
+            row = table[abs(iy - jy)]
+            for ix in range(nx):
+                u[iy, ix] += d * row[abs(ix - jx)]

@@ -37,7 +37,6 @@ problem (not symmetric) takes the dense solve.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 from scipy import fft
 
@@ -86,20 +85,6 @@ BLOCKS_KEPT = 8
 #: converging held step of finger7/bumps-3x3 took a step 1e12 times its predecessors' on
 #: such a gradient and stopped far from the answer).
 ROUNDING = 1e-13
-
-
-@numba.njit(cache=True)
-def _add_columns(u, table, nodes, dp, nx):
-    """``u += C[:, nodes] @ dp`` on the lattice: each node's column is the kernel ``table``
-    shifted to it (``u`` and ``table`` as (ny, nx))."""
-    ny = u.shape[0]
-    for k in range(nodes.size):
-        jy, jx = divmod(nodes[k], nx)
-        d = dp[k]
-        for iy in range(ny):
-            row = table[abs(iy - jy)]
-            for ix in range(nx):
-                u[iy, ix] += d * row[abs(ix - jx)]
 
 
 def _mean_gap(u: np.ndarray, pen: np.ndarray, on: np.ndarray) -> float:
@@ -303,16 +288,10 @@ class Spectral:
                 scale,
             )
             if st == 1:  # no direction left on the set: solved, unless nodes off it overlap
-                join = (p == 0) & (g < -gap_tol) & ok
-                if not join.any():
+                joined = self._joined(p, g, ok, gap_tol, total)
+                if joined is None:
                     return p, it, 0.0
-                p = p.copy()
-                p[join] = -g[join] / self.diag
-                if held:
-                    p *= total / p.sum()
-                t = np.zeros(self.n)
-                delta = 0.0
-                u = None
+                p, t, delta, u = joined, np.zeros(self.n), 0.0, None
                 continue
             if not carried:
                 u = None  # taken again by FFT at the next iteration
@@ -322,6 +301,19 @@ class Spectral:
             if verdict:
                 return (p if verdict == 1 else None), it, change
         return None, budget, change
+
+    def _joined(self, p, g, ok, gap_tol, total):
+        """Where no direction is left on the set: the pressures with the nodes off it that
+        overlap the plate joined, each with the pressure that would lift it alone (the sum
+        held at ``total``), or None if none overlaps (solved)."""
+        join = (p == 0) & (g < -gap_tol) & ok
+        if not join.any():
+            return None
+        p = p.copy()
+        p[join] = -g[join] / self.diag
+        if total is not None:
+            p *= total / p.sum()
+        return p
 
     def _judge(self, change: float, stuck: int) -> tuple[int, int]:
         """``(verdict, stuck)`` after an iteration that changed the pressures by ``change``:
@@ -365,16 +357,10 @@ class Spectral:
                 # equal, e.g. one node, has no gradient; returning then kept a one-node warm
                 # start where the whole face touched). Those nodes join with the pressure
                 # that would lift them alone.
-                join = (p == 0) & (g < -gap_tol) & ok
-                if not join.any():
+                joined = self._joined(p, g, ok, gap_tol, total)
+                if joined is None:
                     return p, it, 0.0
-                p = p.copy()
-                p[join] = -g[join] / self.diag
-                if total is not None:
-                    p *= total / p.sum()
-                t = np.zeros(self.n)
-                delta = 0.0
-                u = None
+                p, t, delta, u = joined, np.zeros(self.n), 0.0, None
                 continue
             tau = float(g[on] @ t[on]) / rt
             p_old = p
@@ -413,7 +399,7 @@ class Spectral:
         u = u - tau * r_raw
         if moved.size:
             u2 = u.reshape(self.ny, self.nx)
-            _add_columns(u2, self.table, moved, p[moved] - line[moved], self.nx)
+            cg_kernels.add_columns(u2, self.table, moved, p[moved] - line[moved], self.nx)
         return u
 
     def stiffness_per_area(self, p: np.ndarray, tol: float = 1e-8) -> float:
