@@ -7,6 +7,9 @@ Floats are written with ``repr``, so a file read back gives the same numbers to 
 
 from __future__ import annotations
 
+from functools import cache
+from pathlib import Path
+
 from .errors import ConfigError
 
 
@@ -71,7 +74,6 @@ def read_file(path, what: str) -> dict:
     """A user's TOML file as data (``what``: how errors name it, e.g. "sensor file"): it must
     end in .toml, exist and parse."""
     import tomllib
-    from pathlib import Path
 
     path = Path(path)
     if path.suffix.lower() != ".toml":
@@ -87,8 +89,6 @@ def read_file(path, what: str) -> dict:
 def write_file(data: dict, path, what: str, header: str = ""):
     """Write ``data`` as a TOML file at ``path`` (ending in .toml), to a temporary name first
     so that a failed write leaves nothing half written; the path."""
-    from pathlib import Path
-
     path = Path(path)
     if path.suffix != ".toml":
         raise ConfigError(f"{what} {str(path)!r}: valid: a name ending in .toml")
@@ -96,3 +96,20 @@ def write_file(data: dict, path, what: str, header: str = ""):
     tmp.write_text(dumps(data, header), encoding="utf-8")
     tmp.replace(path)
     return path
+
+
+def asset_path(*parts: str) -> Path:
+    """A file or folder of the presets' data (the project's ``assets/``, installed as the
+    package ``sim_tactile.assets``)."""
+    from importlib.resources import files
+
+    return Path(str(files("sim_tactile.assets").joinpath(*parts)))
+
+
+@cache
+def asset_data(*parts: str) -> dict:
+    """A TOML file of :func:`asset_path` as data, read once a process (the package's own
+    files); callers build their objects anew from it and do not change it."""
+    import tomllib
+
+    return tomllib.loads(asset_path(*parts).read_text(encoding="utf-8"))

@@ -33,11 +33,10 @@ Choices where the papers are silent (all plates: base 108 x 36 x 5 mm, textured 
 from __future__ import annotations
 
 import math
-import tomllib
-from functools import cache
 from pathlib import Path
 
 from ..errors import UnknownNameError
+from ..toml_text import asset_data, asset_path
 from .files import plate_from_data
 from .spec import Plate
 
@@ -60,21 +59,7 @@ def turned_corr_length_m(ra_m: float) -> float:
 
 def assets_dir() -> Path:
     """The folder of the preset plates' files."""
-    from importlib.resources import files
-
-    return Path(str(files("sim_tactile.assets").joinpath("plates")))
-
-
-@cache
-def _index() -> tuple[str, ...]:
-    return tuple(tomllib.loads((assets_dir() / "index.toml").read_text(encoding="utf-8"))["names"])
-
-
-@cache
-def _data(name: str) -> dict:
-    """A preset's file as data, read once a process (the package's own files); each plate is
-    built anew from it."""
-    return tomllib.loads(preset_file(name).read_text(encoding="utf-8"))
+    return asset_path("plates")
 
 
 def preset_file(name: str) -> Path:
@@ -84,7 +69,7 @@ def preset_file(name: str) -> Path:
 
 def preset_names() -> list[str]:
     """All preset names, in a fixed order."""
-    return list(_index())
+    return list(asset_data("plates", "index.toml")["names"])
 
 
 def get_plate(name: str | Path) -> Plate:
@@ -94,7 +79,7 @@ def get_plate(name: str | Path) -> Plate:
         from .files import load_plate_file
 
         return load_plate_file(name)
-    names = _index()
+    names = asset_data("plates", "index.toml")["names"]
     if name not in names:
         fams = sorted({n.split("/")[0] for n in names})
         close = [n for n in names if name and str(name).split("/")[-1] in n][:5]
@@ -104,4 +89,5 @@ def get_plate(name: str | Path) -> Plate:
             f"`sim-tactile plates list` (families {', '.join(fams)}), or a plate file (.toml)"
             f"{hint}"
         )
-    return plate_from_data(_data(name), name, where=f"preset plate file {preset_file(name)}")
+    data = asset_data("plates", f"{name}.toml")
+    return plate_from_data(data, name, where=f"preset plate file {preset_file(name)}")

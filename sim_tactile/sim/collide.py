@@ -232,13 +232,16 @@ class PrimitiveCollider:
         kind = np.empty(n, dtype=np.int64)
         pos, mat = np.empty((n, 3)), np.empty((n, 3, 3))
         size, top = np.empty((n, 3)), np.zeros(n)
+        fs = None  # the plate's features, where a mesh must be found among them
         for k, g in enumerate(plate_geoms):
             t = int(m.geom_type[g])
             if t in (_BOX, _SPHERE, _CYLINDER):
                 kind[k], pos[k], size[k] = t, d.geom_xpos[g], m.geom_size[g]
                 mat[k] = d.geom_xmat[g].reshape(3, 3)
                 continue
-            ridge = _drafted_ridge(m, d, g, plate) if t == _PRISM else None
+            if t == _PRISM and fs is None and plate is not None:
+                fs = features(plate)  # once, for every mesh geom
+            ridge = _drafted_ridge(m, d, g, fs) if t == _PRISM else None
             if ridge is None:
                 return None
             kind[k], top[k] = _PRISM, ridge[3]
@@ -337,15 +340,15 @@ def _half_extents(kind: np.ndarray, mat: np.ndarray, size: np.ndarray) -> np.nda
     return out
 
 
-def _drafted_ridge(m: mujoco.MjModel, d: mujoco.MjData, g: int, plate):
-    """A mesh geom that is one of ``plate``'s drafted ridges (by its name ``fNNNN``, as
-    :func:`~sim_tactile.plates.mjcf.plate_spec` names it) as ``(pos, mat, size, top)``: its
-    mid-height centre in the world, the plate body's frame (unrotated), its bottom half-widths
-    and half-height, its top half-width. None if it is not one, or the plate is rotated."""
+def _drafted_ridge(m: mujoco.MjModel, d: mujoco.MjData, g: int, fs):
+    """A mesh geom that is one of the plate's drafted ridges (its features ``fs``; by the
+    geom's name ``fNNNN``, as :func:`~sim_tactile.plates.mjcf.plate_spec` names it) as ``(pos,
+    mat, size, top)``: its mid-height centre in the world, the plate body's frame (unrotated),
+    its bottom half-widths and half-height, its top half-width. None if it is not one, or the
+    plate is rotated."""
     name = m.geom(g).name
-    if plate is None or not (len(name) == 5 and name[0] == "f" and name[1:].isdigit()):
+    if fs is None or not (len(name) == 5 and name[0] == "f" and name[1:].isdigit()):
         return None
-    fs = features(plate)
     i = int(name[1:])
     if i >= len(fs) or fs[i].kind != "prism":
         return None

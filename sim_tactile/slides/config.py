@@ -170,14 +170,17 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
     return ss, seed, name
 
 
+def _beside(value: str, base_dir: Path | None) -> Path:
+    """A file the configuration names: relative paths are relative to its folder."""
+    path = Path(value)
+    return base_dir / path if not path.is_absolute() and base_dir is not None else path
+
+
 def _plate(value: str, base_dir: Path | None) -> str:
     """A preset plate's name, or a plate file's absolute path (``.toml``, relative to the
     configuration file's folder), checked."""
     if value.lower().endswith(".toml"):
-        path = Path(value)
-        if not path.is_absolute() and base_dir is not None:
-            path = base_dir / path
-        path = path.resolve()
+        path = _beside(value, base_dir).resolve()
         get_plate(str(path))  # it must read
         return str(path)
     if value not in preset_names():
@@ -192,10 +195,7 @@ def _sensor(value, base_dir: Path | None):
     """``(name, definition)`` of the configuration's ``sensor``: a preset's name (definition
     None), or a sensor file (``.toml``, relative to the configuration file's folder)."""
     if isinstance(value, str) and value.lower().endswith(".toml"):
-        path = Path(value)
-        if not path.is_absolute() and base_dir is not None:
-            path = base_dir / path
-        spec = load_sensor_file(path)
+        spec = load_sensor_file(_beside(value, base_dir))
         return spec.name, spec
     return v.one_of("sensor", value, [*sensor_names(), "<a sensor file>.toml"]), None
 
