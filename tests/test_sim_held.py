@@ -229,19 +229,9 @@ def test_the_compiled_held_step_on_ridges_and_cylinders(plate, cache):
     took them: the compiled held step against the plain loop, both over the compiled
     collider."""
 
-    def run(options):
-        return simulate(
-            plate,
-            "grid3x3",
-            protocol=Protocol(duration_s=0.5),
-            fidelity="L1",
-            ideal=True,
-            seed=4,
-            options=options,
-            cache=cache,
-        ).recording
-
-    fast, slow = run(StepOptions()), run(StepOptions(compiled_hold=False))
+    kw = dict(fidelity="L1", seed=4, cache=cache)
+    fast = _ideal_slide(plate, "grid3x3", 0.5, StepOptions(), **kw)
+    slow = _ideal_slide(plate, "grid3x3", 0.5, StepOptions(compiled_hold=False), **kw)
     assert slow.meta["skin_problem"] == "full problem"
     assert fast.data.max() > 0.05
     np.testing.assert_allclose(fast.data, slow.data, rtol=SLIDE_RTOL, atol=SLIDE_ATOL_N)
@@ -256,20 +246,18 @@ def test_the_compiled_held_step_on_a_rough_plate(reference, cache):
     """The rough plates' profile collider in the compiled held step (the pvdf2 fingertip is
     mirror-symmetric: a halved solve) against the plain loop and the full problem."""
 
-    def run(options):
-        return simulate(
-            "roughness8/ra-50",
-            "pvdf2",
-            protocol=Protocol(duration_s=0.2),
-            ideal=True,
-            seed=3,
-            options=options,
-            cache=cache,
-        ).recording
-
-    fast, slow = run(StepOptions()), run(reference)
+    fast, slow = (
+        _ideal_slide("roughness8/ra-50", "pvdf2", 0.2, options, seed=3, cache=cache)
+        for options in (StepOptions(), reference)
+    )
     assert "mirror-halved" in fast.meta["skin_problem"]
     assert "mirror" not in slow.meta["skin_problem"]
     assert np.abs(fast.data).max() > 1e-3
     np.testing.assert_allclose(fast.data, slow.data, rtol=SLIDE_RTOL, atol=SLIDE_ATOL_N)
     np.testing.assert_allclose(fast.meta["normal_force_n"], slow.meta["normal_force_n"], rtol=1e-6)
+
+
+def _ideal_slide(plate, sensor, duration_s, options, **kw):
+    """The ideal loads of a slide of ``duration_s`` under the step ``options``."""
+    proto = Protocol(duration_s=duration_s)
+    return simulate(plate, sensor, protocol=proto, ideal=True, options=options, **kw).recording
