@@ -9,7 +9,7 @@ from .build import KINDS, BuildResult, build, load_heightmap
 from .features import features, height_at, roughness_profile
 from .geometry import Feature
 from .presets import get_plate, preset_names
-from .spec import Bumps, Flat, Grating, Plate, Ridges, Roughness
+from .spec import Bumps, Flat, Grating, HeightMap, Plate, Ridges, Roughness
 
 __all__ = [
     "KINDS",
@@ -18,6 +18,7 @@ __all__ = [
     "Feature",
     "Flat",
     "Grating",
+    "HeightMap",
     "Plate",
     "Ridges",
     "Roughness",

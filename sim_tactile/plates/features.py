@@ -64,12 +64,35 @@ def height_at(plate: Plate, x: np.ndarray | float, y: np.ndarray | float) -> np.
     """
     x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
     z = np.zeros(x.shape)
+    inside = (np.abs(x) <= plate.area_length_m / 2) & (np.abs(y) <= plate.area_width_m / 2)
     if plate.texture.kind == "roughness":
         px, pz = roughness_profile(plate)
-        inside = (np.abs(x) <= plate.area_length_m / 2) & (np.abs(y) <= plate.area_width_m / 2)
         z = np.where(inside, np.interp(x, px, pz), 0.0)
+    elif plate.texture.kind == "heightmap":
+        t = plate.texture
+        z = np.where(inside, map_height(x, y, t.z, t.pixel_m), 0.0)
     else:
         for f in features(plate):
             np.maximum(z, f.height(x, y), out=z)
     off = (np.abs(x) > plate.length_m / 2) | (np.abs(y) > plate.width_m / 2)
     return np.where(off, np.nan, z)
+
+
+def map_height(x: np.ndarray, y: np.ndarray, z: np.ndarray, pixel: float) -> np.ndarray:
+    """Bilinear height of the map ``z`` (ny, nx) [m], sampled every ``pixel`` [m] and centred
+    on the origin, at ``(x, y)`` (broadcast); NaN where a corner of the cell is NaN (no
+    material). Points beyond the map take its edge cells' extrapolation: callers mask them.
+
+    The arithmetic, in this order, is the compiled collider's (tested bit for bit): ``fx =
+    (x + (nx - 1) pixel / 2) / pixel``, ``j = clip(floor(fx), 0, nx - 2)``, ``tx = fx - j``
+    (so for y), then ``(1 - ty) ((1 - tx) z00 + tx z01) + ty ((1 - tx) z10 + tx z11)``.
+    """
+    ny, nx = z.shape
+    fx = (x + (nx - 1) * pixel / 2) / pixel
+    fy = (y + (ny - 1) * pixel / 2) / pixel
+    j = np.clip(np.floor(fx), 0, nx - 2).astype(np.intp)
+    i = np.clip(np.floor(fy), 0, ny - 2).astype(np.intp)
+    tx, ty = fx - j, fy - i
+    lower = (1 - tx) * z[i, j] + tx * z[i, j + 1]
+    upper = (1 - tx) * z[i + 1, j] + tx * z[i + 1, j + 1]
+    return (1 - ty) * lower + ty * upper

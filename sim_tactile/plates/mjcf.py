@@ -20,7 +20,7 @@ from scipy.spatial import ConvexHull, QhullError
 from ..errors import GeometryError
 from .features import features, roughness_profile
 from .geometry import Feature
-from .spec import Plate, Roughness
+from .spec import HeightMap, Plate, Roughness
 
 #: Largest height error allowed when the height field is made coarser than the profile: a
 #: fifth of the 0.01 mm agreement demanded between collider and CAD [m], and at most a tenth
@@ -75,6 +75,8 @@ def plate_spec(plate: Plate) -> mujoco.MjSpec:
     L, W, T = plate.length_m / 2, plate.width_m / 2, plate.thickness_m
     if isinstance(plate.texture, Roughness):
         _add_roughness(spec, body, cls, plate)
+    elif isinstance(plate.texture, HeightMap):
+        _add_heightmap(spec, body, cls, plate)
     else:
         _add_box(body, cls, "base", (-L, -W, -T), (L, W, 0.0))
     for i, f in enumerate(features(plate)):
@@ -134,9 +136,23 @@ def hfield_profile(px: np.ndarray, pz: np.ndarray, max_error_m: float = HFIELD_M
 
 
 def _add_roughness(spec, body, cls, plate: Plate) -> None:
-    """Base box below the field, flat margin boxes at z = 0 around it, and the field."""
+    """The roughness profile as a two-row height field (:func:`_add_field`)."""
     tol = min(HFIELD_MAX_ERROR_M, HFIELD_MAX_ERROR_RA * plate.texture.ra_m)
     px, pz = hfield_profile(*roughness_profile(plate), max_error_m=tol)
+    _add_field(spec, body, cls, plate, np.stack([pz, pz]), "roughness")
+
+
+def _add_heightmap(spec, body, cls, plate: Plate) -> None:
+    """A height map's samples as the field, one elevation each (MuJoCo's rows run along +y,
+    as the map's do); samples without material lie on the field's floor."""
+    z = np.asarray(plate.texture.z)
+    floor = float(np.nanmin(z))
+    _add_field(spec, body, cls, plate, np.where(np.isnan(z), floor, z), "heightmap")
+
+
+def _add_field(spec, body, cls, plate: Plate, pz: np.ndarray, name: str) -> None:
+    """Base box below the field, flat margin boxes at z = 0 around it, and the field of
+    heights ``pz`` (rows along y) over the textured area."""
     zmin, zmax = float(pz.min()), float(pz.max())
     L, W, T = plate.length_m / 2, plate.width_m / 2, plate.thickness_m
     ax, ay = plate.area_length_m / 2, plate.area_width_m / 2
@@ -151,18 +167,16 @@ def _add_roughness(spec, body, cls, plate: Plate) -> None:
     for k, ((x0, y0), (x1, y1)) in enumerate(margins):
         if x1 - x0 > 1e-12 and y1 - y0 > 1e-12:
             _add_box(body, cls, f"margin{k}", (x0, y0, floor), (x1, y1, 0.0))
-    span = zmax - zmin
+    span = max(zmax - zmin, 1e-12)
     elev = (pz - zmin) / span
     spec.add_hfield(
-        name="roughness",
+        name=name,
         size=[ax, ay, span, HFIELD_BASE_M],
-        nrow=2,
-        ncol=len(px),
-        userdata=np.concatenate([elev, elev]).tolist(),
+        nrow=pz.shape[0],
+        ncol=pz.shape[1],
+        userdata=elev.ravel().tolist(),
     )
-    body.add_geom(
-        cls, name="roughness", type=_T.mjGEOM_HFIELD, hfieldname="roughness", pos=(0.0, 0.0, zmin)
-    )
+    body.add_geom(cls, name=name, type=_T.mjGEOM_HFIELD, hfieldname=name, pos=(0.0, 0.0, zmin))
 
 
 def mjcf_xml(plate: Plate) -> str:

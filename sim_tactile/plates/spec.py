@@ -13,9 +13,12 @@ range, before anything is built or cached.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import asdict, dataclass, field, fields
 from typing import Literal
+
+import numpy as np
 
 from .. import _validate as v
 from ..errors import ConfigError
@@ -31,6 +34,8 @@ MIN_FEATURE_SIZE_M = 10e-6
 MAX_ROUGHNESS_SAMPLES = 200_001
 #: Largest draft angle [deg]; at 60 degrees a drafted ridge is a low wedge already.
 MAX_DRAFT_DEG = 60.0
+#: Largest number of samples a height map may have (128 MB of float64).
+MAX_HEIGHTMAP_SAMPLES = 16_000_000
 
 BumpShape = Literal["box", "cylinder", "hemisphere"]
 BUMP_SHAPES = ("box", "cylinder", "hemisphere")
@@ -264,7 +269,96 @@ class Roughness:
         return []
 
 
-Texture = Flat | Ridges | Grating | Bumps | Roughness
+@dataclass(frozen=True, eq=False)
+class HeightMap:
+    """A sampled top surface: heights ``z`` [m] (rows along y, columns along x) every
+    ``pixel_m`` over the textured area, bilinear between samples; NaN where there is no
+    material. Made from a user's CAD, script or height map (:mod:`.user`).
+
+    Sample ``(i, j)`` lies at ``x = -(nx - 1) pixel / 2 + j pixel``, ``y = -(ny - 1) pixel / 2
+    + i pixel``, so the map spans the textured area exactly: ``area_length_m = (nx - 1)
+    pixel_m`` and ``area_width_m = (ny - 1) pixel_m``. The geometry is the samples' bytes
+    (their SHA-256 is in :meth:`params`), so two files that give the same map give the same
+    plate, and an edited file another one. ``source`` says where it came from (not part of
+    the geometry).
+    """
+
+    z: np.ndarray
+    pixel_m: float
+    source: str = ""
+    kind: Literal["heightmap"] = field(default="heightmap", init=False)
+
+    def __post_init__(self) -> None:
+        v.in_range("heightmap.pixel_m", self.pixel_m, 1e-6, 1e-2, unit="m")
+        z = np.asarray(self.z)
+        if z.ndim != 2 or min(z.shape) < 2:
+            raise ConfigError(
+                f"heightmap.z must be a 2-D array of at least 2 x 2 samples, got shape {z.shape}"
+            )
+        if z.size > MAX_HEIGHTMAP_SAMPLES:
+            raise ConfigError(
+                f"heightmap.z has {z.size} samples ({z.shape[0]} x {z.shape[1]}); valid: at most "
+                f"{MAX_HEIGHTMAP_SAMPLES} (a coarser pixel_m, or a smaller part)"
+            )
+        if not np.issubdtype(z.dtype, np.floating) and not np.issubdtype(z.dtype, np.integer):
+            raise ConfigError(f"heightmap.z must hold numbers, got dtype {z.dtype}")
+        z = np.ascontiguousarray(z, dtype="<f8")
+        z = np.where(np.isnan(z), np.nan, z + 0.0)  # one NaN, no -0.0: one geometry, one hash
+        if np.isinf(z).any():
+            raise ConfigError(
+                "heightmap.z holds an infinite height; valid: finite, or NaN (no material)"
+            )
+        if np.isnan(z).all():
+            raise ConfigError("heightmap.z holds no material (every sample is NaN)")
+        lo, hi = float(np.nanmin(z)), float(np.nanmax(z))
+        if lo < -MAX_FEATURE_HEIGHT_M or hi > MAX_FEATURE_HEIGHT_M:
+            raise ConfigError(
+                f"heightmap.z spans [{lo:g}, {hi:g}] m; valid: within +-{MAX_FEATURE_HEIGHT_M:g} m "
+                "of the base (z = 0)"
+            )
+        z.setflags(write=False)
+        object.__setattr__(self, "z", z)
+        object.__setattr__(self, "_sha", hashlib.sha256(z.tobytes()).hexdigest())
+
+    @property
+    def sha256(self) -> str:
+        """SHA-256 of the samples (little-endian float64, C order)."""
+        return self._sha
+
+    @property
+    def extent_m(self) -> tuple[float, float]:
+        """The map's span (x, y) [m]."""
+        ny, nx = self.z.shape
+        return (nx - 1) * self.pixel_m, (ny - 1) * self.pixel_m
+
+    def grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """The samples' coordinates (xs, ys) [m]."""
+        ny, nx = self.z.shape
+        p = self.pixel_m
+        return (np.arange(nx) - (nx - 1) / 2) * p, (np.arange(ny) - (ny - 1) / 2) * p
+
+    def params(self) -> dict:
+        return {
+            "kind": self.kind,
+            "pixel_m": self.pixel_m,
+            "shape": list(self.z.shape),
+            "sha256": self.sha256,
+        }
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, HeightMap):
+            return NotImplemented
+        return self.pixel_m == other.pixel_m and self.sha256 == other.sha256
+
+    def __hash__(self) -> int:
+        return hash((self.pixel_m, self.sha256))
+
+    def features(self, area_length_m: float, area_width_m: float) -> list[Feature]:
+        """None: a height map is its samples."""
+        return []
+
+
+Texture = Flat | Ridges | Grating | Bumps | Roughness | HeightMap
 _TEXTURES = {
     "flat": Flat,
     "ridges": Ridges,
@@ -287,9 +381,10 @@ class Plate:
     name: str | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.texture, Flat | Ridges | Grating | Bumps | Roughness):
+        if not isinstance(self.texture, Flat | Ridges | Grating | Bumps | Roughness | HeightMap):
             raise ConfigError(
-                f"plate.texture must be one of {', '.join(_TEXTURES)}, got {self.texture!r}"
+                f"plate.texture must be one of {', '.join(_TEXTURES)} or a heightmap, got "
+                f"{type(self.texture).__name__}"
             )
         v.in_range("plate.length_m", self.length_m, 1e-3, 2.0, unit="m")
         v.in_range("plate.width_m", self.width_m, 1e-3, 2.0, unit="m")
@@ -305,6 +400,17 @@ class Plate:
                     f"{self.area_length_m:g} m; valid: at most {MAX_ROUGHNESS_SAMPLES} samples "
                     f"(resolution_m >= {self.area_length_m / (MAX_ROUGHNESS_SAMPLES - 1):g} m)"
                 )
+        if isinstance(t, HeightMap):
+            ex, ey = t.extent_m
+            for key, want, got in (
+                ("area_length_m", ex, self.area_length_m),
+                ("area_width_m", ey, self.area_width_m),
+            ):
+                if abs(want - got) > 1e-9:
+                    raise ConfigError(
+                        f"plate.{key} = {got:g} m differs from the height map's span, {want:g} m "
+                        f"((samples - 1) x pixel_m); valid: {want:g} m"
+                    )
         # expanding the features checks that they fit and do not overlap
         self.texture.features(self.area_length_m, self.area_width_m)
 
@@ -317,7 +423,8 @@ class Plate:
         d = {
             f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("texture", "name")
         }
-        d["texture"] = asdict(self.texture)
+        t = self.texture
+        d["texture"] = t.params() if isinstance(t, HeightMap) else asdict(t)
         return _canon(d)
 
     @property
@@ -330,13 +437,19 @@ class Plate:
         return (self.name or f"plate-{self.hash}").replace("/", "_")
 
     @classmethod
-    def from_params(cls, params: dict, name: str | None = None) -> Plate:
-        """Build a plate from :meth:`params`-style data (e.g. a TOML or JSON file)."""
+    def from_params(
+        cls, params: dict, name: str | None = None, maps: dict[str, np.ndarray] | None = None
+    ) -> Plate:
+        """Build a plate from :meth:`params`-style data (e.g. a TOML or JSON file). A height
+        map's parameters name its samples by SHA-256: ``maps`` holds them by that hash (a
+        data set's store does, :func:`~sim_tactile.datasets.store.plate_maps`)."""
         if not isinstance(params, dict) or "texture" not in params:
             raise ConfigError("plate parameters must be a table with a 'texture' table")
         p = dict(params)
         tex = dict(p.pop("texture"))
         kind = tex.pop("kind", None)
+        if kind == "heightmap":
+            return cls._from_map_params(p, tex, name, maps or {})
         if kind not in _TEXTURES:
             raise ConfigError(
                 f"texture.kind = {kind!r} is not valid; valid: {', '.join(_TEXTURES)}"
@@ -348,3 +461,19 @@ class Plate:
             return cls(texture=texture, name=name, **p)
         except TypeError as exc:
             raise ConfigError(f"plate parameters: {exc}") from None
+
+    @classmethod
+    def _from_map_params(cls, p: dict, tex: dict, name, maps: dict) -> Plate:
+        sha = tex.get("sha256")
+        if sha not in maps:
+            raise ConfigError(
+                f"plate {name or ''!s}: its height map (sha256 {sha}) is not given; a height-map "
+                "plate is re-created from its samples (a data set's store holds them)"
+            )
+        texture = HeightMap(np.asarray(maps[sha]), float(tex.get("pixel_m", 0.0)))
+        if texture.sha256 != sha or list(texture.z.shape) != list(tex.get("shape", [])):
+            raise ConfigError(
+                f"plate {name or ''!s}: the height map given for sha256 {sha} has sha256 "
+                f"{texture.sha256} and shape {list(texture.z.shape)}; valid: the recorded map"
+            )
+        return cls(texture=texture, name=name, **p)
