@@ -55,3 +55,42 @@ def add_command(parent, name: str, func, help: str) -> argparse.ArgumentParser:
     sp.add_argument("--json", action="store_true", help="print one JSON document on stdout")
     sp.set_defaults(func=func)
     return sp
+
+
+PLATE_HELP = (
+    "preset plate name, a plate file (.toml: copy one of assets/plates), a part (.step, .stp, "
+    ".stl, a CadQuery script .py[:function], in mm unless units=...) or a height map (.npy in "
+    "m, 16-bit .png), with options after '?' (see --plate-frame)"
+)
+PLATE_FRAME_HELP = (
+    "options of a part or height map, comma-separated key=value: units (mm, m, um, in), up "
+    "(+z, -z, +x, -x, +y, -y: the part's axis that points up), rotate_deg (about z), scale, "
+    "pixel_m (the height map's sample spacing), z_scale_m (a PNG's metres per count), "
+    "thickness_m, fill_overhangs (true/false), timeout_s (a script's time limit), name"
+)
+
+
+def add_plate_args(parser: argparse.ArgumentParser, **kw) -> None:
+    """``--plate`` and ``--plate-frame``."""
+    parser.add_argument("--plate", help=PLATE_HELP, **kw)
+    parser.add_argument("--plate-frame", default=None, help=PLATE_FRAME_HELP)
+
+
+def plate_of(plate: str, frame: str | None) -> str:
+    """The plate reference of ``--plate`` with ``--plate-frame``'s options."""
+    if frame is None:
+        return plate
+    from ..plates.user import is_user_plate, parse_ref
+
+    if not is_user_plate(plate):
+        raise ConfigError(
+            f"--plate-frame applies to a part or height map (.step, .stp, .stl, .py, .npy, "
+            f".png), not to {plate!r}"
+        )
+    opts = {}
+    for item in frame.split(","):
+        key, eq, val = item.partition("=")
+        if not eq or not key.strip():
+            raise ConfigError(f"--plate-frame {frame!r}: {item!r} is not key=value")
+        opts[key.strip()] = val.strip()
+    return parse_ref(plate, **opts).ref()

@@ -6,7 +6,7 @@ import argparse
 
 from ..errors import ConfigError
 from ..tables import text_table
-from ._common import add_command, emit, log
+from ._common import PLATE_FRAME_HELP, PLATE_HELP, add_command, emit, log, plate_of
 
 
 def cmd_plates_list(args: argparse.Namespace) -> int:
@@ -36,11 +36,15 @@ def cmd_plates_build(args: argparse.Namespace) -> int:
 
     if args.all == bool(args.name):
         raise ConfigError("plates build: give a plate NAME or --all")
-    names = preset_names() if args.all else [args.name]
+    names = preset_names() if args.all else [plate_of(args.name, args.plate_frame)]
     results = []
     for n in names:
         r = build(n, args.out)
-        log(f"built {n} in {r.wall_s:.2f} s ({'cache hit' if all(r.cached.values()) else 'built'})")
+        for note in r.notes:
+            log(f"note: {note}")
+        log(
+            f"built {r.plate.name} in {r.wall_s:.2f} s ({'cache hit' if all(r.cached.values()) else 'built'})"
+        )
         results.append(r)
     payload = [r.to_json() for r in results] if args.all else results[0].to_json()
     emit(args, payload, lambda: _build_table(results))
@@ -54,6 +58,7 @@ def add_parsers(sub) -> None:
     b = add_command(
         psub, "build", cmd_plates_build, "build a plate's STL, STEP, MJCF and preview PNG"
     )
-    b.add_argument("name", nargs="?", help="preset name, e.g. finger7/ridges-4")
+    b.add_argument("name", nargs="?", help="e.g. finger7/ridges-4; " + PLATE_HELP)
+    b.add_argument("--plate-frame", default=None, help=PLATE_FRAME_HELP)
     b.add_argument("--all", action="store_true", help="build every preset")
     b.add_argument("--out", required=True, help="output directory")

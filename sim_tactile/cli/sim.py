@@ -9,7 +9,7 @@ from pathlib import Path
 from ..errors import ConfigError
 from ..sim.fidelity import FIDELITIES, PRESS_LEVELS
 from ..sim.protocol import FORCE_CONTROLS, STARTS
-from ._common import add_command, emit, log
+from ._common import add_command, add_plate_args, emit, log, plate_of
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -36,7 +36,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         cal = load_calibration(args.sensor_config)
         sensor = calibrated(resolve_sensor(args.sensor or cal.sensor), cal)
     res = simulate(
-        args.plate,
+        plate_of(args.plate, args.plate_frame),
         sensor or "grid3x3",
         protocol=proto,
         fidelity=args.fidelity,
@@ -136,7 +136,7 @@ def cmd_press(args: argparse.Namespace) -> int:
         args.force,
         readout_pitch_m=args.pitch,
         node_pitch_m=args.node_pitch,
-        plate=args.plate,
+        plate=plate_of(args.plate, args.plate_frame),
         fidelity=args.fidelity,
         depth_m=args.depth,
         slide_dir=SLIDE_DIRS[args.slide_dir],
@@ -168,11 +168,7 @@ def _add_simulate(sub) -> None:
     sm = add_command(
         sub, "simulate", cmd_simulate, "press a finger on a plate, slide it, record the taxels"
     )
-    sm.add_argument(
-        "--plate",
-        required=True,
-        help="preset plate name, or a plate file (.toml: copy one of assets/plates)",
-    )
+    add_plate_args(sm, required=True)
     sm.add_argument(
         "--sensor",
         default=None,
@@ -280,5 +276,5 @@ def _add_press(sub) -> None:
         default=None,
         help="the skin's node pitch [m] (default: the taxel pitch, at most 0.2 mm)",
     )
-    pr.add_argument("--plate", default="finger7/flat")
+    add_plate_args(pr, default="finger7/flat")
     pr.add_argument("--fidelity", default="L1", choices=PRESS_LEVELS)

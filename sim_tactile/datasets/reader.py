@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import StoreError
 from ..records import Recording, TactileDataset
-from .store import FORMAT, PARAM_NAMES, check_slide, open_root, slide_digest
+from .store import FORMAT, PARAM_NAMES, check_slide, open_root, plate_maps, slide_digest
 
 
 def parts_of(path: str | Path) -> list[str]:
@@ -48,6 +48,21 @@ class SlideStore:
     @property
     def config(self) -> dict:
         return self.meta["config"]
+
+    def plates(self) -> list:
+        """The plates of a simulated data set, re-created from what the store records (their
+        parameters, and a height-map plate's samples, checked against its SHA-256), in class
+        order: no file the configuration named is needed."""
+        from ..plates import Plate
+
+        params = self.config.get("plate_params")
+        if params is None:
+            raise StoreError(f"{str(self.path)!r} records no plates (not a simulated data set)")
+        maps = plate_maps(self.group)
+        return [
+            Plate.from_params(p, name=name, maps=maps)
+            for p, name in zip(params, self.class_names, strict=True)
+        ]
 
     @property
     def config_hash(self) -> str:

@@ -108,6 +108,9 @@ class StoreSpec:
     taxel_positions: np.ndarray | None = None
     dataset_meta: dict = field(default_factory=dict)
     code_version: str | None = None
+    #: the samples of its height-map plates by their SHA-256 (a user's part or height map:
+    #: the store holds it whole, so the plates can be re-created without the files)
+    plate_maps: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def n_slides(self) -> int:
@@ -166,6 +169,11 @@ def _create_group(root, path: str, spec: StoreSpec) -> None:
     arr("slide", spec.slide.astype(np.int64), "int64")
     arr("seed", spec.seeds.astype(np.uint64), "uint64")
     arr("params", spec.params.astype(np.float64), "float64", (idx[0], len(PARAM_NAMES)), np.nan)
+    if spec.plate_maps:
+        maps = g.create_group("plate_maps")
+        for sha, z in sorted(spec.plate_maps.items()):
+            a = maps.create_array(sha, shape=z.shape, dtype="float64", fill_value=np.nan)
+            a[...] = z
     g.attrs.update(spec.attrs())
 
 
@@ -254,3 +262,11 @@ def open_root(path: str | Path, mode: str = "r"):
     if v != FORMAT_VERSION:
         raise StoreError(f"{str(path)!r} has format version {v}; this code reads {FORMAT_VERSION}")
     return root
+
+
+def plate_maps(group) -> dict[str, np.ndarray]:
+    """The height-map plates' samples a data set's group holds, by SHA-256."""
+    if "plate_maps" not in group:
+        return {}
+    maps = group["plate_maps"]
+    return {name: maps[name][...] for name in sorted(maps.array_keys())}

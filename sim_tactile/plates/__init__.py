@@ -8,8 +8,9 @@ from __future__ import annotations
 from .build import KINDS, BuildResult, build, load_heightmap
 from .features import features, height_at, roughness_profile
 from .geometry import Feature
-from .presets import get_plate, preset_names
+from .presets import get_plate, is_plate_file, preset_names
 from .spec import Bumps, Flat, Grating, HeightMap, Plate, Ridges, Roughness
+from .user import load_user_plate
 
 __all__ = [
     "KINDS",
@@ -25,6 +26,8 @@ __all__ = [
     "build",
     "features",
     "get_plate",
+    "is_plate_file",
+    "load_user_plate",
     "height_at",
     "load_heightmap",
     "preset_names",

@@ -32,6 +32,8 @@ HEIGHTMAP_STEP_M = 5e-5
 _MAKERS = {
     "stl": ("cad", ("cadquery",)),
     "step": ("cad", ("cadquery",)),
+    "map_stl": ("map_mesh", ("cadquery", "trimesh", "numpy")),
+    "map_step": ("map_mesh", ("cadquery", "trimesh", "numpy")),
     "mjcf": ("mjcf", ("mujoco", "numpy", "scipy")),
     "png": ("render", ("matplotlib", "numpy")),
     "heightmap": ("features", ("numpy",)),
@@ -54,12 +56,13 @@ def _settings(kind: str) -> dict:
 
 
 def artefact_key(plate: Plate, kind: str) -> str:
+    maker = f"map_{kind}" if kind in ("stl", "step") and plate.texture.kind == "heightmap" else kind
     return ArtefactCache.key(
         {
             "plate": plate.params(),
             "kind": kind,
             "settings": _settings(kind),
-            "code": _code_version(kind),
+            "code": _code_version(maker),
         }
     )
 
@@ -94,6 +97,11 @@ class BuildResult:
     cached: dict[str, bool]
     wall_s: float
     timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """What loading a user's part reported (e.g. a filled overhang)."""
+        return getattr(self.plate.texture, "notes", ())
 
     def to_json(self) -> dict:
         return {
@@ -141,7 +149,11 @@ def build(
     solid = None
     for k in missing:
         t = time.perf_counter()
-        if k in ("stl", "step"):
+        if k in ("stl", "step") and plate.texture.kind == "heightmap":
+            from . import map_mesh
+
+            data = map_mesh.stl_bytes(plate) if k == "stl" else map_mesh.step_bytes(plate)
+        elif k in ("stl", "step"):
             from . import cad
 
             if solid is None:

@@ -70,7 +70,9 @@ def height_at(plate: Plate, x: np.ndarray | float, y: np.ndarray | float) -> np.
         z = np.where(inside, np.interp(x, px, pz), 0.0)
     elif plate.texture.kind == "heightmap":
         t = plate.texture
-        z = np.where(inside, map_height(x, y, t.z, t.pixel_m), 0.0)
+        ex, ey = t.extent_m
+        on_map = (np.abs(x) <= ex / 2) & (np.abs(y) <= ey / 2)
+        z = np.where(on_map, map_height(x, y, t.z, t.pixel_m), 0.0)
     else:
         for f in features(plate):
             np.maximum(z, f.height(x, y), out=z)

@@ -139,7 +139,8 @@ def _add_roughness(spec, body, cls, plate: Plate) -> None:
     """The roughness profile as a two-row height field (:func:`_add_field`)."""
     tol = min(HFIELD_MAX_ERROR_M, HFIELD_MAX_ERROR_RA * plate.texture.ra_m)
     px, pz = hfield_profile(*roughness_profile(plate), max_error_m=tol)
-    _add_field(spec, body, cls, plate, np.stack([pz, pz]), "roughness")
+    area = (plate.area_length_m / 2, plate.area_width_m / 2)
+    _add_field(spec, body, cls, plate, np.stack([pz, pz]), "roughness", area)
 
 
 def _add_heightmap(spec, body, cls, plate: Plate) -> None:
@@ -147,15 +148,16 @@ def _add_heightmap(spec, body, cls, plate: Plate) -> None:
     as the map's do); samples without material lie on the field's floor."""
     z = np.asarray(plate.texture.z)
     floor = float(np.nanmin(z))
-    _add_field(spec, body, cls, plate, np.where(np.isnan(z), floor, z), "heightmap")
+    half = (plate.texture.extent_m[0] / 2, plate.texture.extent_m[1] / 2)
+    _add_field(spec, body, cls, plate, np.where(np.isnan(z), floor, z), "heightmap", half)
 
 
-def _add_field(spec, body, cls, plate: Plate, pz: np.ndarray, name: str) -> None:
+def _add_field(spec, body, cls, plate: Plate, pz: np.ndarray, name: str, half) -> None:
     """Base box below the field, flat margin boxes at z = 0 around it, and the field of
-    heights ``pz`` (rows along y) over the textured area."""
+    heights ``pz`` (rows along y) over ``|x| <= half[0], |y| <= half[1]``."""
     zmin, zmax = float(pz.min()), float(pz.max())
     L, W, T = plate.length_m / 2, plate.width_m / 2, plate.thickness_m
-    ax, ay = plate.area_length_m / 2, plate.area_width_m / 2
+    ax, ay = half
     floor = zmin - HFIELD_FLOOR_GAP_M
     _add_box(body, cls, "base", (-L, -W, -T), (L, W, floor))
     margins = [

@@ -72,13 +72,26 @@ def preset_names() -> list[str]:
     return list(asset_data("plates", "index.toml")["names"])
 
 
+def is_plate_file(ref: str | Path) -> bool:
+    """Whether ``ref`` names a file (a plate file, ``.toml``, or a user's CAD, script or
+    height map, :mod:`.user`) rather than a preset."""
+    from .user import is_user_plate
+
+    return str(ref).lower().endswith(".toml") or is_user_plate(ref)
+
+
 def get_plate(name: str | Path) -> Plate:
-    """The preset plate called ``name`` (e.g. ``"finger7/ridges-4"``), or the plate of a plate
-    file (a path ending in ``.toml``, :mod:`.files`)."""
+    """The preset plate called ``name`` (e.g. ``"finger7/ridges-4"``), the plate of a plate
+    file (a path ending in ``.toml``, :mod:`.files`), or of a user's STEP, STL, CadQuery
+    script or height map (a reference of :mod:`.user`, e.g. ``"knurl.py:make"``)."""
     if str(name).lower().endswith(".toml"):
         from .files import load_plate_file
 
         return load_plate_file(name)
+    from .user import is_user_plate, load_user_plate
+
+    if is_user_plate(name):
+        return load_user_plate(str(name))
     names = asset_data("plates", "index.toml")["names"]
     if name not in names:
         fams = sorted({n.split("/")[0] for n in names})
@@ -86,7 +99,9 @@ def get_plate(name: str | Path) -> Plate:
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise UnknownNameError(
             f"plate {name!r} is not a preset; valid: one of the {len(names)} names of "
-            f"`sim-tactile plates list` (families {', '.join(fams)}), or a plate file (.toml)"
+            f"`sim-tactile plates list` (families {', '.join(fams)}), a plate file (.toml), or "
+            "a part (.step, .stp, .stl, a CadQuery script .py[:function]) or height map "
+            "(.npy, .png)"
             f"{hint}"
         )
     data = asset_data("plates", f"{name}.toml")

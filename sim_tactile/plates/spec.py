@@ -276,16 +276,18 @@ class HeightMap:
     material. Made from a user's CAD, script or height map (:mod:`.user`).
 
     Sample ``(i, j)`` lies at ``x = -(nx - 1) pixel / 2 + j pixel``, ``y = -(ny - 1) pixel / 2
-    + i pixel``, so the map spans the textured area exactly: ``area_length_m = (nx - 1)
-    pixel_m`` and ``area_width_m = (ny - 1) pixel_m``. The geometry is the samples' bytes
+    + i pixel``: the map is centred on the textured area and spans at least it (a part's map
+    spans the part, its textured area the raised part of it) and at most the plate, whose
+    base (z = 0) lies around it. The geometry is the samples' bytes
     (their SHA-256 is in :meth:`params`), so two files that give the same map give the same
     plate, and an edited file another one. ``source`` says where it came from (not part of
-    the geometry).
+    the geometry), ``notes`` what its loading reported (a filled overhang).
     """
 
     z: np.ndarray
     pixel_m: float
     source: str = ""
+    notes: tuple[str, ...] = ()
     kind: Literal["heightmap"] = field(default="heightmap", init=False)
 
     def __post_init__(self) -> None:
@@ -401,15 +403,14 @@ class Plate:
                     f"(resolution_m >= {self.area_length_m / (MAX_ROUGHNESS_SAMPLES - 1):g} m)"
                 )
         if isinstance(t, HeightMap):
-            ex, ey = t.extent_m
-            for key, want, got in (
-                ("area_length_m", ex, self.area_length_m),
-                ("area_width_m", ey, self.area_width_m),
+            for key, span, area, side in (
+                ("x", t.extent_m[0], self.area_length_m, self.length_m),
+                ("y", t.extent_m[1], self.area_width_m, self.width_m),
             ):
-                if abs(want - got) > 1e-9:
+                if not area - 1e-9 <= span <= side + 1e-9:
                     raise ConfigError(
-                        f"plate.{key} = {got:g} m differs from the height map's span, {want:g} m "
-                        f"((samples - 1) x pixel_m); valid: {want:g} m"
+                        f"the height map spans {span:g} m along {key} ((samples - 1) x pixel_m); "
+                        f"valid: from the textured area's {area:g} m to the plate's {side:g} m"
                     )
         # expanding the features checks that they fit and do not overlap
         self.texture.features(self.area_length_m, self.area_width_m)

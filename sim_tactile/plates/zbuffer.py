@@ -15,11 +15,21 @@ _EDGE_EPS = 1e-9
 _CHUNK = 2_000_000
 
 
-def zbuffer(vertices: np.ndarray, faces: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
-    """Highest surface z at every node of the grid ``xs`` x ``ys``.
+def zbuffer(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    xs: np.ndarray,
+    ys: np.ndarray,
+    *,
+    lowest: bool = False,
+    edge_eps: float = _EDGE_EPS,
+) -> np.ndarray:
+    """Highest surface z at every node of the grid ``xs`` x ``ys`` (the lowest with
+    ``lowest``).
 
     vertices: (V, 3); faces: (F, 3) int; xs: (nx,) and ys: (ny,) increasing and evenly
-    spaced. Returns (ny, nx), NaN where no triangle covers the node.
+    spaced. Returns (ny, nx), NaN where no triangle covers the node. ``edge_eps``: the
+    barycentric slack (negative: only nodes strictly inside a triangle count).
     """
     xs, ys = np.asarray(xs, float), np.asarray(ys, float)
     tri = vertices[faces]  # (F, 3, 3)
@@ -35,7 +45,8 @@ def zbuffer(vertices: np.ndarray, faces: np.ndarray, xs: np.ndarray, ys: np.ndar
     iy1 = np.clip(np.floor((hi[:, 1] - ys[0]) / dy + 1e-9).astype(np.int64) + 1, 0, len(ys))
     nxs, nys = np.maximum(ix1 - ix0, 0), np.maximum(iy1 - iy0, 0)
     counts = nxs * nys
-    out = np.full(len(ys) * len(xs), -np.inf)
+    out = np.full(len(ys) * len(xs), np.inf if lowest else -np.inf)
+    pick = np.minimum if lowest else np.maximum
     # process triangles in chunks so that the candidate pairs fit in memory
     bounds = np.searchsorted(np.cumsum(counts), np.arange(_CHUNK, counts.sum() + _CHUNK, _CHUNK))
     start = 0
@@ -58,8 +69,8 @@ def zbuffer(vertices: np.ndarray, faces: np.ndarray, xs: np.ndarray, ys: np.ndar
         l1 = ((px - a[:, 0]) * (cc[:, 1] - a[:, 1]) - (cc[:, 0] - a[:, 0]) * (py - a[:, 1])) / det
         l2 = ((b[:, 0] - a[:, 0]) * (py - a[:, 1]) - (px - a[:, 0]) * (b[:, 1] - a[:, 1])) / det
         l0 = 1 - l1 - l2
-        inside = (l0 >= -_EDGE_EPS) & (l1 >= -_EDGE_EPS) & (l2 >= -_EDGE_EPS)
-        z = l0 * a[:, 2] + l1 * b[:, 2] + l2 * cc[:, 2]
-        np.maximum.at(out, (gy * len(xs) + gx)[inside], z[inside])
-    out[np.isneginf(out)] = np.nan
+        inside = (l0 >= -edge_eps) & (l1 >= -edge_eps) & (l2 >= -edge_eps)
+        z = a[:, 2] + l1 * (b[:, 2] - a[:, 2]) + l2 * (cc[:, 2] - a[:, 2])  # exact on flat faces
+        pick.at(out, (gy * len(xs) + gx)[inside], z[inside])
+    out[np.isinf(out)] = np.nan
     return out.reshape(len(ys), len(xs))

@@ -5,7 +5,10 @@
     name = "my-set"              # optional, a label
     seed = 0                     # integer >= 0
     plates = ["finger7/flat", "finger7/ridges-2"]   # >= 2 plates (the classes): preset names
-                                 # or plate files ("my-plate.toml", relative to this file)
+                                 # or plate files ("my-plate.toml", relative to this file),
+                                 # parts and height maps ("knurl.py:make", "part.step?up=+y",
+                                 # "scan.npy?pixel_m=1e-5", or a table {file = "part.stl",
+                                 # units = "mm", rotate_deg = 90}: sim_tactile.plates.user)
     sensor = "grid3x3"           # a sensor (its layout, rate, transducer and pad): a preset's
                                  # name or a sensor file ("my4x4.toml", relative to this file)
     slides_per_plate = 100       # [2, 100000]
@@ -48,6 +51,7 @@ from pathlib import Path
 from .. import _validate as v
 from ..errors import ConfigError
 from ..plates import get_plate, preset_names
+from ..plates.user import is_user_plate, parse_ref
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
 from ..sensors.files import load_sensor_file
 from ..sim.fidelity import FIDELITIES
@@ -117,9 +121,10 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         if key not in cfg:
             raise ConfigError(f"{key} is missing ({TOP_KEYS[key]})")
     plates = cfg["plates"]
-    if not isinstance(plates, list) or not all(isinstance(p, str) for p in plates):
+    if not isinstance(plates, list) or not all(isinstance(p, str | dict) for p in plates):
         raise ConfigError(
-            f"plates must be a list of preset plate names or plate files, got {plates!r}"
+            f"plates must be a list of preset plate names, plate files, parts or height maps, "
+            f"got {plates!r}"
         )
     plates = [_plate(p, base_dir) for p in plates]
     if len(plates) < 2 or len(set(plates)) != len(plates):
@@ -176,17 +181,38 @@ def _beside(value: str, base_dir: Path | None) -> Path:
     return base_dir / path if not path.is_absolute() and base_dir is not None else path
 
 
-def _plate(value: str, base_dir: Path | None) -> str:
-    """A preset plate's name, or a plate file's absolute path (``.toml``, relative to the
-    configuration file's folder), checked."""
+def _plate(value, base_dir: Path | None) -> str:
+    """A preset plate's name, a plate file's absolute path (``.toml``, relative to the
+    configuration file's folder), or the reference of a user's part or height map
+    (:mod:`~sim_tactile.plates.user`: a string, or a table with its ``file`` and options)
+    with its path made absolute, checked (a script runs here, once)."""
+    if isinstance(value, dict):
+        opts = dict(value)
+        file = opts.pop("file", None)
+        if not isinstance(file, str) or not is_user_plate(file):
+            raise ConfigError(
+                f"a plate table needs file = a part or height map (.step, .stp, .stl, .py, "
+                f".npy, .png), got {file!r}"
+            )
+        src = parse_ref(file, **opts)
+        value = replace(src, path=str(_beside(src.path, base_dir).resolve())).ref()
+        get_plate(value)
+        return value
+    if not isinstance(value, str):
+        raise ConfigError(f"a plate must be a name, a file or a table, got {value!r}")
+    if is_user_plate(value):
+        src = parse_ref(value)
+        value = replace(src, path=str(_beside(src.path, base_dir).resolve())).ref()
+        get_plate(value)  # it must load
+        return value
     if value.lower().endswith(".toml"):
         path = _beside(value, base_dir).resolve()
         get_plate(str(path))  # it must read
         return str(path)
     if value not in preset_names():
         raise ConfigError(
-            f"plate {value!r} is not a preset; valid: {', '.join(preset_names())}, or a plate "
-            "file (.toml)"
+            f"plate {value!r} is not a preset; valid: {', '.join(preset_names())}, a plate "
+            "file (.toml), a part (.step, .stp, .stl, .py[:function]) or a height map (.npy, .png)"
         )
     return value
 

@@ -75,6 +75,11 @@ def slide_plan(
         taxel_positions=np.asarray(sensor.layout.positions),
         dataset_meta=meta,
         code_version=slide_code_version(),
+        plate_maps={
+            j.plate.texture.sha256: j.plate.texture.z
+            for j in jobs
+            if j.plate.texture.kind == "heightmap"
+        },
     )
     return Plan("", spec, jobs=jobs)
 

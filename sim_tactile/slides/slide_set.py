@@ -18,7 +18,7 @@ import numpy as np
 from .. import _validate as v
 from ..errors import ConfigError
 from ..hashing import derive_seed
-from ..plates import get_plate, preset_names
+from ..plates import get_plate, is_plate_file, preset_names
 from ..records import TactileDataset
 from ..sensors import Finger, Sensor, get_sensor, sensor_names
 from ..sensors.calibration import Calibration, calibrated
@@ -33,8 +33,9 @@ SLIDES_RANGE = (2, 100_000)
 
 def class_name(plate: str) -> str:
     """A plate's class name: the part of its name after the family (a plate file's name is
-    its ``name`` key, else the file's name)."""
-    if plate.lower().endswith(".toml"):
+    its ``name`` key, else the file's name; a part's or height map's, its file's name or its
+    ``name`` option)."""
+    if is_plate_file(plate):
         plate = get_plate(plate).name
     return plate.split("/", 1)[-1]
 
@@ -85,8 +86,8 @@ class SlideSet:
         if len(self.plates) < 2:
             raise ConfigError(f"a task needs at least 2 plates, got {len(self.plates)}")
         for p in self.plates:
-            if p.lower().endswith(".toml"):
-                get_plate(p)  # a plate file: it must read
+            if is_plate_file(p):
+                get_plate(p)  # a plate file, a part or a height map: it must read
             elif p not in preset_names():
                 raise ConfigError(f"plate {p!r} is not a preset; valid: {preset_names()}")
         names = [class_name(p) for p in self.plates]

@@ -1,0 +1,362 @@
+"""Plates from a user's files: STEP, STL, a CadQuery script, or a height map.
+
+A plate reference is a path, optionally a script's function after a colon and options after
+a question mark::
+
+    knurl.py:make?pixel_m=2.5e-05     a CadQuery script; its function make() (default plate())
+    part.step?up=+y&rotate_deg=90     a STEP file drawn y-up, turned a quarter about z
+    part.stl?units=m                  an STL written in metres (CAD files are in mm by default)
+    scan.npy?pixel_m=1e-05            a height map in metres, rows along +y, a sample every 10 um
+    scan.png?pixel_m=1e-05&z_scale_m=1e-08   a 16-bit PNG: height = count x z_scale_m
+
+Each becomes a :class:`~.spec.Plate` with a :class:`~.spec.HeightMap` texture in the plate
+frame: top surface at z = 0 (the lowest point of the part's top surface), features rising,
+the textured area centred, sliding along +x. The options (``Source``): ``units``, ``up``,
+``rotate_deg``, ``scale`` (the placement, :class:`~.mesh_map.Placement`), ``pixel_m``,
+``z_scale_m``, ``thickness_m`` (a height map's base), ``fill_overhangs``, ``timeout_s`` (a
+script's or STEP reader's time limit) and ``name``.
+
+A STEP file is read and a script is run in a separate process (:mod:`.cad_worker`) under a
+time limit: **a script is code** and runs only because its path was given. STL, NPY and
+PNG files are read as data (numpy's reader without pickles, Pillow, trimesh). The checks
+(closed solid, size, overhangs, resolution) are :mod:`.mesh_map`'s; every refusal names the
+file, the value and the valid range, and nothing is written.
+
+The plate is its samples: its hash (and so every cache key of its slides) is their SHA-256,
+never the file's path, so an edited file is another plate. Loaded plates are kept in this
+process by the file's content and the options.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+from urllib.parse import unquote
+
+import numpy as np
+
+from ..errors import ConfigError
+from .mesh_map import DEFAULT_PIXEL_M, PLATE_SIDE_RANGE_M, Placement, closed_mesh, sample_part
+from .spec import HeightMap, Plate
+
+SUFFIXES = {".stl": "stl", ".step": "step", ".stp": "step", ".py": "script", ".npy": "npy"}
+SUFFIXES[".png"] = "png"
+#: Time limit of a script or a STEP reader [s] (CadQuery's import takes about 5 s).
+DEFAULT_TIMEOUT_S = 120.0
+DEFAULT_THICKNESS_M = 0.005
+#: Flat ground a plate has beyond its textured area along the slide, each side [m]: the
+#: presets' (36 mm for a 36 mm texture on a 108 mm plate), where a pad lands and leaves.
+RUN_IN_M = 0.036
+_MEMO: dict[tuple, Plate] = {}
+_MEMO_MAX = 16
+
+
+@dataclass(frozen=True)
+class Source:
+    """A parsed plate reference (see the module)."""
+
+    path: str
+    function: str = "plate"
+    units: str | None = None
+    up: str = "+z"
+    rotate_deg: float = 0.0
+    scale: float = 1.0
+    pixel_m: float | None = None
+    z_scale_m: float | None = None
+    thickness_m: float | None = None
+    fill_overhangs: bool = False
+    timeout_s: float = DEFAULT_TIMEOUT_S
+    name: str | None = None
+
+    @property
+    def kind(self) -> str:
+        return SUFFIXES[Path(self.path).suffix.lower()]
+
+    def ref(self) -> str:
+        """The reference string that parses back to this source."""
+        out = self.path + (f":{self.function}" if self.function != "plate" else "")
+        opts = [
+            f"{f.name}={_text(getattr(self, f.name))}"
+            for f in fields(self)
+            if f.name not in ("path", "function") and getattr(self, f.name) != f.default
+        ]
+        return out + ("?" + "&".join(opts) if opts else "")
+
+
+def _text(x) -> str:
+    if isinstance(x, bool):
+        return "true" if x else "false"
+    return repr(x) if isinstance(x, float) else str(x)
+
+
+_FLOATS = ("rotate_deg", "scale", "pixel_m", "z_scale_m", "thickness_m", "timeout_s")
+
+
+def is_user_plate(ref) -> bool:
+    """Whether ``ref`` names a user's file (by its suffix), not a preset or a plate file."""
+    path = str(ref).split("?", 1)[0]
+    if path.lower().endswith(".py") or ".py:" in path.lower():
+        return True
+    return Path(path).suffix.lower() in SUFFIXES
+
+
+def parse_ref(ref: str, **options) -> Source:
+    """The :class:`Source` of a plate reference; ``options`` add to (or override) the ones
+    after its ``?``."""
+    text, _, query = str(ref).partition("?")
+    function = "plate"
+    head, colon, tail = text.rpartition(":")
+    if colon and head.lower().endswith(".py") and tail.isidentifier():
+        text, function = head, tail
+    if Path(text).suffix.lower() not in SUFFIXES:
+        raise ConfigError(
+            f"plate file {text!r}: suffix {Path(text).suffix!r} is not valid; valid: "
+            f"{', '.join(sorted(SUFFIXES))}"
+        )
+    known = {f.name for f in fields(Source)} - {"path"}
+    opts: dict = {}
+    pairs = []
+    for item in filter(None, query.split("&")):
+        key, eq, val = item.partition("=")
+        if not eq:
+            raise ConfigError(f"plate {text!r}: option {item!r} is not key=value")
+        pairs.append((unquote(key), unquote(val)))  # '+' stays a plus: up=+y
+    for key, val in [*pairs, *options.items()]:
+        if key not in known:
+            raise ConfigError(
+                f"plate {text!r}: option {key!r} is not valid; valid: {', '.join(sorted(known))}"
+            )
+        opts[key] = _option(text, key, val)
+    return Source(path=text, function=opts.pop("function", function), **opts)
+
+
+def _option(where: str, key: str, val):
+    if val is None:
+        return None
+    try:
+        if key in _FLOATS:
+            x = float(val)
+            if not math.isfinite(x):
+                raise ValueError
+            return x
+        if key == "fill_overhangs":
+            if isinstance(val, bool):
+                return val
+            if str(val).lower() not in ("true", "false", "1", "0"):
+                raise ValueError
+            return str(val).lower() in ("true", "1")
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"plate {where!r}: {key} = {val!r} is not valid; valid: a number"
+            if key != "fill_overhangs"
+            else f"plate {where!r}: fill_overhangs = {val!r} is not valid; valid: true or false"
+        ) from None
+    return str(val)
+
+
+def load_user_plate(ref: str | Source, *, base_dir: str | Path | None = None, **options) -> Plate:
+    """The plate of a user's file (see the module); ``base_dir``: where a relative path is
+    found (default: the working directory)."""
+    src = ref if isinstance(ref, Source) else parse_ref(ref, **options)
+    path = Path(src.path)
+    if base_dir is not None and not path.is_absolute():
+        path = Path(base_dir) / path
+    where = f"plate file {str(src.path)!r}"
+    if not path.is_file():
+        raise ConfigError(f"{where}: no such file ({path.resolve()})")
+    data = path.read_bytes()
+    key = (str(path.resolve()), hashlib.sha256(data).hexdigest(), replace(src, path=""))
+    if key in _MEMO:
+        return _MEMO[key]
+    plate = _load(src, path, data, where)
+    if len(_MEMO) >= _MEMO_MAX:
+        _MEMO.pop(next(iter(_MEMO)))
+    _MEMO[key] = plate
+    return plate
+
+
+def _load(src: Source, path: Path, data: bytes, where: str) -> Plate:
+    name = src.name or (path.stem if src.function == "plate" else f"{path.stem}-{src.function}")
+    if src.kind in ("npy", "png"):
+        z, pixel = _raster(src, path, where)
+        span = ((z.shape[1] - 1) * pixel, (z.shape[0] - 1) * pixel)
+        thickness = src.thickness_m or DEFAULT_THICKNESS_M
+        return _plate(z, pixel, span, thickness, name, src, data, [])
+    placement = Placement(src.units or "mm", src.up, src.rotate_deg, src.scale)
+    if src.kind == "stl":
+        vertices, faces = _read_stl(data, where)
+    else:
+        vertices, faces = _run_worker(src, path, where)
+    mesh = closed_mesh(vertices, faces, where)
+    part = sample_part(
+        mesh, placement, src.pixel_m or DEFAULT_PIXEL_M, where, fill_overhangs=src.fill_overhangs
+    )
+    thickness = src.thickness_m or part.thickness_m
+    return _plate(part.z, part.pixel_m, part.area_m, thickness, name, src, data, part.notes)
+
+
+def _plate(z, pixel: float, area, thickness: float, name: str, src: Source, data, notes) -> Plate:
+    """The plate of a map: the map over the textured area ``area`` (x, y) [m] and the rest of
+    the part; a flat base extends it to :data:`RUN_IN_M` beyond the texture along x."""
+    where = f"plate file {src.path!r}"
+    digest = hashlib.sha256(data).hexdigest()[:16]
+    ny, nx = z.shape
+    span = ((nx - 1) * pixel, (ny - 1) * pixel)
+    length = max(span[0], area[0] + 2 * RUN_IN_M)
+    if length > span[0] + 1e-9:
+        notes = [
+            *notes,
+            f"a flat base extends the part from {span[0] * 1e3:.4g} to {length * 1e3:.4g} mm along "
+            f"x, {RUN_IN_M * 1e3:g} mm beyond the texture each side, where a pad lands and leaves",
+        ]
+    try:
+        texture = HeightMap(
+            z, pixel, source=f"{src.ref()} (file sha256 {digest})", notes=tuple(notes)
+        )
+        return Plate(
+            texture,
+            float(length),
+            float(span[1]),
+            float(thickness),
+            float(area[0]),
+            float(area[1]),
+            name=name,
+        )
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _read_stl(data: bytes, where: str):
+    import io
+
+    import trimesh
+
+    try:
+        mesh = trimesh.load(io.BytesIO(data), file_type="stl", process=False)
+    except Exception as exc:  # noqa: BLE001  (any parse failure of the user's bytes)
+        raise ConfigError(f"{where}: not a readable STL file ({exc})") from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise ConfigError(f"{where}: the STL holds no triangles; valid: a closed solid")
+    return mesh.vertices, mesh.faces
+
+
+def _raster(src: Source, path: Path, where: str) -> tuple[np.ndarray, float]:
+    """A height map file's samples [m] (rows along +y, lowest at 0) and pixel size."""
+    if src.pixel_m is None:
+        raise ConfigError(f"{where}: a height map needs its sample spacing: pass pixel_m=... (m)")
+    if src.up != "+z":
+        raise ConfigError(f"{where}: up = {src.up!r} is not valid for a height map; valid: +z")
+    turns = src.rotate_deg / 90
+    if turns != round(turns):
+        raise ConfigError(
+            f"{where}: rotate_deg = {src.rotate_deg:g} is not valid for a height map; valid: "
+            "a multiple of 90"
+        )
+    if src.kind == "npy":
+        try:
+            z = np.load(path, allow_pickle=False)
+        except Exception as exc:  # noqa: BLE001
+            raise ConfigError(
+                f"{where}: not a readable .npy array without pickles ({exc})"
+            ) from None
+        unit = {None: 1.0, "m": 1.0, "mm": 1e-3, "um": 1e-6}.get(src.units)
+        if unit is None:
+            raise ConfigError(f"{where}: units = {src.units!r} is not valid; valid: m, mm, um")
+    else:
+        z, unit = _read_png(src, path, where), 1.0
+    if not (isinstance(z, np.ndarray) and z.ndim == 2 and z.dtype.kind in "fiu"):
+        raise ConfigError(f"{where}: the height map must be a 2-D array of numbers")
+    z = np.rot90(np.asarray(z, float) * unit, int(round(turns)) % 4) * src.scale
+    pixel = src.pixel_m * src.scale
+    lo_m, hi_m = PLATE_SIDE_RANGE_M
+    for axis, n in zip("yx", z.shape, strict=True):
+        side = (n - 1) * pixel
+        if not lo_m <= side <= hi_m:
+            raise ConfigError(
+                f"{where}: the map is {side:.4g} m along {axis} ({n} samples of {pixel:g} m); "
+                f"valid: [{lo_m:g}, {hi_m:g}] m"
+            )
+    if np.isfinite(z).any():
+        z = z - np.nanmin(z)
+    return z, pixel
+
+
+def _read_png(src: Source, path: Path, where: str) -> np.ndarray:
+    from PIL import Image
+
+    if src.z_scale_m is None:
+        raise ConfigError(
+            f"{where}: a PNG height map needs its scale: pass z_scale_m=... (m a count)"
+        )
+    try:
+        with Image.open(path) as im:
+            if im.format != "PNG":
+                raise ConfigError(f"{where}: not a PNG file ({im.format})")
+            if im.mode not in ("I;16", "I;16B", "I", "L"):
+                raise ConfigError(
+                    f"{where}: PNG mode {im.mode} is not valid; valid: 16-bit grey (or 8-bit)"
+                )
+            counts = np.asarray(im, dtype=np.float64)
+    except ConfigError:
+        raise
+    except Exception as exc:  # noqa: BLE001
+        raise ConfigError(f"{where}: not a readable PNG ({exc})") from None
+    return counts[::-1] * src.z_scale_m  # image rows run down the picture: -y
+
+
+def _run_worker(src: Source, path: Path, where: str):
+    """The tessellation of a STEP file or a script's part, made in a separate process."""
+    if not 1 <= src.timeout_s <= 3600:
+        raise ConfigError(
+            f"{where}: timeout_s = {src.timeout_s:g} is not valid; valid: [1, 3600] s"
+        )
+    with tempfile.TemporaryDirectory(prefix="sim_tactile_cad_") as tmp:
+        out = Path(tmp) / "mesh.npz"
+        cmd = [
+            sys.executable,
+            "-m",
+            "sim_tactile.plates.cad_worker",
+            src.kind,
+            str(path.resolve()),
+            str(out),
+        ]
+        if src.kind == "script":
+            cmd.append(src.function)
+        proc = subprocess.Popen(
+            cmd,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            cwd=str(path.resolve().parent),
+            start_new_session=True,
+            env={**os.environ, "PYTHONPATH": _package_root()},
+        )
+        try:
+            _, err = proc.communicate(timeout=src.timeout_s)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+            what = f"{src.function}()" if src.kind == "script" else "reading it"
+            raise ConfigError(
+                f"{where}: {what} did not finish within timeout_s = {src.timeout_s:g} s; valid: "
+                "a part made within the limit (pass timeout_s=... for a slow one)"
+            ) from None
+        if proc.returncode != 0 or not out.is_file():
+            lines = [ln for ln in err.decode(errors="replace").splitlines() if ln.strip()]
+            reason = lines[-1] if lines else f"exit status {proc.returncode}"
+            what = f"{src.function}() failed" if src.kind == "script" else "could not be read"
+            raise ConfigError(f"{where}: {what}: {reason}")
+        with np.load(out, allow_pickle=False) as npz:
+            return npz["vertices"], npz["faces"]
+
+
+def _package_root() -> str:
+    root = str(Path(__file__).resolve().parents[2])
+    extra = os.environ.get("PYTHONPATH")
+    return root + (os.pathsep + extra if extra else "")
