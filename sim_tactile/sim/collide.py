@@ -22,10 +22,15 @@ margin), and is any node that close. :func:`make_collider` chooses one, in one p
 - :class:`~.height_collider.ProfileCollider`: a roughness plate (a profile z(x) across the
   textured area, on its base): each node's depth below the plate's height map at its centre,
   in one numba loop (numpy's interpolation, bit for bit).
+- :class:`~.height_collider.MapCollider`: a height-map plate (heights sampled on a grid over
+  its textured area, bilinear between them, NaN where there is no material, on its base):
+  each node's depth below the map at its centre, in one numba loop (the bilinear height of
+  :func:`~sim_tactile.plates.height_at`, bit for bit). MuJoCo's height-field collider had
+  served it, several contacts a node and at most 50 a field.
 - :class:`MujocoCollider`: MuJoCo's own collider on the scene's collision model, for any
   geometry: the reference the tests compare the others with, and the collider of a plate
-  neither of them takes (a mesh that is not a drafted ridge of the plate's features, a
-  rotated plate). No preset plate steps it.
+  none of them takes (a mesh that is not a drafted ridge of the plate's features, a rotated
+  plate). No preset plate steps it.
 """
 
 from __future__ import annotations
@@ -37,7 +42,7 @@ import numba
 import numpy as np
 
 from ..plates import features
-from .height_collider import ProfileCollider, report_depth
+from .height_collider import MapCollider, ProfileCollider, report_depth
 
 _BOX = int(mujoco.mjtGeom.mjGEOM_BOX)
 _SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
@@ -117,7 +122,8 @@ QS_MARGIN_MUJOCO_M = 0.1e-3
 
 def node_margin_m(plate) -> float:
     """The skin nodes' collider margin for a held force on ``plate``: wide where the compiled
-    collider serves (every plate of features; it costs nothing there), narrow on roughness."""
+    collider serves (every plate of features, and height maps; it costs nothing there),
+    narrow on roughness."""
     if plate.texture.kind == "roughness":
         return QS_MARGIN_MUJOCO_M
     return QS_MARGIN_M
@@ -125,14 +131,13 @@ def node_margin_m(plate) -> float:
 
 def make_collider(scene, primitive: bool = True):
     """The compiled collider on a plate of features, the profile collider on a roughness
-    plate (both where ``primitive`` is set), else MuJoCo's. The bone must be at its starting
-    pose (its world position is read here)."""
+    plate, the map collider on a height map (each where ``primitive`` is set), else MuJoCo's.
+    The bone must be at its starting pose (its world position is read here)."""
     if primitive:
-        c = PrimitiveCollider.from_scene(scene)
-        if c is None:
-            c = ProfileCollider.from_scene(scene)
-        if c is not None:
-            return c
+        for kind in (PrimitiveCollider, ProfileCollider, MapCollider):
+            c = kind.from_scene(scene)
+            if c is not None:
+                return c
     return MujocoCollider(scene)
 
 

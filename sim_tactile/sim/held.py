@@ -10,14 +10,16 @@ the taxel loads there. One step, two implementations with the same interface
 - :class:`HeldStep`: the plain loop, over any collider and any skin model: the reference,
   and the path of the spectral skin and of plates that MuJoCo must collide;
 - :class:`CompiledHeldStep`: the whole step in one numba call (:func:`_held_kernel`) with a
-  compiled collider (the plate's features, or the rough plates' profile), so no step pays
-  Python's per-call costs more than once, on the smallest exact problem:
+  compiled collider (the plate's features, the rough plates' profile, or a height map's
+  samples), so no step pays Python's per-call costs more than once, on the smallest exact
+  problem:
 
   - **columns** (:meth:`PrimitiveCollider.y_invariant`, :meth:`ProfileCollider.y_invariant`):
     when every plate geom is a box or drafted ridge that runs past the whole pad in y
     (ridges across the slide), or the pad lies inside a rough profile's y extent, a node's
     depth does not depend on its y; the collider computes one node per distinct (x, z,
-    radius, margin), the rest are copies (bit-identical);
+    radius, margin), the rest are copies (bit-identical). A height map never reduces
+    (:meth:`MapCollider.y_invariant`): its collider computes every node;
   - **mirror** halving: when, in addition, the node grid is symmetric about the pad's centre
     line (nodes at y and -y alike), the depth map, and so the unique contact solution, are
     symmetric. The solve then runs on the nodes with y >= 0 only. Its unknowns are the summed
@@ -41,7 +43,12 @@ from ..errors import PhysicsError
 from . import contact
 from .collide import PrimitiveCollider, depths_kernel
 from .contact.kernels import NO_K, force_loop, force_same_set
-from .height_collider import ProfileCollider, profile_depths_kernel
+from .height_collider import (
+    MapCollider,
+    ProfileCollider,
+    map_depths_kernel,
+    profile_depths_kernel,
+)
 from .skin import CoupledSkin, SkinModel, SpectralSkin
 
 #: Collision queries one step may take before it gives up (the pad falling through).
@@ -125,7 +132,7 @@ class CompiledHeldStep:
 
     def __init__(
         self,
-        collider: PrimitiveCollider | ProfileCollider,
+        collider: PrimitiveCollider | ProfileCollider | MapCollider,
         skin: SkinModel,
         W: np.ndarray,
         area_m2: float,
@@ -289,11 +296,37 @@ _NO_PROFILE = (
 )
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
+#: (a height map's samples are read-only, so its placeholder is too)
+_NO_MAP = (
+    np.zeros((0, 3)),
+    np.zeros(0),
+    np.zeros(0),
+    _read_only(np.zeros((2, 2))),
+    1.0,
+    1.0,
+    1.0,
+    1.0,
+    1.0,
+)
+#: Which depth kernel :func:`_held_kernel` runs (``probe[0]``).
+_PRIMITIVE, _PROFILE, _MAP = 0, 1, 2
+
+
 def _probe_args(c) -> tuple:
-    """``(profile, primitive arrays, profile arrays)`` of :func:`_held_kernel`'s ``probe``."""
-    if isinstance(c, ProfileCollider):
-        return (True, _NO_PRIMITIVE, tuple(float(a) if np.ndim(a) == 0 else a for a in c.arrays))
-    return (False, c.arrays, _NO_PROFILE)
+    """``(which, primitive arrays, profile arrays, map arrays)`` of :func:`_held_kernel`'s
+    ``probe``: the collider's own arrays (its scalars as floats), placeholders for the
+    others'."""
+    if isinstance(c, ProfileCollider | MapCollider):
+        own = tuple(float(a) if np.ndim(a) == 0 else a for a in c.arrays)
+        if isinstance(c, ProfileCollider):
+            return (_PROFILE, _NO_PRIMITIVE, own, _NO_MAP)
+        return (_MAP, _NO_PRIMITIVE, _NO_PROFILE, own)
+    return (_PRIMITIVE, c.arrays, _NO_PROFILE, _NO_MAP)
 
 
 @numba.njit(cache=True)
@@ -301,9 +334,11 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     """:meth:`CompiledHeldStep.step`. The arguments, grouped:
 
     - ``pose``: ``(bone0, qpos, jx, jz)``, the bone's rest position and the joints;
-    - ``probe``: ``(profile, primitive arrays, profile arrays)``: which collider's depth map
-      (:func:`~.collide.depths_kernel` or :func:`~.height_collider.profile_depths_kernel`)
-      and the arrays of each (:func:`_probe_args`; the other's are empty placeholders);
+    - ``probe``: ``(which, primitive arrays, profile arrays, map arrays)``: which
+      collider's depth map (:data:`_PRIMITIVE`: :func:`~.collide.depths_kernel`,
+      :data:`_PROFILE`: :func:`~.height_collider.profile_depths_kernel`, :data:`_MAP`:
+      :func:`~.height_collider.map_depths_kernel`) and the arrays of each
+      (:func:`_probe_args`; the others' are empty placeholders);
     - ``reduced``: ``(small, group, mult)``: the probes' depths, each node's probe, the nodes
       each reduced node stands for;
     - ``skin``: ``(winkler_k, C, K, floor, sym)``: the Winkler stiffness (> 0 for L0), else
@@ -331,8 +366,10 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
         bone[0] = bone0[0] + qpos[jx]
         bone[1] = bone0[1]
         bone[2] = bone0[2] + qpos[jz]
-        if probe[0]:
+        if probe[0] == _PROFILE:
             near = profile_depths_kernel(bone, *probe[2], small)
+        elif probe[0] == _MAP:
+            near = map_depths_kernel(bone, *probe[3], small)
         else:
             near = depths_kernel(bone, *probe[1], small)
         for i in range(n):
