@@ -67,7 +67,7 @@ def wall_lines(plate: Plate) -> tuple[np.ndarray, np.ndarray]:
     """The plate frame's x positions of the vertical walls across the slide, and y positions
     of those along it [m]: the faces of its boxes (ridges, bumps, grating bars)."""
     xs, ys = set(), set()
-    for f in features(plate):  # none on a rough plate
+    for f in features(plate):  # none on a rough plate or a height map
         if f.kind == "box":
             xs.update((round(f.x - f.hx, 12), round(f.x + f.hx, 12)))
             ys.update((round(f.y - f.hy, 12), round(f.y + f.hy, 12)))
@@ -232,7 +232,8 @@ class ClippedPatches:
         bx = self.sx
         self.lo, self.hi = bx[0], bx[-1]
         self.half_x = max(-bx[0], bx[-1])
-        fs = features(plate) if plate.texture.kind != "roughness" else None
+        sampled = plate.texture.kind in ("roughness", "heightmap")  # no features: its samples
+        fs = None if sampled else features(plate)
         self._feats = fs
         self._fx = None if fs is None else np.array([f.x for f in fs])
         self._fhx = None if fs is None else np.array([f.hx for f in fs])
@@ -295,7 +296,7 @@ class ClippedPatches:
         """The plate's height above the base less the pad's undeformed surface, at the patch
         centres [m]: a patch's penetration with the pad's lowest point at z is this less z."""
         x, y = cx + x_pad, cy + self.y0
-        if self._feats is None:  # rough: the plate's own function
+        if self._feats is None:  # rough, a height map: the plate's own function
             z = height_at(self.plate, x, y)
         else:  # the features within the pad's reach (height_at over all of them, faster)
             z = np.zeros(x.shape)

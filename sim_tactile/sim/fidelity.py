@@ -7,9 +7,10 @@
 | L2 | L1 at half the node pitch and a quarter of the time step: the reference | auto/2 | auto/4 |
 
 ``auto`` (default) picks L1 with the coarsest node pitch and time step that resolve the
-scene: the pitch is at most 1/2.5 of the smallest feature width or gap and half the smallest
-taxel; the time step lets each feature take at least 20 steps to cross and stays within the
-skin-bone coupling's stability limit. It warns when the taxels are coarser than the texture,
+scene: the pitch is at most 1/2.5 of the smallest feature width or gap (a height map's read
+off its samples, :mod:`~sim_tactile.sim.map_scale`) and half the smallest taxel; the time
+step lets each feature take at least 20 steps to cross and stays within the skin-bone
+coupling's stability limit. It warns when the taxels are coarser than the texture,
 when a forced pitch or time step is too coarse, and when the plate's roughness lies below what
 any node grid resolves (the micro-roughness model of the sensors handles that).
 
@@ -44,6 +45,7 @@ from ..plates.spec import Roughness
 from ..scene.nodes import skin_grid
 from .anchored_lines import anchor_refusals, anchored_cells
 from .clipped import has_walls, skin_refusals, static_cells
+from .map_scale import map_scales
 from .measured_errors import (
     MAX_NODES_MEASURED,
     WARN_ABOVE,
@@ -149,7 +151,10 @@ class Fidelity:
 
 
 def feature_scale_m(plate: Plate) -> float | None:
-    """Smallest feature width or gap of the plate [m]; None for flat or rough plates."""
+    """Smallest feature width or gap of the plate [m]; None for flat or rough plates. A
+    height map's are read off its samples (:func:`~.map_scale.map_scales`)."""
+    if plate.texture.kind == "heightmap":
+        return map_scales(plate.texture)[0]
     fs = features(plate)
     if not fs:
         return None
@@ -469,6 +474,8 @@ def flat_stiffness(finger, coupled: bool, k_w: float) -> float:
 
 
 def texture_period(plate: Plate) -> float | None:
+    if plate.texture.kind == "heightmap":
+        return map_scales(plate.texture)[1]
     fs = features(plate)
     xs = sorted({round(f.x, 9) for f in fs})
     if len(xs) < 2:

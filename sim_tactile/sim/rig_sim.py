@@ -76,9 +76,11 @@ def probe_grid(plate: Plate, pitch_m: float) -> SkinGrid:
 def probe_contact(plate: Plate, finger: Finger, grid: SkinGrid, force_n: float):
     """The probe's contact pressure [Pa] on ``grid`` (its face pressed on the finger's skin
     with ``force_n``), its approach [m] (how far the face's base plane sits below the
-    sensor's surface less the tallest feature) and the skin's description."""
+    sensor's surface less the tallest feature) and the skin's description. A node where a
+    height map holds no material (NaN) is out of reach."""
     skin = _skin(grid.lattice, grid.pitch_m, finger)
     pen = height_at(plate, grid.xy[:, 0], grid.xy[:, 1])
+    pen = np.where(np.isnan(pen), -np.inf, pen)
     p, dz = skin.solve_force(pen - pen.max(), force_n / grid.area_m2)
     return p, float(dz), skin.describe()
 
@@ -353,7 +355,7 @@ def _check_rig_inputs(plate: Plate, sensor: Sensor, finger: Finger, protocol: Pr
     if plate.texture.kind == "roughness":
         raise ConfigError(
             f"plate {plate.name or plate.hash}: the probe rig does not model micro-roughness; "
-            "valid: plates of ridges, gratings, bumps or flat"
+            "valid: plates of ridges, gratings, bumps, height maps or flat"
         )
     layout = sensor.layout
     sheet = finger.thickness_m if finger.stack is None else finger.stack.thickness_m
