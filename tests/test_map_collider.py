@@ -90,17 +90,34 @@ def _rough(seed=0) -> Plate:
     return _plate(z, 0.1 * MM, length_m=12 * MM, width_m=8 * MM, thickness_m=1 * MM)
 
 
+def _wide(seed=1) -> Plate:
+    """A random map that spans more than the textured area (7 x 5.2 mm over 5 x 4 mm): the
+    map, not the area, bounds the sampled surface."""
+    rng = np.random.default_rng(seed)
+    z = rng.normal(0.0, 30e-6, (53, 71))
+    z[rng.random(z.shape) < 0.05] = np.nan
+    return Plate(
+        HeightMap(z, 0.1 * MM),
+        length_m=12 * MM,
+        width_m=8 * MM,
+        thickness_m=1 * MM,
+        area_length_m=5 * MM,
+        area_width_m=4 * MM,
+    )
+
+
 def _points(plate: Plate, rng, n=20_000) -> tuple[np.ndarray, np.ndarray]:
     """Random points over and past the plate, the map's samples and cell edges (in x, in y,
-    both), and the map's, textured area's and plate's borders."""
+    both), and the map's, textured area's and plate's borders (and just past the map's)."""
     t = plate.texture
     xs, ys = t.grid()
     L, W = plate.length_m / 2, plate.width_m / 2
     x = [rng.uniform(-1.1 * L, 1.1 * L, n), rng.choice(xs, n), rng.choice(xs, n)]
     y = [rng.uniform(-1.1 * W, 1.1 * W, n), rng.uniform(ys[0], ys[-1], n), rng.choice(ys, n)]
     ax, ay = plate.area_length_m / 2, plate.area_width_m / 2
-    edges_x = [xs[0], xs[-1], -ax, ax, -L, L, np.nextafter(ax, 1), np.nextafter(-ax, -1)]
-    edges_y = [ys[0], ys[-1], -ay, ay, -W, W, np.nextafter(ay, 1), np.nextafter(-ay, -1)]
+    sx, sy = t.extent_m[0] / 2, t.extent_m[1] / 2
+    edges_x = [xs[0], xs[-1], -ax, ax, -sx, sx, -L, L, np.nextafter(sx, 1), np.nextafter(-sx, -1)]
+    edges_y = [ys[0], ys[-1], -ay, ay, -sy, sy, -W, W, np.nextafter(sy, 1), np.nextafter(-sy, -1)]
     ex, ey = np.meshgrid(edges_x + list(xs[::7]), edges_y + list(ys[::5]))
     x += [rng.uniform(xs[0], xs[-1], n), ex.ravel()]
     y += [rng.choice(ys, n), ey.ravel()]
@@ -114,7 +131,9 @@ def _same_bits(a: np.ndarray, b: np.ndarray) -> None:
     assert a[ok].tobytes() == b[ok].tobytes()
 
 
-@pytest.mark.parametrize("make", [_rough, _grating, _smooth], ids=["rough", "grating", "smooth"])
+@pytest.mark.parametrize(
+    "make", [_rough, _wide, _grating, _smooth], ids=["rough", "wide", "grating", "smooth"]
+)
 def test_the_compiled_height_is_height_at_bit_for_bit(make):
     plate = make()
     t = plate.texture
@@ -145,7 +164,7 @@ def _bound(plate: Plate, n=400, seed=0) -> MapCollider:
     return c
 
 
-@pytest.mark.parametrize("make", [_rough, _grating], ids=["rough", "grating"])
+@pytest.mark.parametrize("make", [_rough, _wide, _grating], ids=["rough", "wide", "grating"])
 def test_the_compiled_loop_is_its_numpy_reference_and_height_at(make):
     """The depths bit for bit three ways (the compiled loop, its numpy reference, height_at
     less each probe's lowest point), within each probe's margin, at poses on, off and past
