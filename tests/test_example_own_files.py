@@ -30,7 +30,7 @@ def test_the_example_generates_and_runs(cli, tmp_path):
         ]
     )
     rep = json.loads(res.stdout)
-    assert rep["task"] == "config:my4x4-gratings"
+    assert rep["task"] == "config:my4x4-textures"
     assert rep["dataset"]["channels"] == 16 and rep["dataset"]["classes"] == 4
     assert [r["classifier"] for r in rep["results"]] == ["svm-raw", "svm-spike"]
     assert rep["timing"]["simulate_s"] == 0.0  # read from the store
@@ -66,4 +66,4 @@ def test_a_bad_evaluate_table_is_refused_before_anything_runs(tmp_path):
         for w in words:
             assert w in str(exc.value), (w, str(exc.value))
     spec, seed = config_task(ex / "set.toml")
-    assert spec.id == "config:my4x4-gratings" and seed == 0 and spec.full.repeats == 5
+    assert spec.id == "config:my4x4-textures" and seed == 0 and spec.full.repeats == 5

@@ -101,6 +101,7 @@ def _walls_far(plate, X, Y, clearance_m):
     return ok
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["step", "stl", "script"])
 def test_a_cad_grating_becomes_its_height_map_within_the_stated_tolerance(files, kind):
     ref = {"step": "grating.step", "stl": "grating.stl", "script": "parts.py"}[kind]
@@ -132,6 +133,7 @@ def test_a_cad_grating_becomes_its_height_map_within_the_stated_tolerance(files,
     assert np.all((z[near] >= lo - 1e-9) & (z[near] <= hi + 1e-9))
 
 
+@pytest.mark.slow
 def test_step_stl_and_script_give_one_plate_and_its_artefacts(files, tmp_path):
     step = load_user_plate(files / "grating.step")
     script = load_user_plate(f"{files / 'parts.py'}:plate")
@@ -160,6 +162,7 @@ def test_step_stl_and_script_give_one_plate_and_its_artefacts(files, tmp_path):
     assert all(build(step, cache=cache).cached.values())
 
 
+@pytest.mark.slow
 def test_a_part_drawn_y_up_is_placed_by_up(files):
     z_up = load_user_plate(files / "grating.stl")
     side = load_user_plate(files / "grating-yup.stl")  # read z-up: the part on its side
@@ -204,6 +207,7 @@ def test_height_maps_npy_and_16bit_png(tmp_path):
         load_user_plate(tmp_path / "objects.npy", pixel_m=1e-5)
 
 
+@pytest.mark.slow
 def test_cached_by_content_not_by_path(files, tmp_path):
     """Editing a CAD file makes another plate, so its slides have other cache keys; the same
     bytes at another path are the same plate."""
@@ -231,6 +235,7 @@ def _nothing_written(d: Path, before: set) -> None:
     assert {p.name for p in d.iterdir()} == before
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "ref, words",
     [
@@ -254,6 +259,7 @@ def test_bad_parts_are_refused_with_what_is_wrong_and_nothing_written(files, ref
     _nothing_written(files, before)
 
 
+@pytest.mark.slow
 def test_an_open_mesh_is_refused(files, tmp_path):
     import trimesh
 
@@ -267,6 +273,7 @@ def test_an_open_mesh_is_refused(files, tmp_path):
         load_user_plate(tmp_path / "junk.stl")
 
 
+@pytest.mark.slow
 def test_an_overhang_may_be_filled_and_is_reported(files):
     plate = load_user_plate(f"{files / 'parts.py'}:mushroom?fill_overhangs=true")
     assert any("filled under the top surface" in n for n in plate.texture.notes)
@@ -274,6 +281,7 @@ def test_an_overhang_may_be_filled_and_is_reported(files):
     assert height_at(plate, 0.003, 0.0) == pytest.approx(3e-3, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_a_script_that_never_returns_is_stopped(files):
     t0 = time.perf_counter()
     with pytest.raises(ConfigError, match="did not finish within timeout_s = 3 s"):
@@ -286,6 +294,7 @@ def test_a_script_that_never_returns_is_stopped(files):
     assert "cad_worker script" not in ps or str(files) not in ps
 
 
+@pytest.mark.slow
 def test_a_script_is_run_in_another_process(files, tmp_path):
     """The script's side effects stay in its own process (its working directory is its
     folder); this process's modules never see cadquery imported by it."""

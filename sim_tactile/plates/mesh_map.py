@@ -17,7 +17,8 @@ The steps, each of which refuses bad input with an error that names the file:
    whole part if none is); that lowest point becomes z = 0. Samples beyond the part are NaN
    (no material).
 6. **Resolved**: every raised feature (above half the relief) must be at least three samples
-   across, so that the collider, which interpolates the samples bilinearly, holds it.
+   across, so that the collider, which interpolates the samples bilinearly, holds it (the
+   slivers the part's outline cuts from features are not held to it).
 """
 
 from __future__ import annotations
@@ -224,6 +225,13 @@ def _check_resolved(z: np.ndarray, pixel: float, where: str) -> None:
         return
     depth = ndimage.distance_transform_edt(raised)
     widest = ndimage.maximum(depth, labels, index=np.arange(1, n + 1))
+    # features the part's outline cuts (touching its edge or a place without material) are
+    # slivers of features, not features: they are not held to the rule
+    edge = np.zeros(z.shape, bool)
+    edge[[0, -1], :] = edge[:, [0, -1]] = True
+    edge |= ndimage.binary_dilation(np.isnan(z))
+    cut = np.unique(labels[edge & raised])
+    widest[cut[cut > 0] - 1] = np.inf
     k = int(np.argmin(widest))
     across = 2 * float(widest[k])
     if across < RESOLVE_SAMPLES:

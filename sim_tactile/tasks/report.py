@@ -440,9 +440,29 @@ def write_figures(
     f = out / "raster_per_class.png"
     plot_rasters(ds, encoded, f)
     files.append(str(f))
-    params = (ds.meta.get("setup") or {}).get("plate_params")
-    if params:  # the plates the data set recorded, whole (no lookup by name)
+    plates = recorded_plates(ds.meta.get("setup") or {})
+    if plates and all(p is not None for p in plates):
         f = out / "plates.png"
-        plot_plates([Plate.from_params(p) for p in params], ds.class_names, f)
+        plot_plates(plates, ds.class_names, f)
         files.append(str(f))
     return files
+
+
+def recorded_plates(setup: dict) -> list[Plate | None]:
+    """The plates a data set recorded, from their parameters (no lookup by name). A height
+    map's samples are not in its parameters: its file is read again (a script runs again,
+    or this process's loaded plate is taken) and kept only if it gives the recorded plate;
+    else None (a store holds the samples: ``SlideStore.plates``)."""
+    from ..plates import get_plate
+
+    out: list[Plate | None] = []
+    for ref, params in zip(setup.get("plates", []), setup.get("plate_params", []), strict=False):
+        if params.get("texture", {}).get("kind") != "heightmap":
+            out.append(Plate.from_params(params))
+            continue
+        try:
+            plate = get_plate(ref)
+        except Exception:  # noqa: BLE001  (the file is gone or no longer loads: no picture)
+            plate = None
+        out.append(plate if plate is not None and plate.params() == params else None)
+    return out
