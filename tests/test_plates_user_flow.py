@@ -19,11 +19,11 @@ pytestmark = pytest.mark.slow
 PERIOD_MM = 2.2
 
 
-def _grating(period=PERIOD_MM, n=16):
+def _grating(period=PERIOD_MM, n=16, height=0.5):
     w = cq.Workplane("XY").box(40, 36, 3, centered=(True, True, False)).translate((0, 0, -3))
     for i in range(n):
         x = -n * period / 2 + (i + 0.5) * period
-        ridge = cq.Workplane("XY").box(period / 2, 36, 0.5, centered=(True, True, False))
+        ridge = cq.Workplane("XY").box(period / 2, 36, height, centered=(True, True, False))
         w = w.union(ridge.translate((x, 0, 0)))
     return w
 
@@ -121,3 +121,35 @@ def test_a_configuration_of_parts_makes_a_store_that_holds_them(tmp_path, cache_
         generate(str(bad), tmp_path / "bad.zarr", progress=False, log=lambda m: None, workers=1)
     assert not (tmp_path / "bad.zarr").exists()
     assert not list(tmp_path.glob(".bad.zarr*"))
+
+
+def test_editing_a_part_never_reuses_its_old_slides(tmp_path):
+    """Through the slide cache itself: the second run of an unchanged file reads its slide,
+    an edited file (a taller grating) is simulated again and records another stream."""
+    from sim_tactile.cache import ArtefactCache
+    from sim_tactile.plates import get_plate
+    from sim_tactile.sensors import get_sensor
+    from sim_tactile.sim.protocol import Protocol
+    from sim_tactile.slides.jobs import SlideJob
+    from sim_tactile.slides.run import run_slides
+
+    cache = ArtefactCache(tmp_path / "cache")
+    stl = tmp_path / "mine.stl"
+    sensor = get_sensor("grid3x3")
+    proto = Protocol(speed_m_s=0.04, force_n=1.0, rate_hz=100.0, duration_s=0.3)
+
+    def slide():
+        job = SlideJob(get_plate(str(stl)), sensor, proto, seed=5, ideal=True)
+        (rec,), stats = run_slides([job], cache=cache, workers=1)
+        return rec, stats
+
+    cq.exporters.export(_grating(), str(stl), exportType="STL", tolerance=0.005)
+    first, s1 = slide()
+    again, s2 = slide()
+    assert (s1["slides_simulated"], s2["slides_simulated"], s2["slides_cached"]) == (1, 0, 1)
+    assert np.array_equal(first.data, again.data)
+    # edited in place: ridges 0.8 mm high
+    cq.exporters.export(_grating(height=0.8), str(stl), exportType="STL", tolerance=0.005)
+    edited, s3 = slide()
+    assert s3["slides_simulated"] == 1 and s3["slides_cached"] == 0
+    assert not np.array_equal(edited.data, first.data)
