@@ -38,8 +38,9 @@ _STIFFNESS_CHECK_STEPS = 50
 class StepOptions:
     """Which implementation of each part of a step runs (all fast by default).
 
-    primitive_collider: the compiled collider where the plate is made of features
-        (else MuJoCo's collider, the reference);
+    primitive_collider: the compiled collider of the plate (its features, a roughness
+        profile or a height map; :func:`~.collide.make_collider`), else MuJoCo's collider,
+        the reference;
     compiled_hold: the held step as one compiled call where the compiled collider serves
         (else the plain loop, the reference);
     reduce_skin: the compiled held step on the smallest exact problem (columns, mirror half).
