@@ -628,3 +628,33 @@ def test_the_kept_stress_tables_read_as_the_exact_ones():
         assert len(memo) == 2  # one table per taxel depth, for all three offsets
     finally:
         cache_module.SETUP = old
+
+
+def test_the_spline_on_a_grid_is_scipys_map_coordinates():
+    """The kept tables are read on the nodes' tensor grid in two passes of four taps: the
+    numbers of scipy's cubic spline (order 3, periodic, no prefilter) at every point to
+    round-off, wrapped ends and integer coordinates included; and the nodes' tensor grid is
+    found only where the nodes are one."""
+    from scipy.ndimage import map_coordinates
+
+    from sim_tactile.scene.layered import _tensor_grid, spline_on_grid
+
+    rng = np.random.default_rng(4)
+    coef = rng.standard_normal((97, 61))
+    cx = np.concatenate([rng.uniform(-7, 104, 50), [0.0, 1.0, 96.0, 97.0, -1.0]])
+    cy = np.concatenate([rng.uniform(-3, 64, 20), [0.0, 60.0, 61.0]])
+    X, Y = np.meshgrid(cx, cy)
+    ref = map_coordinates(coef, [X.ravel(), Y.ravel()], order=3, mode="grid-wrap", prefilter=False)
+    got = spline_on_grid(coef, cx, cy)
+    assert got.shape == X.shape
+    assert np.max(np.abs(got.ravel() - ref)) <= 1e-13 * np.abs(ref).max()
+    xs, ys = np.arange(5) * 0.3, np.arange(3) * 0.2 - 1
+    nodes = np.column_stack([np.tile(xs, 3), np.repeat(ys, 5)])
+    got_xs, got_ys = _tensor_grid(nodes)
+    assert np.array_equal(got_xs, xs) and np.array_equal(got_ys, ys)
+    rx, ry = _tensor_grid(nodes[::-1])  # a grid in any order of its axes is one
+    assert np.array_equal(rx, xs[::-1]) and np.array_equal(ry, ys[::-1])
+    assert _tensor_grid(nodes[:-1]) is None  # a row short
+    swapped = nodes.copy()
+    swapped[[1, 2]] = swapped[[2, 1]]
+    assert _tensor_grid(swapped) is None
