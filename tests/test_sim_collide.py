@@ -365,3 +365,21 @@ def test_interp_at_is_numpys_interp_bit_for_bit():
         got = np.array([interp_at(q, xp, fp, left, right) for q in qs])
         want = np.interp(qs, xp, fp, left=left, right=right)
         assert got.tobytes() == want.tobytes()
+
+
+def test_the_stepped_model_drops_the_node_spheres_and_nothing_else(cache):
+    """MuJoCo steps a model without the skin's probe spheres (massless, out of contact): the
+    bone's mass, inertia and frame are the collision model's, bit for bit, and the sample
+    loop's stepping is unchanged (the golden slides hold it bit for bit too)."""
+    sc = _scene("finger7/bumps-4x4", 0.5e-3, cache)
+    col, dyn = sc.m_col, sc.m_dyn
+    assert col.ngeom - dyn.ngeom == sc.n_nodes
+    assert not any(
+        mujoco.mj_id2name(dyn, mujoco.mjtObj.mjOBJ_GEOM, g).startswith("node")
+        for g in range(dyn.ngeom)
+        if mujoco.mj_id2name(dyn, mujoco.mjtObj.mjOBJ_GEOM, g)
+    )
+    b = col.body("bone").id
+    for key in ("body_mass", "body_inertia", "body_ipos", "body_iquat", "dof_M0"):
+        assert np.array_equal(getattr(col, key), getattr(dyn, key)), key
+    assert dyn.body("bone").id == b

@@ -181,6 +181,13 @@ class PrimitiveCollider:
         self.start = np.zeros(len(buckets) + 1, dtype=np.int64)
         self.start[1:] = np.cumsum([len(b) for b in buckets])
         self.items = np.array([g for b in buckets for g in b], dtype=np.int64)
+        # each cell's highest point of its geoms: a node whose sphere is more than its margin
+        # above it is out of reach of every geom there (each one's distance is at least the
+        # height between them), and is not measured (-inf, as the distances would give)
+        tops = pos[:, 2] + half[:, 2]
+        self.cell_top = np.array(
+            [max((tops[g] for g in b), default=-np.inf) for b in buckets], dtype=np.float64
+        )
         #: the arguments of the depth kernel after the bone's position, in its order
         self.arrays = (
             self.local,
@@ -196,6 +203,7 @@ class PrimitiveCollider:
             self.shape,
             self.start,
             self.items,
+            self.cell_top,
         )
 
     @classmethod
@@ -417,7 +425,22 @@ def _cylinder_distance(lx, ly, lz, radius, hz, upright):
 
 @numba.njit(cache=True)
 def depths_kernel(
-    bone, local, radius, margin, kind, pos, mat, size, top, origin, cell, shape, start, items, pen
+    bone,
+    local,
+    radius,
+    margin,
+    kind,
+    pos,
+    mat,
+    size,
+    top,
+    origin,
+    cell,
+    shape,
+    start,
+    items,
+    cell_top,
+    pen,
 ):
     n = local.shape[0]
     near = False
@@ -433,6 +456,9 @@ def depths_kernel(
             pen[i] = -np.inf
             continue
         b = bi * shape[1] + bj
+        if cz - r - cell_top[b] > margin[i]:  # above every geom of the cell by its margin
+            pen[i] = -np.inf
+            continue
         for k in range(start[b], start[b + 1]):
             g = items[k]
             dx = cx - pos[g, 0]

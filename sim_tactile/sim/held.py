@@ -282,6 +282,7 @@ _NO_PRIMITIVE = (
     np.ones(2, np.int64),
     np.zeros(1, np.int64),
     np.zeros(0, np.int64),
+    np.full(2, -np.inf),
 )
 _NO_PROFILE = (
     np.zeros((0, 3)),
