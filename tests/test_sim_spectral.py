@@ -309,3 +309,17 @@ def test_the_compiled_iteration_agrees_with_the_numpy_one(total, monkeypatch):
         assert np.abs(pa - pb).max() < AGREE * pb.max()
         assert dza == pytest.approx(dzb, rel=AGREE, abs=1e-15)
         assert abs(ia - ib) <= max(3, ib // 4)  # the same iteration, give or take rounding
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (2, 3), (7, 5), (25, 30), (68, 95)])
+def test_the_direct_transforms_are_scipy_ffts_bit_for_bit(shape):
+    """The product through scipy.fft's pocketfft binding is the public functions' product,
+    to the bit, and again with the buffers reused."""
+    from sim_tactile.sim.contact import spectral
+
+    assert spectral._DIRECT  # this scipy has the binding: the fast path is the one tested
+    rng = np.random.default_rng(shape[0] * 100 + shape[1])
+    s = spectral.Spectral(np.abs(rng.standard_normal(shape)))
+    for _ in range(3):
+        p = rng.standard_normal(s.n)
+        assert np.array_equal(s.apply(p), s.apply_public(p))
