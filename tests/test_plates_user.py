@@ -300,12 +300,14 @@ def test_a_script_is_run_in_another_process(files, tmp_path):
     folder); this process's modules never see cadquery imported by it."""
     d = tmp_path / "s"
     d.mkdir()
+    (d / "helpers.py").write_text("SIDE = 20\n")  # a module of the user's, beside it
     (d / "side.py").write_text(
         "import os, cadquery as cq\n"
+        "from helpers import SIDE\n"
         "def plate():\n"
         "    os.environ['SIM_TACTILE_TOUCHED'] = '1'\n"
         "    open('ran-here.txt', 'w').write(str(os.getpid()))\n"
-        "    return cq.Workplane('XY').box(20, 20, 2)\n"
+        "    return cq.Workplane('XY').box(SIDE, SIDE, 2)\n"
     )
     plate = load_user_plate(d / "side.py")
     assert "SIM_TACTILE_TOUCHED" not in os.environ

@@ -10,6 +10,7 @@ result is not a CadQuery shape.
 
 from __future__ import annotations
 
+import os
 import runpy
 import sys
 import traceback
@@ -37,6 +38,7 @@ def _load(kind: str, source: str, function: str):
 
     if kind == "step":
         return cq.importers.importStep(source)
+    sys.path.insert(0, os.path.dirname(os.path.abspath(source)))  # its own modules beside it
     namespace = runpy.run_path(source, run_name="sim_tactile_plate_script")
     fn = namespace.get(function)
     if not callable(fn):
