@@ -15,8 +15,6 @@ from sim_tactile.sensors import Finger, get_layout, get_sensor
 from sim_tactile.sim.collide import (
     MujocoCollider,
     PrimitiveCollider,
-    _cylinder_distance,
-    _ridge_distance,
     make_collider,
     penetration_map,
 )
@@ -24,6 +22,7 @@ from sim_tactile.sim.fidelity import choose_fidelity
 from sim_tactile.sim.height_collider import ProfileCollider, interp_at
 from sim_tactile.sim.protocol import Protocol
 from sim_tactile.sim.runner import StepOptions
+from sim_tactile.sim.shapes import cylinder_distance, ridge_distance
 from sim_tactile.sim.simulate import simulate
 
 
@@ -208,7 +207,7 @@ def test_the_ridge_and_cylinder_distances_against_brute_force():
     hx, hy, hz, tx = 1.0e-3, 5e-3, 0.5e-3, 0.42e-3
     for _ in range(200):
         lx, lz = rng.uniform(-2e-3, 2e-3), rng.uniform(-0.8e-3, 1.5e-3)
-        d = _ridge_distance(lx, 0.0, lz, hx, hy, hz, tx)
+        d = ridge_distance(lx, 0.0, lz, hx, hy, hz, tx)
         u = abs(lx)
         top = hz if u <= tx else hz - 2 * hz * (u - tx) / (hx - tx)
         if u <= hx and lz <= top:
@@ -218,13 +217,13 @@ def test_the_ridge_and_cylinder_distances_against_brute_force():
                 _trapezoid_distance_brute(lx, lz + hz, hx, tx, 2 * hz), abs=2e-9
             )
     # past the ridge's end along y, the distance adds the y-gap in quadrature
-    d = _ridge_distance(0.0, hy + 0.3e-3, hz + 0.4e-3, hx, hy, hz, tx)
+    d = ridge_distance(0.0, hy + 0.3e-3, hz + 0.4e-3, hx, hy, hz, tx)
     assert d == pytest.approx(0.5e-3, abs=1e-15)
     r, h = 1.5e-3, 0.25e-3
-    assert _cylinder_distance(0.0, 0.5e-3, -0.1e-3, r, h, True) == pytest.approx(-0.35e-3)
-    assert _cylinder_distance(2.0e-3, 0.0, 0.0, r, h, True) == pytest.approx(0.5e-3)
-    assert _cylinder_distance(1.8e-3, 0.0, h + 0.4e-3, r, h, True) == pytest.approx(0.5e-3)
-    assert _cylinder_distance(0.0, 0.0, -h + 0.05e-3, r, h, False) == pytest.approx(-0.05e-3)
+    assert cylinder_distance(0.0, 0.5e-3, -0.1e-3, r, h, True) == pytest.approx(-0.35e-3)
+    assert cylinder_distance(2.0e-3, 0.0, 0.0, r, h, True) == pytest.approx(0.5e-3)
+    assert cylinder_distance(1.8e-3, 0.0, h + 0.4e-3, r, h, True) == pytest.approx(0.5e-3)
+    assert cylinder_distance(0.0, 0.0, -h + 0.05e-3, r, h, False) == pytest.approx(-0.05e-3)
 
 
 @pytest.mark.parametrize("plate", ["roughness8/ra-50", "textures20/rough-ra100"])

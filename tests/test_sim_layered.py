@@ -637,7 +637,7 @@ def test_the_spline_on_a_grid_is_scipys_map_coordinates():
     found only where the nodes are one."""
     from scipy.ndimage import map_coordinates
 
-    from sim_tactile.scene.layered import _tensor_grid, spline_on_grid
+    from sim_tactile.scene.spline_grid import spline_on_grid, tensor_grid
 
     rng = np.random.default_rng(4)
     coef = rng.standard_normal((97, 61))
@@ -650,11 +650,11 @@ def test_the_spline_on_a_grid_is_scipys_map_coordinates():
     assert np.max(np.abs(got.ravel() - ref)) <= 1e-13 * np.abs(ref).max()
     xs, ys = np.arange(5) * 0.3, np.arange(3) * 0.2 - 1
     nodes = np.column_stack([np.tile(xs, 3), np.repeat(ys, 5)])
-    got_xs, got_ys = _tensor_grid(nodes)
+    got_xs, got_ys = tensor_grid(nodes)
     assert np.array_equal(got_xs, xs) and np.array_equal(got_ys, ys)
-    rx, ry = _tensor_grid(nodes[::-1])  # a grid in any order of its axes is one
+    rx, ry = tensor_grid(nodes[::-1])  # a grid in any order of its axes is one
     assert np.array_equal(rx, xs[::-1]) and np.array_equal(ry, ys[::-1])
-    assert _tensor_grid(nodes[:-1]) is None  # a row short
+    assert tensor_grid(nodes[:-1]) is None  # a row short
     swapped = nodes.copy()
     swapped[[1, 2]] = swapped[[2, 1]]
-    assert _tensor_grid(swapped) is None
+    assert tensor_grid(swapped) is None
