@@ -27,7 +27,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from ..errors import ConfigError
 from .spec import MAX_FEATURE_HEIGHT_M, MAX_HEIGHTMAP_SAMPLES
@@ -216,6 +215,8 @@ def _check_overhangs(v, up, xs, ys, pixel, where, fill, notes) -> None:
 
 
 def _check_resolved(z: np.ndarray, pixel: float, where: str) -> None:
+    from scipy import ndimage  # 0.13 s to import: only when a part is sampled
+
     relief = float(np.nanmax(z))
     if relief <= TEXTURE_TOL_M:
         return
