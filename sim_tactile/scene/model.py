@@ -138,6 +138,20 @@ def _models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:
     return kept
 
 
+def add_velocity_servo(spec: mujoco.MjSpec, name: str, joint: str, kv: float) -> None:
+    """A velocity servo on ``joint``: force ``kv (ctrl - qvel)`` (the finger's slide, the
+    rig's carriage)."""
+    spec.add_actuator(
+        name=name,
+        target=joint,
+        trntype=mujoco.mjtTrn.mjTRN_JOINT,
+        gaintype=mujoco.mjtGain.mjGAIN_FIXED,
+        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
+        gainprm=[kv] + [0] * 9,
+        biasprm=[0, 0, -kv] + [0] * 7,
+    )
+
+
 def _compile_models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:
     xml = build_plate(plate, kinds=("mjcf",), cache=cache).files["mjcf"].read_text()
     spec = mujoco.MjSpec.from_string(xml)
@@ -163,15 +177,7 @@ def _compile_models(plate, finger, grid, z_damping, node_margin_m, cache) -> tup
         conaffinity=0,
         rgba=(0.85, 0.75, 0.65, 1),
     )
-    spec.add_actuator(
-        name="slide",
-        target="slide_x",
-        trntype=mujoco.mjtTrn.mjTRN_JOINT,
-        gaintype=mujoco.mjtGain.mjGAIN_FIXED,
-        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
-        gainprm=[SLIDE_KV] + [0] * 9,
-        biasprm=[0, 0, -SLIDE_KV] + [0] * 7,
-    )
+    add_velocity_servo(spec, "slide", "slide_x", SLIDE_KV)
     # the stepped model needs neither contacts nor the massless node spheres, whose poses
     # MuJoCo would otherwise compute every step (30 us a step for a curved pad's 5785 nodes):
     # it is compiled before they are added (deleting them from the spec took 2.5 ms each)

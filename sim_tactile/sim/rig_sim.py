@@ -39,6 +39,7 @@ from ..plates import Plate, get_plate, height_at
 from ..records import Recording
 from ..scene.elastic import subsurface_weights
 from ..scene.layered import layered_subsurface_weights
+from ..scene.model import add_velocity_servo
 from ..scene.nodes import SkinGrid
 from ..sensors import Finger, Sensor, resolve_sensor
 from .height_collider import interp_at
@@ -206,15 +207,7 @@ def rig_model(plate: Plate, sensor: Sensor, rig: ProbeRig, x0_m: float, y0_m: fl
         mass=rig.probe_mass_kg,
         rgba=(0.7, 0.7, 0.7, 1),
     )
-    spec.add_actuator(
-        name="carriage",
-        target="slide_x",
-        trntype=mujoco.mjtTrn.mjTRN_JOINT,
-        gaintype=mujoco.mjtGain.mjGAIN_FIXED,
-        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
-        gainprm=[CARRIAGE_KV] + [0] * 9,
-        biasprm=[0, 0, -CARRIAGE_KV] + [0] * 7,
-    )
+    add_velocity_servo(spec, "carriage", "slide_x", CARRIAGE_KV)
     m = spec.compile()
     jx = int(m.jnt_dofadr[m.joint("slide_x").id])
     jz = int(m.jnt_dofadr[m.joint("press_z").id])
