@@ -186,22 +186,19 @@ def _plate(value, base_dir: Path | None) -> str:
     configuration file's folder), or the reference of a user's part or height map
     (:mod:`~sim_tactile.plates.user`: a string, or a table with its ``file`` and options)
     with its path made absolute, checked (a script runs here, once)."""
+    opts = {}
     if isinstance(value, dict):
         opts = dict(value)
-        file = opts.pop("file", None)
-        if not isinstance(file, str) or not is_user_plate(file):
+        value = opts.pop("file", None)
+        if not isinstance(value, str) or not is_user_plate(value):
             raise ConfigError(
                 f"a plate table needs file = a part or height map (.step, .stp, .stl, .py, "
-                f".npy, .png), got {file!r}"
+                f".npy, .png), got {value!r}"
             )
-        src = parse_ref(file, **opts)
-        value = replace(src, path=str(_beside(src.path, base_dir).resolve())).ref()
-        get_plate(value)
-        return value
     if not isinstance(value, str):
         raise ConfigError(f"a plate must be a name, a file or a table, got {value!r}")
     if is_user_plate(value):
-        src = parse_ref(value)
+        src = parse_ref(value, **opts)
         value = replace(src, path=str(_beside(src.path, base_dir).resolve())).ref()
         get_plate(value)  # it must load
         return value
