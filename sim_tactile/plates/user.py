@@ -46,8 +46,14 @@ from ..errors import ConfigError
 from .mesh_map import DEFAULT_PIXEL_M, PLATE_SIDE_RANGE_M, Placement, closed_mesh, sample_part
 from .spec import HeightMap, Plate
 
-SUFFIXES = {".stl": "stl", ".step": "step", ".stp": "step", ".py": "script", ".npy": "npy"}
-SUFFIXES[".png"] = "png"
+SUFFIXES = {
+    ".stl": "stl",
+    ".step": "step",
+    ".stp": "step",
+    ".py": "script",
+    ".npy": "npy",
+    ".png": "png",
+}
 #: Time limit of a script or a STEP reader [s] (CadQuery's import takes about 5 s).
 DEFAULT_TIMEOUT_S = 120.0
 DEFAULT_THICKNESS_M = 0.005

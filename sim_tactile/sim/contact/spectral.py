@@ -47,6 +47,9 @@ try:  # scipy.fft's own pocketfft binding, without its dispatch (see Spectral.ap
     from scipy.fft._pocketfft import pypocketfft as _pocketfft
 except ImportError:  # pragma: no cover (another scipy: the public path)
     _pocketfft = None
+#: whether :meth:`Spectral.apply` takes the direct transforms (set when the module loads,
+#: by :func:`_direct_works`)
+_DIRECT = False
 
 #: Convergence of the conjugate-gradient iteration: the pressures' change in one iteration,
 #: summed over the nodes, relative to their sum (Polonsky and Keer's criterion). At 1e-10
@@ -473,5 +476,4 @@ def _direct_works() -> bool:
         return False
 
 
-_DIRECT = False
 _DIRECT = _direct_works()
