@@ -17,17 +17,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from .._jit import njit
 
 RK4, EULER, IZH2003 = 0, 1, 2
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def _rhs(v, u, cur, a, b):
     return (0.04 * v + 5.0) * v + 140.0 - u + cur, a * (b * v - u)
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def _rk4(v, u, cur, a, b, h):
     k1v, k1u = _rhs(v, u, cur, a, b)
     k2v, k2u = _rhs(v + 0.5 * h * k1v, u + 0.5 * h * k1u, cur, a, b)
@@ -39,7 +40,7 @@ def _rk4(v, u, cur, a, b, h):
     )
 
 
-@njit(cache=True)
+@njit
 def _rk4_all(v, u, vn, un, row, a, b, h):
     # the same arithmetic as _rk4, written out so that LLVM vectorises it across neurons
     for i in range(v.size):
@@ -66,7 +67,7 @@ def _rk4_all(v, u, vn, un, row, a, b, h):
         un[i] = ui + h / 6.0 * (k1u + 2.0 * k2u + 2.0 * k3u + k4u)
 
 
-@njit(cache=True)
+@njit
 def _euler_all(v, u, vn, un, row, a, b, h):
     for i in range(v.size):
         vi = v[i]
@@ -75,7 +76,7 @@ def _euler_all(v, u, vn, un, row, a, b, h):
         un[i] = ui + h * (a[i] * (b[i] * vi - ui))
 
 
-@njit(cache=True)
+@njit
 def _izh2003_all(v, u, vn, un, row, a, b, h):
     for i in range(v.size):
         vi = v[i]
@@ -86,7 +87,7 @@ def _izh2003_all(v, u, vn, un, row, a, b, h):
         un[i] = ui + h * a[i] * (b[i] * vi - ui)
 
 
-@njit(cache=True)
+@njit
 def _record(times, who, n_total, t, n):
     if n_total == times.size:
         t2 = np.empty(2 * times.size)
@@ -99,7 +100,7 @@ def _record(times, who, n_total, t, n):
     return times, who, n_total + 1
 
 
-@njit(cache=True)
+@njit
 def _rk4_spiking_step(v, u, cur, a, b, c, d, v_peak, t, dt, tol, max_per_step, times, who, nt, n):
     """The rare path: a rk4 step that reaches v_peak. Bisect the Runge-Kutta map to the
     crossing, reset, integrate the rest of the step; repeat while it keeps crossing."""
@@ -134,7 +135,7 @@ def _rk4_spiking_step(v, u, cur, a, b, c, d, v_peak, t, dt, tol, max_per_step, t
     return v, u, fired, capped, times, who, nt
 
 
-@njit(cache=True)
+@njit
 def izhikevich_run(
     current_t, sample_of_step, a, b, c, d, v_peak, v_init, dt, scheme, tol, max_per_step
 ):
@@ -177,7 +178,7 @@ def izhikevich_run(
     return grouped, counts, multi, capped, nonfinite
 
 
-@njit(cache=True)
+@njit
 def group_by_neuron(times, who, nt, n_neurons):
     """The first ``nt`` spikes, recorded in time order, regrouped by neuron (a counting sort:
     stable, so each neuron's spikes stay in time order); and each neuron's count."""
@@ -197,7 +198,7 @@ def group_by_neuron(times, who, nt, n_neurons):
     return out, counts
 
 
-@njit(cache=True)
+@njit
 def _rk4_steps(
     current_t,
     sample_of_step,
@@ -262,7 +263,7 @@ def _rk4_steps(
     return times, who, nt
 
 
-@njit(cache=True)
+@njit
 def _one_spike_steps(
     current_t, sample_of_step, a, b, c, d, v_peak, v, u, dt, scheme, multi, nonfinite
 ):
@@ -306,13 +307,13 @@ def _one_spike_steps(
     return times, who, nt
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def _lif_free(v, adapt, cur, v_rest, tau_m, tau_a, t):
     v_inf = v_rest + cur
     return v_inf + (v - v_inf) * math.exp(-t / tau_m), adapt * math.exp(-t / tau_a)
 
 
-@njit(cache=True)
+@njit
 def lif_run(
     current,
     sample_of_step,

@@ -24,8 +24,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from .._jit import njit
 
 #: The alpha kernel is cut where it has fallen below 1e-4 of its peak: m / tau > 13.4.
 KERNEL_SPAN = 14.0
@@ -72,7 +73,7 @@ def srm_spikes_torch(torch, u, theta: float, d: float, c: float):
         return spikes.movedim(0, -1), refr.movedim(0, -1)
 
 
-@numba.njit(cache=True)
+@njit
 def _srm_rows(u, theta, d, c, spikes, refr):  # pragma: no cover - compiled
     for m in range(u.shape[0]):
         a = np.float32(0.0)

@@ -45,9 +45,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from .._jit import njit
 from ..errors import PhysicsError
 from ..plates import Plate, features
 from .anchored_lines import _SHAPES, check_anchorable, period_lines, row_lines
@@ -57,7 +57,7 @@ from .contact.kernels import NO_K, force_loop, force_same_set
 from .contact.reference import MAX_ITER
 
 
-@numba.njit(cache=True)
+@njit
 def lattice_compliance(cxb, wxb, P, n_periods, cy, wy, e_star):
     """(n, n) deflection at cell i's centre per unit *load* on cell j [m/N] (Love's
     rectangle solution over the cell's area), cells numbered ``(k m + a) ny + j`` for period
@@ -91,7 +91,7 @@ def lattice_compliance(cxb, wxb, P, n_periods, cy, wy, e_star):
     return C
 
 
-@numba.njit(cache=True)
+@njit
 def _surface(shape, x, y, hx, hy, r, R, rx, ry, rz):
     """:meth:`Finger.surface` at one point."""
     if shape == 0:
@@ -106,7 +106,7 @@ def _surface(shape, x, y, hx, hy, r, R, rx, ry, rz):
     return rz * (1.0 - math.sqrt(max(1.0 - (x / rx) ** 2 - (y / ry) ** 2, 0.0)))
 
 
-@numba.njit(cache=True)
+@njit
 def depths(off, x_pad, z_low, y0, cxr, cy, boxes, plate_half, pad, pen):
     """Each cell's penetration [m] (``pen``, -inf where no skin lies over it or no plate
     under it) with the lattice's first column at ``off + cxr`` in the pad frame, the pad at
@@ -145,7 +145,7 @@ def depths(off, x_pad, z_low, y0, cxr, cy, boxes, plate_half, pad, pen):
             pen[c * ny + j] = h - z_low - s
 
 
-@numba.njit(cache=True)
+@njit
 def read_surface(off, cxr, wxr, ny, taxel_x, taxel_hx, oy, f, out):
     """Surface taxels' loads [N] (``out``): each cell's load ``f`` spread over the cell, read
     over the taxel's area: the x overlap of the cells at ``off + cxr`` (widths ``wxr``) with

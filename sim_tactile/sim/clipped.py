@@ -37,10 +37,10 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 
+from .._jit import njit
 from ..errors import ConfigError, PhysicsError
 from ..plates import Plate, features, height_at
 from ..scene.elastic import subsurface_weights
@@ -117,7 +117,7 @@ def _merge(base: np.ndarray, extra, lo: float, hi: float) -> np.ndarray:
     return np.array(out)
 
 
-@numba.njit(cache=True)
+@njit
 def _F(x, y):
     ax, ay = abs(x), abs(y)
     a = 0.0 if ax == 0.0 else x * math.asinh(y / ax)
@@ -125,12 +125,12 @@ def _F(x, y):
     return a + b
 
 
-@numba.njit(cache=True)
+@njit
 def _entry(x, y, a, b):
     return _F(x + a, y + b) - _F(x - a, y + b) - _F(x + a, y - b) + _F(x - a, y - b)
 
 
-@numba.njit(cache=True)
+@njit
 def assemble(cx, cy, hx, hy, cell, split, C_cells, e_star):
     """:func:`rect_compliance` of the patches, taking the entry between two patches that
     are whole static cells (``split`` False) from ``C_cells`` (the static cells'
@@ -147,7 +147,7 @@ def assemble(cx, cy, hx, hy, cell, split, C_cells, e_star):
     return C
 
 
-@numba.njit(cache=True)
+@njit
 def rect_compliance(cx, cy, hx, hy, e_star):
     """(n, n) surface compliance [m/Pa]: the deflection at patch i's centre per unit pressure
     on patch j, a rectangle of half-sides ``hx[j]``, ``hy[j]`` centred at (``cx[j]``,

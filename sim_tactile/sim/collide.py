@@ -38,9 +38,9 @@ from __future__ import annotations
 import math
 
 import mujoco
-import numba
 import numpy as np
 
+from .._jit import njit
 from ..plates import features
 from .height_collider import MapCollider, ProfileCollider, report_depth
 from .shapes import cylinder_distance, ridge_distance
@@ -53,7 +53,7 @@ _CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
 _PRISM = int(mujoco.mjtGeom.mjGEOM_MESH)
 
 
-@numba.njit(cache=True)
+@njit
 def penetration_map(
     geom: np.ndarray, dist: np.ndarray, node_of_geom: np.ndarray, pen: np.ndarray
 ) -> None:
@@ -375,7 +375,7 @@ def _drafted_ridge(m: mujoco.MjModel, d: mujoco.MjData, g: int, fs):
     return pos, xmat.copy(), np.array([f.hx, f.hy, f.height_m / 2]), float(f.top_hx)
 
 
-@numba.njit(cache=True)
+@njit
 def depths_kernel(
     bone,
     local,

@@ -21,8 +21,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from .._jit import njit
 
 
 class _SurfaceCollider:
@@ -222,7 +223,7 @@ class MapCollider(_SurfaceCollider):
         return np.where(off, np.nan, z)
 
 
-@numba.njit(cache=True)
+@njit
 def interp_at(q, xp, fp, left, right):
     """``np.interp(q, xp, fp, left, right)`` at one point, with numpy's arithmetic (the same
     number bit for bit, tested): the knot found by bisection, the slope between its
@@ -246,7 +247,7 @@ def interp_at(q, xp, fp, left, right):
     return v
 
 
-@numba.njit(cache=True)
+@njit
 def _profile_depths(x0, y0, z0, local, radius, margin, px, pz, ax, ay, sx, sy, pen):
     """:meth:`ProfileCollider.depths_numpy` in one loop: each node's height-map depth within
     its margin (the profile over the textured area ``|x| <= ax, |y| <= ay``, the base
@@ -266,7 +267,7 @@ def _profile_depths(x0, y0, z0, local, radius, margin, px, pz, ax, ay, sx, sy, p
     return near
 
 
-@numba.njit(cache=True)
+@njit
 def profile_depths_kernel(bone, local, radius, margin, px, pz, ax, ay, sx, sy, pen):
     """:func:`_profile_depths` for the bone at world position ``bone`` (3,): the depth kernel
     of :class:`ProfileCollider` in the compiled held step (the same sums, bit for bit)."""
@@ -275,7 +276,7 @@ def profile_depths_kernel(bone, local, radius, margin, px, pz, ax, ay, sx, sy, p
     )
 
 
-@numba.njit(cache=True)
+@njit
 def map_height_at(x, y, z, pixel):
     """:func:`~sim_tactile.plates.features.map_height` at one point, in its operation order
     (the same number bit for bit, tested): the cell by ``floor``, clipped to the map's edge
@@ -292,7 +293,7 @@ def map_height_at(x, y, z, pixel):
     return (1 - ty) * lower + ty * upper
 
 
-@numba.njit(cache=True)
+@njit
 def map_surface_at(x, y, z, pixel, ax, ay, sx, sy):
     """A height-map plate's surface height at (x, y), as
     :func:`~sim_tactile.plates.height_at` gives it: the map over its span ``|x| <= ax, |y|
@@ -305,7 +306,7 @@ def map_surface_at(x, y, z, pixel, ax, ay, sx, sy):
     return 0.0
 
 
-@numba.njit(cache=True)
+@njit
 def _map_depths(x0, y0, z0, local, radius, margin, z, pixel, ax, ay, sx, sy, pen):
     """:meth:`MapCollider.depths_numpy` in one loop: each node's depth below the plate's
     surface at its centre (:func:`map_surface_at`) within its margin, else -inf (and where the
@@ -317,7 +318,7 @@ def _map_depths(x0, y0, z0, local, radius, margin, z, pixel, ax, ay, sx, sy, pen
     return near
 
 
-@numba.njit(cache=True)
+@njit
 def map_depths_kernel(bone, local, radius, margin, z, pixel, ax, ay, sx, sy, pen):
     """:func:`_map_depths` for the bone at world position ``bone`` (3,): the depth kernel of
     :class:`MapCollider` in the compiled held step (the same sums, bit for bit)."""
@@ -326,7 +327,7 @@ def map_depths_kernel(bone, local, radius, margin, z, pixel, ax, ay, sx, sy, pen
     )
 
 
-@numba.njit(cache=True, inline="always")
+@njit(inline="always")
 def report_depth(pen, i, depth, margin):
     """Node ``i``'s depth into ``pen`` if it is within its margin (else -inf); whether it is.
     A NaN depth (no surface) is not within it."""

@@ -35,9 +35,9 @@ the taxel loads there. One step, two implementations with the same interface
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from .._jit import njit
 from ..cache import array_digest, setup_memo
 from ..errors import PhysicsError
 from . import contact
@@ -330,7 +330,7 @@ def _probe_args(c) -> tuple:
     return (_PRIMITIVE, c.arrays, _NO_PROFILE, _NO_MAP)
 
 
-@numba.njit(cache=True)
+@njit
 def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     """:meth:`CompiledHeldStep.step`. The arguments, grouped:
 
@@ -430,7 +430,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     return 0, force, top, M, S, updates, rebuilds, rowsum
 
 
-@numba.njit(cache=True)
+@njit
 def _winkler_force(pen, mult, k, total, f):
     """:func:`~sim_tactile.sim.contact.winkler_force` with node weights ``mult`` (the nodes each reduced node
     stands for): the shift ``dz`` at which ``sum(mult * k * max(pen + dz, 0)) = total``, and

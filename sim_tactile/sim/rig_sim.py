@@ -30,10 +30,10 @@ import math
 import time
 
 import mujoco
-import numba
 import numpy as np
 
 from .. import __version__
+from .._jit import njit
 from ..errors import ConfigError, PhysicsError
 from ..plates import Plate, get_plate, height_at
 from ..records import Recording
@@ -360,7 +360,7 @@ def _check_rig_inputs(plate: Plate, sensor: Sensor, finger: Finger, protocol: Pr
     return sheet
 
 
-@numba.njit(cache=True)
+@njit
 def _read_lines(xt, x, u, R, out):
     """``out[i] = np.interp(xt[i] - x, u, R[i], left=0, right=0)`` for every element, with
     numpy's arithmetic (:func:`~.height_collider.interp_at`; the same numbers bit for bit, tested),

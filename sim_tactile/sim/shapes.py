@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import math
 
-import numba
+from .._jit import njit
 
 
-@numba.njit(cache=True)
+@njit
 def _segment_distance(u, v, ax, az, bx, bz):
     """Distance from (u, v) to the segment from (ax, az) to (bx, bz)."""
     ex, ez = bx - ax, bz - az
@@ -19,7 +19,7 @@ def _segment_distance(u, v, ax, az, bx, bz):
     return math.sqrt(px * px + pz * pz)
 
 
-@numba.njit(cache=True)
+@njit
 def ridge_distance(lx, ly, lz, hx, hy, hz, tx):
     """Signed distance from (lx, ly, lz) to a drafted ridge in its frame (centred at
     mid-height; its cross-section in x-z a trapezoid from half-width ``hx`` at ``lz = -hz`` to
@@ -44,7 +44,7 @@ def ridge_distance(lx, ly, lz, hx, hy, hz, tx):
     return inside + math.sqrt(ox * ox + oy * oy)
 
 
-@numba.njit(cache=True)
+@njit
 def cylinder_distance(lx, ly, lz, radius, hz, upright):
     """Signed distance from (lx, ly, lz) to a cylinder in its frame (axis z, half-height
     ``hz``), but over an upright one's footprint the height above its top face."""

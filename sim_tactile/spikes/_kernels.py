@@ -11,12 +11,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from .._jit import njit
 
 VP, VR, ISI, SPIKE, ES = 0, 1, 2, 3, 4
 
 
-@njit(cache=True)
+@njit
 def _vp(x, y, q, row):
     n = x.size
     m = y.size
@@ -49,7 +50,7 @@ def _vp(x, y, q, row):
     return row[m]
 
 
-@njit(cache=True)
+@njit
 def _vr(x, y, tau):
     # f_x - f_y right after each merged event is g; between events it decays as exp(-t/tau),
     # so the integral of its square is a sum of non-negative terms (no cancellation).
@@ -81,7 +82,7 @@ def _vr(x, y, tau):
     return math.sqrt(0.5 * acc)
 
 
-@njit(cache=True)
+@njit
 def _nonempty(x, t0, t1):
     if x.size > 0:
         return x
@@ -91,7 +92,7 @@ def _nonempty(x, t0, t1):
     return out
 
 
-@njit(cache=True)
+@njit
 def _isi_nu(s, k, t0, t1):
     n = s.size
     if k < 0:
@@ -101,7 +102,7 @@ def _isi_nu(s, k, t0, t1):
     return max(t1 - s[n - 1], s[n - 1] - s[n - 2]) if n > 1 else t1 - s[n - 1]
 
 
-@njit(cache=True)
+@njit
 def _isi(x, y, t0, t1):
     a = _nonempty(x, t0, t1)
     b = _nonempty(y, t0, t1)
@@ -131,7 +132,7 @@ def _isi(x, y, t0, t1):
     return acc / (t1 - t0)
 
 
-@njit(cache=True)
+@njit
 def _aux(s, t0, t1):
     n = s.size
     if n > 1:
@@ -139,7 +140,7 @@ def _aux(s, t0, t1):
     return t0, t1
 
 
-@njit(cache=True)
+@njit
 def _nearest(t, s, lo, hi, start):
     # distance from t to the nearest of {lo, s..., hi}; s sorted, scanning from `start`
     d = min(abs(t - lo), abs(hi - t))
@@ -154,7 +155,7 @@ def _nearest(t, s, lo, hi, start):
     return d, k
 
 
-@njit(cache=True)
+@njit
 def _spike_knots(x, y, t0, t1):
     """Knot times and values of the local weighted distance S_x (PySpike's edge rules)."""
     n = x.size
@@ -181,7 +182,7 @@ def _spike_knots(x, y, t0, t1):
     return kt, kv
 
 
-@njit(cache=True)
+@njit
 def _spike_at(t, k1, v1, k2, v2, i1, i2):
     isi1 = k1[i1 + 1] - k1[i1]
     isi2 = k2[i2 + 1] - k2[i2]
@@ -194,7 +195,7 @@ def _spike_at(t, k1, v1, k2, v2, i1, i2):
     return 2.0 * ((s1 / tot) * (isi2 / tot) + (s2 / tot) * (isi1 / tot))
 
 
-@njit(cache=True)
+@njit
 def _spike(x, y, t0, t1):
     a = _nonempty(x, t0, t1)
     b = _nonempty(y, t0, t1)
@@ -222,7 +223,7 @@ def _spike(x, y, t0, t1):
     return acc / (t1 - t0)
 
 
-@njit(cache=True)
+@njit
 def _es_counts(x, y, tau_fixed, tau_max):
     """c(x|y) of Quian Quiroga et al. (2002): spikes of y shortly before spikes of x."""
     n = x.size
@@ -260,7 +261,7 @@ def _es_counts(x, y, tau_fixed, tau_max):
     return c
 
 
-@njit(cache=True)
+@njit
 def _es(x, y, tau_fixed, tau_max):
     n = x.size
     m = y.size
@@ -274,7 +275,7 @@ def _es(x, y, tau_fixed, tau_max):
     return 1.0 - min(q, 1.0)
 
 
-@njit(cache=True)
+@njit
 def _pair(metric, x, y, p0, p1, row):
     if metric == VP:
         return _vp(x, y, p0, row)
@@ -287,7 +288,7 @@ def _pair(metric, x, y, p0, p1, row):
     return _es(x, y, p0, p1)
 
 
-@njit(cache=True)
+@njit
 def distance_matrix(metric, flat_a, off_a, flat_b, off_b, p0, p1, symmetric):
     """(n_a, n_b) matrix of one metric between two packed sets of trains.
 

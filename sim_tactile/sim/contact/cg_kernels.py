@@ -11,11 +11,12 @@ not to the bit.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from ..._jit import njit
 
-@numba.njit(cache=True)
+
+@njit
 def gradient(u, pen, p, g, held):
     """``g = u - pen`` less its mean on the contact set (``p > 0``) when ``held``; returns
     ``(G, n_on)``: the squared norm of ``g`` on the set, and the set's size."""
@@ -38,14 +39,14 @@ def gradient(u, pen, p, g, held):
     return G, c
 
 
-@numba.njit(cache=True)
+@njit
 def direction(g, p, t, beta):
     """``t = where(p > 0, g + beta t, 0)`` in place."""
     for i in range(t.shape[0]):
         t[i] = g[i] + beta * t[i] if p[i] > 0.0 else 0.0
 
 
-@numba.njit(cache=True)
+@njit
 def step(r_raw, t, g, p, new, u, ok, held, total, G, rounding, direct_max, table, nx, scale):
     """The rest of an iteration after ``r_raw = C t``: the step length on the set, the
     projection onto ``p >= 0`` (nodes off the set that overlap the plate join), ``u = C p``
@@ -123,7 +124,7 @@ def step(r_raw, t, g, p, new, u, ok, held, total, G, rounding, direct_max, table
     return 0, 0.0 if joined else 1.0, change, carried, scale
 
 
-@numba.njit(cache=True)
+@njit
 def add_columns(u, table, nodes, dp, nx):
     """``u += C[:, nodes] @ dp`` on the lattice: each node's column is the kernel ``table``
     shifted to it (``u`` and ``table`` as (ny, nx))."""

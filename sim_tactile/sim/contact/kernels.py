@@ -4,11 +4,12 @@ active-set loop with block updates of the inverse, and the force-holding loop. T
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from ..._jit import njit
 
-@numba.njit(cache=True)
+
+@njit
 def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
     """Whether the contact set S still solves the problem for ``pen``; if so, write the
     pressures to ``p``. Checks the three conditions :meth:`ActiveSet.solve` would: every node
@@ -48,7 +49,7 @@ def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
 NO_K = np.zeros((0, 0))
 
 
-@numba.njit(cache=True)
+@njit
 def take(X, rows, cols):
     """X[rows][:, cols] as a new C-contiguous array."""
     out = np.empty((rows.size, cols.size))
@@ -66,7 +67,7 @@ def take(X, rows, cols):
 DRIFT_TOL = 1e-9
 
 
-@numba.njit(cache=True)
+@njit
 def drifted(M, C, S, tol):
     """Whether M is no longer inv(C[S, S]) to ``tol``: M C_SS v against v for v of ones and
     of alternating signs (O(|S|^2), the cost of one update's products)."""
@@ -88,7 +89,7 @@ def drifted(M, C, S, tol):
     return False
 
 
-@numba.njit(cache=True)
+@njit
 def _checked(M, C, K, S, sym, updates, rebuilds):
     """After a block update: M rebuilt from C (S sorted) if it has drifted."""
     if drifted(M, C, S, DRIFT_TOL):
@@ -97,7 +98,7 @@ def _checked(M, C, K, S, sym, updates, rebuilds):
     return M, S, updates, rebuilds
 
 
-@numba.njit(cache=True)
+@njit
 def inverse_subset(C, K, S, sym=True):
     """inv(C[S, S]); a large S goes through its small complement T with K = inv(C):
     inv(C_SS) = K_SS - K_ST inv(K_TT) K_TS. ``K`` of shape (0, 0) stands for no inverse.
@@ -120,7 +121,7 @@ def inverse_subset(C, K, S, sym=True):
     return np.ascontiguousarray(KSS - KST @ np.linalg.solve(KTT, KTS))
 
 
-@numba.njit(cache=True)
+@njit
 def solve_loop(
     M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor=0.0, sym=True
 ):
@@ -216,7 +217,7 @@ def solve_loop(
     return False, M, S, updates, rebuilds
 
 
-@numba.njit(cache=True)
+@njit
 def force_loop(
     M,
     S,
@@ -294,7 +295,7 @@ def force_loop(
     return 0, dz, M, S, updates, rebuilds
 
 
-@numba.njit(cache=True)
+@njit
 def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b, floor=0.0) -> float:
     """:meth:`ActiveSet.solve_force` on the set S alone: the shift ``dz`` at which the set's
     pressures sum to ``total``, and the pressures (into ``p``) if S still solves the contact
@@ -343,7 +344,7 @@ def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b, floor=0.0) -> flo
     return dz
 
 
-@numba.njit(cache=True)
+@njit
 def inverse_without(M, keep, drop, sym=True):
     """inv(C_KK) from M = inv(C_SS), S = K + R: the Schur complement M_KK - M_KR inv(M_RR) M_RK
     (``sym``: M_RK taken as M_KR's transpose)."""
@@ -355,7 +356,7 @@ def inverse_without(M, keep, drop, sym=True):
     return Mkk - Mkr @ X
 
 
-@numba.njit(cache=True)
+@njit
 def inverse_with(M, C, S, A, sym=True):
     """inv(C_TT) for T = S + A from M = inv(C_SS), through the Schur complement of C_SS:
     Z = C_AA - C_AS M C_SA, inv = [[M + M C_SA Z^-1 C_AS M, -M C_SA Z^-1],

@@ -1,0 +1,161 @@
+"""A compiled kernel is never older than its source (sim_tactile/_jit.py).
+
+numba's own cache checks only the file of the kernel it loads: a kernel that calls a jitted
+function of another file kept the old callee after an edit, and an edited simulator stored
+its old physics under its new key. These tests edit a callee *in another file* of a copy of
+the package, in place, and check that the next process computes with the new code (and that
+an unedited package is still served from the cache)."""
+
+from __future__ import annotations
+
+import ast
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import sim_tactile
+from sim_tactile import hashing
+from sim_tactile._jit import kernel_stamp, njit
+
+_CALLEE = """
+from ._jit import njit
+
+@njit
+def shift(x):
+    return x + {shift!r}
+"""
+_CALLER = """
+from ._jit import njit
+from ._probe_callee import shift
+
+@njit
+def twice_shifted(x):
+    return 2.0 * shift(x)
+"""
+_RUN = """
+import json
+from sim_tactile._probe_caller import twice_shifted
+value = twice_shifted(1.0)
+print(json.dumps({"value": value, "hits": sum(twice_shifted.stats.cache_hits.values()),
+                  "misses": sum(twice_shifted.stats.cache_misses.values())}))
+"""
+
+
+def _copy_package(tmp_path: Path, *, with_caches: bool) -> Path:
+    """A copy of the package (its compiled caches too, or none) and its preset assets."""
+    src = Path(sim_tactile.__file__).parent
+    pkg = tmp_path / "copy" / "sim_tactile"
+    ignore = None if with_caches else shutil.ignore_patterns("__pycache__")
+    shutil.copytree(src, pkg, ignore=ignore)
+    shutil.copytree(src.parent / "assets", pkg / "assets", ignore=ignore)
+    return pkg
+
+
+def _env(pkg: Path, tmp_path: Path, numba_cache: Path | None = None) -> dict:
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update(PYTHONPATH=str(pkg.parent), SIM_TACTILE_CACHE=str(tmp_path / "cache"))
+    if numba_cache is not None:
+        env["NUMBA_CACHE_DIR"] = str(numba_cache)
+    return env
+
+
+def _python(code: str, env: dict, cwd: Path) -> str:
+    p = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, cwd=cwd
+    )
+    assert p.returncode == 0, p.stderr[-3000:]
+    return p.stdout
+
+
+def test_a_kernel_follows_an_edit_of_a_jitted_callee_in_another_file(tmp_path):
+    pkg = _copy_package(tmp_path, with_caches=False)
+    (pkg / "_probe_caller.py").write_text(_CALLER)
+    (pkg / "_probe_callee.py").write_text(_CALLEE.format(shift=1.0))
+    env = _env(pkg, tmp_path)
+
+    def run() -> dict:
+        return json.loads(_python(_RUN, env, tmp_path))
+
+    first = run()
+    assert first == {"value": 4.0, "hits": 0, "misses": 1}
+    assert run() == {"value": 4.0, "hits": 1, "misses": 0}  # served from the disk cache
+    (pkg / "_probe_callee.py").write_text(_CALLEE.format(shift=2.0))  # the caller's file as it was
+    edited = run()
+    assert edited["value"] == 6.0, "the cached kernel kept its old callee"
+    assert edited["misses"] == 1
+    assert run() == {"value": 6.0, "hits": 1, "misses": 0}  # the new code is cached in turn
+
+
+def test_the_stamp_follows_the_modules_a_kernel_imports():
+    held = hashing.import_closure("sim_tactile.sim.held")
+    assert "sim_tactile.sim.shapes" in held  # through the collider
+    assert kernel_stamp("sim_tactile.sim.held") != kernel_stamp("sim_tactile.sim.shapes")
+    assert kernel_stamp("sim_tactile.sim.held") == hashing.code_version(
+        "sim_tactile.sim.held", libraries=("numba", "numpy")
+    )
+
+
+def test_njit_refuses_an_unversioned_cache_and_compiles_what_it_is_given():
+    with pytest.raises(TypeError, match="cache"):
+        njit(cache=True)
+
+    def add(a, b):
+        return a + b
+
+    assert njit(add)(2, 3) == 5
+
+
+def test_the_import_scan_finds_every_import_of_every_module():
+    """hashing.import_statements (a line scan) against a whole-module parse: the same
+    statements in every module of the package, so code versions are unchanged by it."""
+    root = Path(sim_tactile.__file__).parent
+    for f in sorted(root.rglob("*.py")):
+        src = f.read_bytes()
+        whole = sorted(
+            ast.dump(n)
+            for n in ast.walk(ast.parse(src))
+            if isinstance(n, ast.Import | ast.ImportFrom)
+        )
+        assert sorted(ast.dump(n) for n in hashing.import_statements(src)) == whole, f
+
+
+_SLIDE = """
+import sys
+import numpy as np
+from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.simulate import simulate
+proto = Protocol(speed_m_s=0.06, force_n=1.0, duration_s=0.3, start="texture")
+res = simulate("textures20/cylinders-3.0mm", "grid3x3", protocol=proto, fidelity="L0", seed=1)
+np.save(sys.argv[1], res.recording.data)
+"""
+
+
+@pytest.mark.slow
+def test_a_slide_moves_when_a_collider_shape_in_another_file_is_edited(tmp_path):
+    """The tracker's case: raise the cylinders' tops (sim/shapes.py::cylinder_distance, which
+    the compiled collider in sim/collide.py calls) by 0.2 mm in place. The next slide moves,
+    and equals bit for bit the slide of a process that compiled the edited code afresh."""
+    pkg = _copy_package(tmp_path, with_caches=True)
+    env = _env(pkg, tmp_path)
+
+    def slide(name: str, env: dict) -> np.ndarray:
+        out = tmp_path / f"{name}.npy"
+        subprocess.run([sys.executable, "-c", _SLIDE, str(out)], env=env, check=True, cwd=tmp_path)
+        return np.load(out)
+
+    before = slide("before", env)
+    shapes = pkg / "sim" / "shapes.py"
+    text = shapes.read_text()
+    old = "    if qr <= 0.0 and upright:\n        return lz - hz\n"
+    assert old in text
+    shapes.write_text(text.replace(old, old.replace("lz - hz", "lz - hz - 0.0002")))
+    after = slide("after", env)
+    fresh = slide("fresh", _env(pkg, tmp_path, numba_cache=tmp_path / "numba-fresh"))
+    assert not np.array_equal(after, before), "the cached collider kept the old shapes"
+    np.testing.assert_array_equal(after, fresh)
