@@ -6,17 +6,33 @@ settings, and the version of the code that makes it (:func:`sim_tactile.hashing.
 Files are written to a temporary name in the same directory, flushed and renamed, so a reader
 sees a whole file or none, and an interrupted build leaves nothing behind.
 
+Every entry proves what it is: beside ``<key>.<ext>`` lies ``<key>.<ext>.sum``, written after
+it, which holds the key the entry was stored under and the SHA-256 and size of its bytes.
+:meth:`ArtefactCache.get` serves an entry only when both agree with the key asked for and with
+the bytes on disk; an entry that was altered, truncated, moved under another key or cannot be
+read is discarded with a :class:`~sim_tactile.errors.CacheWarning` naming the file, and made
+again. A cache that cannot be written (a full disk, a read-only folder) raises
+:class:`~sim_tactile.errors.CacheError` in one line; a read-only cache whose entries are all
+there is read as usual.
+
 Location: ``$SIM_TACTILE_CACHE`` if set, else ``~/.cache/sim_tactile``.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import tempfile
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import CacheError, CacheWarning, os_error_message
 from .hashing import code_version, content_hash
+
+#: The suffix of an entry's checksum file.
+SUM_SUFFIX = ".sum"
 
 
 def default_root() -> Path:
@@ -59,13 +75,74 @@ class ArtefactCache:
         return Path(self.root) / key[:2] / f"{key}.{ext}"
 
     def get(self, key: str, ext: str) -> Path | None:
+        """The entry's path if it is there and proves to be the one stored under ``key``,
+        else None (a damaged entry is discarded, with a warning naming it)."""
         p = self.path(key, ext)
-        return p if p.is_file() else None
+        if not p.is_file():
+            return None
+        bad = _check_entry(p, key)
+        if bad is None:
+            return p
+        if bad != _NO_SUM:  # an entry cut short before its checksum is quietly made again
+            warnings.warn(f"cache entry {p}: {bad}; it is made again", CacheWarning, stacklevel=2)
+        self.discard(key, ext)
+        return None
 
     def put(self, key: str, ext: str, data: bytes) -> Path:
+        """Store ``data`` under ``key`` (the bytes, then their checksum); raises CacheError
+        when the cache cannot be written."""
         p = self.path(key, ext)
-        atomic_write(p, data)
+        record = {"key": key, "sha256": hashlib.sha256(data).hexdigest(), "size": len(data)}
+        try:
+            atomic_write(p, data)
+            atomic_write(_sum_path(p), json.dumps(record).encode())
+        except OSError as exc:
+            raise CacheError(
+                f"the cache cannot be written: {os_error_message(exc, p)} (set "
+                "SIM_TACTILE_CACHE to a writable folder with free space)"
+            ) from None
         return p
+
+    def discard(self, key: str, ext: str) -> None:
+        """Remove an entry and its checksum (nothing if they are not there)."""
+        p = self.path(key, ext)
+        for f in (_sum_path(p), p):
+            try:
+                f.unlink(missing_ok=True)
+            except OSError:  # a read-only cache: the entry is not served, nothing more
+                pass
+
+
+_NO_SUM = "no checksum beside it"
+
+
+def _sum_path(p: Path) -> Path:
+    return p.with_name(p.name + SUM_SUFFIX)
+
+
+def _check_entry(p: Path, key: str) -> str | None:
+    """None if the entry at ``p`` is the one stored under ``key``, else what is wrong."""
+    try:
+        record = json.loads(_sum_path(p).read_bytes())
+    except FileNotFoundError:
+        return _NO_SUM
+    except (OSError, ValueError) as exc:
+        return f"its checksum file cannot be read ({type(exc).__name__})"
+    if not isinstance(record, dict) or record.get("key") != key:
+        got = record.get("key") if isinstance(record, dict) else None
+        return f"it was stored under another key ({str(got)[:16]}...)"
+    h = hashlib.sha256()
+    size = 0
+    try:
+        with open(p, "rb") as f:
+            while chunk := f.read(1 << 20):
+                h.update(chunk)
+                size += len(chunk)
+    except OSError as exc:
+        return f"it cannot be read ({exc.strerror or exc})"
+    if size != record.get("size") or h.hexdigest() != record.get("sha256"):
+        return "its bytes do not match their checksum (altered or truncated)"
+    return None
 
 
 class ArrayMemo:
@@ -106,6 +183,11 @@ class ArrayMemo:
 
     def __len__(self) -> int:
         return len(self._items)
+
+    def clear(self) -> None:
+        """Forget every array kept."""
+        self._items.clear()
+        self._bytes.clear()
 
 
 #: The set-up a worker keeps between slides (:func:`setup_memo`): a data set's worker makes

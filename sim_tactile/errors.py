@@ -44,6 +44,32 @@ class StoreError(SimTactileError):
     """A data set's store is missing, of another configuration, incomplete or corrupted."""
 
 
+class OutputError(SimTactileError):
+    """An output file or folder cannot be written (a full disk, a read-only folder)."""
+
+
+class CacheError(OutputError):
+    """The artefact or slide cache cannot be written (a full disk, a read-only folder)."""
+
+
+class CacheWarning(UserWarning):
+    """A cache entry could not be read or failed its checksum: it is made again."""
+
+
+def os_error_message(exc: OSError, path: object, doing: str = "writing") -> str:
+    """One line for an operating-system error on ``path``: a full disk, a read-only folder,
+    a missing permission, or the error's own words."""
+    import errno
+
+    if exc.errno == errno.ENOSPC:
+        return f"no space left on the device {doing} {path}"
+    if exc.errno == errno.EDQUOT:
+        return f"the disk quota is exceeded {doing} {path}"
+    if exc.errno in (errno.EROFS, errno.EACCES, errno.EPERM):
+        return f"{path} is read-only or not writable ({exc.strerror})"
+    return f"{doing} {path} failed: {exc.strerror or exc}"
+
+
 class NeuronStepWarning(RuntimeWarning):
     """The integration step cannot follow the input: the neuron would fire more than once per
     step (rate above ``1 / dt_s``), or a strongly negative input makes the step unstable."""

@@ -74,11 +74,10 @@ class Recording:
     def n_taxels(self) -> int:
         return int(self.data.shape[1])
 
-    def save(self, path: str | Path) -> Path:
-        """Write an .npz (atomically) with ``data``, ``times``, ``taxels`` and ``meta_json``."""
+    def to_npz(self) -> bytes:
+        """The recording as the bytes of an .npz with ``data``, ``times``, ``taxels`` and
+        ``meta_json`` (what :meth:`save` writes and :meth:`load` reads)."""
         import io
-
-        from .cache import atomic_write
 
         buf = io.BytesIO()
         meta = dict(self.meta, units=self.units)
@@ -89,8 +88,14 @@ class Recording:
             taxels=self.taxels,
             meta_json=np.array(json.dumps(meta, sort_keys=True)),
         )
+        return buf.getvalue()
+
+    def save(self, path: str | Path) -> Path:
+        """Write :meth:`to_npz` to ``path`` (atomically)."""
+        from .cache import atomic_write
+
         path = Path(path)
-        atomic_write(path, buf.getvalue())
+        atomic_write(path, self.to_npz())
         return path
 
     @classmethod

@@ -36,11 +36,13 @@ from __future__ import annotations
 
 import hashlib
 import io
+import warnings
+import zipfile
 
 import numpy as np
 
 from ..cache import SETUP, SETUP_MEMO_BYTES, setup_memo
-from ..errors import ConfigError
+from ..errors import CacheWarning, ConfigError
 from ..hashing import blas_kernel, code_version, content_hash
 from ..scene.elastic import compliance_matrix, compliance_table
 from ..scene.layered import Stack, layered_compliance_matrix, layered_compliance_table
@@ -271,8 +273,14 @@ def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
                 what, symmetric = str(z["what"]), bool(z["symmetric"])
             _MEMO.put(key, (C, K, what, symmetric))
             return _keyed(key, C, K, what, symmetric)
-        except (OSError, ValueError, KeyError):
-            pass  # unreadable: computed again and stored over it
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+            warnings.warn(
+                f"cache entry {hit} cannot be read as a skin ({type(exc).__name__}); it is "
+                "computed again",
+                CacheWarning,
+                stacklevel=2,
+            )
+            cache.discard(key, "skin.npz")
     skin = _dense(grid, finger, slide_dir, inverse)
     _store(cache, key, skin.C, skin.K, skin.what, skin.symmetric)
     _MEMO.put(key, (skin.C, skin.K, skin.what, skin.symmetric))

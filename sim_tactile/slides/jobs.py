@@ -10,12 +10,14 @@ served after any of it, or any code that makes a slide, has changed.
 from __future__ import annotations
 
 import time
+import warnings
+import zipfile
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..cache import ArtefactCache
-from ..errors import SimTactileError
+from ..errors import CacheWarning, SimTactileError
 from ..hashing import code_version, content_hash, file_digest
 from ..plates import Plate
 from ..records import Recording
@@ -162,10 +164,34 @@ class SlideWorker:
         t0 = time.perf_counter()
         cache = ArtefactCache(self.cache_root)
         key = job.key()
-        hit = cache.get(key, "slide.npz")
-        if hit is not None:
-            return SlideOutcome(Recording.load(hit), (), time.perf_counter() - t0, True)
+        rec = cached_slide(cache, key)
+        if rec is not None:
+            return SlideOutcome(rec, (), time.perf_counter() - t0, True)
         res = job.simulate(cache)
         if self.write:
-            res.recording.save(cache.path(key, "slide.npz"))
+            cache.put(key, SLIDE_EXT, res.recording.to_npz())
         return SlideOutcome(res.recording, tuple(res.warnings), time.perf_counter() - t0, False)
+
+
+#: The slide cache's file kind.
+SLIDE_EXT = "slide.npz"
+
+
+def cached_slide(cache: ArtefactCache, key: str) -> Recording | None:
+    """The slide cached under ``key`` (its entry checked against the key and its checksum,
+    :meth:`~sim_tactile.cache.ArtefactCache.get`), or None: absent, or damaged and discarded
+    with a warning naming the file (the slide is then simulated again)."""
+    hit = cache.get(key, SLIDE_EXT)
+    if hit is None:
+        return None
+    try:
+        return Recording.load(hit)
+    except (SimTactileError, OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+        warnings.warn(
+            f"cache entry {hit} cannot be read as a slide ({type(exc).__name__}); it is "
+            "simulated again",
+            CacheWarning,
+            stacklevel=2,
+        )
+        cache.discard(key, SLIDE_EXT)
+        return None

@@ -21,7 +21,7 @@ from .. import _validate as v
 from ..cache import ArtefactCache
 from ..errors import ConfigError, SimTactileError, WorkerError, require
 from ..records import Recording
-from .jobs import SlideJob, SlideOutcome, SlideWorker
+from .jobs import SlideJob, SlideOutcome, SlideWorker, cached_slide
 
 #: The backends ``generate --backend`` takes.
 BACKENDS = ("local", "ray")
@@ -243,8 +243,8 @@ def run_slides(
     (each distinct warning with its count)."""
     cache = cache or ArtefactCache.default()
     keys = [j.key() for j in jobs]
-    todo = [i for i, k in enumerate(keys) if cache.get(k, "slide.npz") is None]
-    recs: list[Recording | None] = [None] * len(jobs)
+    recs: list[Recording | None] = [cached_slide(cache, k) for k in keys]
+    todo = [i for i, r in enumerate(recs) if r is None]
     warns: Counter[str] = Counter()
     t0 = time.perf_counter()
     if todo:
@@ -263,10 +263,6 @@ def run_slides(
         finally:
             backend.close(cancel=True)
     sim_s = time.perf_counter() - t0 if todo else 0.0
-    recs = [
-        r if r is not None else Recording.load(cache.get(k, "slide.npz"))
-        for r, k in zip(recs, keys, strict=True)
-    ]
     shapes = Counter(r.data.shape for r in recs)
     if len(shapes) > 1:
         raise ConfigError(f"simulated slides differ in shape: {dict(shapes)}")
