@@ -16,6 +16,7 @@ that fail and simulates the rest. The configuration file's format:
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 from collections import Counter
@@ -31,6 +32,7 @@ from .cache import default_root
 from .datasets.export import spec_from_tactile
 from .datasets.store import SlideWriter, config_hash, create_store, open_root, versions
 from .errors import ConfigError, StoreError, WorkerError
+from .hashing import canonical_json
 from .sensors.calibration import load_calibration
 from .slides.config import config_slide_set, load_config
 from .slides.jobs import SlideWorker
@@ -112,6 +114,10 @@ def _describe_existing(out: Path) -> str:
 
 
 def _diff(a: dict, b: dict, prefix: str = "") -> list[str]:
+    """The keys whose values differ, as JSON data: a list and a tuple of the same values are
+    the same (the store holds JSON; its hash is of the canonical JSON too)."""
+    if not prefix:
+        a, b = json.loads(canonical_json(a)), json.loads(canonical_json(b))
     out = []
     for k in sorted(set(a) | set(b)):
         x, y = a.get(k), b.get(k)

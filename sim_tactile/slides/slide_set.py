@@ -12,6 +12,7 @@ is cached under its job's content key (:meth:`~.jobs.SlideJob.key`): a second ru
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -19,6 +20,7 @@ from .. import _validate as v
 from ..errors import ConfigError
 from ..hashing import derive_seed
 from ..plates import get_plate, is_plate_file, preset_names
+from ..plates.user import is_user_plate, parse_ref
 from ..records import TactileDataset
 from ..sensors import Finger, Sensor, get_sensor, sensor_names
 from ..sensors.calibration import Calibration, calibrated
@@ -29,6 +31,20 @@ from .run import run_slides
 
 #: Slides per plate a set may ask for (per plate and class).
 SLIDES_RANGE = (2, 100_000)
+
+
+def plate_label(plate: str) -> str:
+    """How a set's configuration records a plate: a preset by its name, a file by its name
+    without its folder (a part's or height map's with its options). A data set's identity is
+    its content (each plate's parameters, a height map's samples by their SHA-256, are in the
+    configuration beside it), so a folder of configuration, files and store runs and resumes
+    wherever it is copied."""
+    if not is_plate_file(plate):
+        return plate
+    if is_user_plate(plate):
+        src = parse_ref(plate)
+        return replace(src, path=Path(src.path).name).ref()
+    return Path(plate).name
 
 
 def class_name(plate: str) -> str:
@@ -151,7 +167,7 @@ class SlideSet:
         """The set's configuration as JSON data, each plate with its parameters (so a data
         set records its plates whole, and a changed preset is another configuration)."""
         d = {
-            "plates": list(self.plates),
+            "plates": [plate_label(p) for p in self.plates],
             "plate_params": [get_plate(p).params() for p in self.plates],
             "sensor": self.sensor,
             "sensor_definition": self.sensor_def().to_json(),
