@@ -70,6 +70,15 @@ def os_error_message(exc: OSError, path: object, doing: str = "writing") -> str:
     return f"{doing} {path} failed: {exc.strerror or exc}"
 
 
+class Terminated(KeyboardInterrupt):
+    """The process was asked to stop by a signal (SIGTERM: ``kill``, ``timeout``, a batch
+    scheduler): handled as Ctrl-C is, so every clean-up that Ctrl-C runs runs for it too."""
+
+    def __init__(self, signum: int = 15) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
 class NeuronStepWarning(RuntimeWarning):
     """The integration step cannot follow the input: the neuron would fire more than once per
     step (rate above ``1 / dt_s``), or a strongly negative input makes the step unstable."""

@@ -17,6 +17,7 @@ that fail and simulates the rest. The configuration file's format:
 from __future__ import annotations
 
 import json
+import signal
 import sys
 import time
 from collections import Counter
@@ -31,7 +32,7 @@ from . import _validate as v
 from .cache import default_root
 from .datasets.export import spec_from_tactile
 from .datasets.store import SlideWriter, config_hash, create_store, open_root, versions
-from .errors import ConfigError, StoreError, WorkerError
+from .errors import ConfigError, StoreError, Terminated, WorkerError
 from .hashing import canonical_json
 from .sensors.calibration import load_calibration
 from .slides.config import config_slide_set, load_config
@@ -189,6 +190,8 @@ class _Run:
     sim_s: float = 0.0
     write_s: float = 0.0
     interrupted: bool = False
+    #: the signal that stopped the run (SIGTERM), None for Ctrl-C or none
+    signal: str | None = None
 
 
 def _recheck_written(root, run: _Run, resumed: bool, log) -> None:
@@ -317,10 +320,13 @@ def generate(
             _drain(runner, run, bar)
         finally:
             bar.close()
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         run.interrupted = True
+        if isinstance(exc, Terminated):
+            run.signal = signal.Signals(exc.signum).name
         log(
-            f"interrupted: {run.reused + run.written} of {total} slides are in {out}; "
+            f"{'stopped by ' + run.signal if run.signal else 'interrupted'}: "
+            f"{run.reused + run.written} of {total} slides are in {out}; "
             "run the same command with --resume to continue"
         )
         raise
@@ -371,6 +377,7 @@ def _record_run(root, run: _Run, backend, workers, address, t_start) -> None:
         "written": run.written,
         "regenerated": len(run.corrupt),
         "interrupted": run.interrupted,
+        "signal": run.signal,
         "wall_s": round(time.perf_counter() - t_start, 3),
     }
     if backend == "ray":

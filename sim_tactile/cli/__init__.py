@@ -2,46 +2,107 @@
 commands (plates, sim, tasks, data, bench).
 
 Every command takes ``--json``: stdout then carries one JSON document and nothing else;
-progress and logs go to stderr. A failure exits non-zero with a one-line reason on stderr.
+progress and logs go to stderr. A failure exits non-zero with a one-line reason on stderr
+(``--debug`` shows the traceback). SIGTERM stops a command as Ctrl-C does: its workers stop,
+its store records the interrupted run, and it exits with 143.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
-from collections.abc import Sequence
+import warnings
+from collections.abc import Iterator, Sequence
 
 from .. import __version__
-from ..errors import SimTactileError
+from ..errors import SimTactileError, Terminated, os_error_message
 from . import bench, data, plates, sim, tasks
 from ._common import log
 
 EXIT_ERROR = 2
+#: An error the package did not expect (a bug): exit status, and what the line asks for.
+EXIT_INTERNAL = 3
+EXIT_INTERRUPTED = 130
 
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="sim-tactile", description=__doc__.splitlines()[0])
     p.add_argument("--version", action="version", version=f"sim-tactile {__version__}")
+    p.add_argument("--debug", action="store_true", help="show the traceback of an error")
     sub = p.add_subparsers(dest="command", required=True)
     for group in (plates, sim, tasks, data, bench):
         group.add_parsers(sub)
     return p
 
 
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated(signum)
+
+
+@contextlib.contextmanager
+def _signals() -> Iterator[None]:
+    """SIGTERM raises :class:`~sim_tactile.errors.Terminated` (a KeyboardInterrupt) in the
+    main thread for as long as a command runs."""
+    try:
+        old = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread (an embedding program): leave it be
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def _one_line_warnings(message, category, filename, lineno, line=None) -> str:
+    return f"sim-tactile: warning: {message}\n"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except SimTactileError as exc:
-        log(f"sim-tactile: error: {exc}")
-        return EXIT_ERROR
-    except BrokenPipeError:  # e.g. `sim-tactile plates list | head`
-        sys.stderr.close()
-        return 0
-    except KeyboardInterrupt:
-        log("sim-tactile: interrupted")
-        return 130
+    debug = bool(getattr(args, "debug", False))
+    if not debug:
+        warnings.formatwarning = _one_line_warnings
+    with _signals():
+        try:
+            return int(args.func(args) or 0)
+        except Terminated as exc:
+            log(f"sim-tactile: stopped by signal {signal.Signals(exc.signum).name}")
+            return 128 + exc.signum
+        except KeyboardInterrupt:
+            log("sim-tactile: interrupted")
+            return EXIT_INTERRUPTED
+        except BrokenPipeError:  # e.g. `sim-tactile plates list | head`
+            sys.stderr.close()
+            return 0
+        except SimTactileError as exc:
+            if debug:
+                raise
+            log(f"sim-tactile: error: {exc}")
+            return EXIT_ERROR
+        except OSError as exc:  # the machine's fault: a full disk, a read-only folder
+            if debug:
+                raise
+            where = exc.filename if exc.filename is not None else "a file"
+            log(f"sim-tactile: error: {os_error_message(exc, where, 'using')}")
+            return EXIT_ERROR
+        except MemoryError:
+            if debug:
+                raise
+            log("sim-tactile: error: out of memory (a smaller input, or fewer --workers)")
+            return EXIT_ERROR
+        except Exception as exc:  # a bug: one line, and how to see more
+            if debug:
+                raise
+            text = str(exc).splitlines()[0] if str(exc) else ""
+            log(
+                f"sim-tactile: internal error: {type(exc).__name__}: {text} (run again with "
+                "--debug for the traceback, and please report it)"
+            )
+            return EXIT_INTERNAL
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -53,6 +53,12 @@ def add_command(parent, name: str, func, help: str) -> argparse.ArgumentParser:
     """A subcommand with ``--json`` that runs ``func(args)``."""
     sp = parent.add_parser(name, help=help, description=help)
     sp.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+    sp.add_argument(
+        "--debug",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="show the traceback of an error",
+    )
     sp.set_defaults(func=func)
     return sp
 

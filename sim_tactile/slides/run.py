@@ -79,10 +79,48 @@ class SerialBackend:
         pass
 
 
-def _worker_init() -> None:  # pragma: no cover - runs in the workers
-    import signal
+#: How often a worker checks that its parent is alive [s] (where the kernel cannot tell it).
+WATCHDOG_S = 1.0
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+
+def _worker_init(parent: int) -> None:  # pragma: no cover - runs in the workers
+    """A worker ignores Ctrl-C (the parent handles it and stops the pool), dies of SIGTERM,
+    and ends when its parent ends, however it ends (SIGTERM, SIGKILL, the OOM killer): the
+    kernel sends it SIGKILL then (Linux's parent-death signal), and a watchdog thread ends it
+    where there is no such signal, or where the parent died before it was set."""
+    import signal
+    import threading
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the parent's handler, copied by fork
+    _die_with_parent()
+    if os.getppid() != parent:
+        os._exit(1)
+
+    def watch() -> None:
+        while True:
+            time.sleep(WATCHDOG_S)
+            if os.getppid() != parent:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the workers
+    """Linux: SIGKILL this process when the thread that made it ends (prctl
+    PR_SET_PDEATHSIG); elsewhere nothing (the watchdog does it)."""
+    import ctypes
+    import ctypes.util
+    import signal
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        return
 
 
 def _warm(_: int) -> int:  # pragma: no cover - runs in the workers
@@ -106,8 +144,12 @@ class ProcessBackend:
         self.fn = fn
         self.workers = workers
         self.slots = 2 * workers
-        self.pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_worker_init)
+        self.pool = ProcessPoolExecutor(
+            workers, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
+        )
         list(self.pool.map(_warm, range(workers)))
+        # the workers, started by the map above (the pool keeps them in a private table)
+        self._procs = list(getattr(self.pool, "_processes", {}).values())
 
     def submit(self, item: Any):
         return self.pool.submit(self.fn, item)
@@ -127,7 +169,18 @@ class ProcessBackend:
             raise WorkerError("a worker process died (killed, or out of memory?)") from None
 
     def close(self, cancel: bool = False) -> None:
+        """Stop the pool; with ``cancel``, drop what is queued and end the workers now
+        (a slide in flight is not waited for: an interrupt or an error stops the run)."""
         self.pool.shutdown(wait=not cancel, cancel_futures=cancel)
+        if cancel:
+            for p in self._procs:
+                if p.is_alive():
+                    p.terminate()
+            for p in self._procs:
+                p.join(timeout=5)
+                if p.is_alive():
+                    p.kill()
+                    p.join(timeout=5)
 
 
 def _call(fn: Callable[[Any], Any], item: Any) -> Any:  # pragma: no cover - a Ray task
