@@ -16,20 +16,18 @@ from sim_tactile.errors import ConfigError, StoreError
 from sim_tactile.generate import generate
 from sim_tactile.tasks import evaluate
 
-CONFIG = """
-name = "seeded"
-seed = 7
-plates = ["finger7/flat", "finger7/ridges-2"]
-sensor = "grid3x3"
-slides_per_plate = 3
-
-[protocol]
-duration_s = 0.2
-
-[evaluate]
-split = "2/1"
-repeats = 2
-"""
+#: A small slide set (2 plates x 3 slides of 0.2 s) whose file carries its own seed, 7.
+CONFIG = json.dumps(
+    {
+        "name": "seeded",
+        "seed": 7,
+        "sensor": "grid3x3",
+        "plates": ["finger7/flat", "finger7/ridges-2"],
+        "slides_per_plate": 3,
+        "protocol": {"duration_s": 0.2},
+        "evaluate": {"split": "2/1", "repeats": 2},
+    }
+)
 
 
 def _flat(X):
@@ -40,7 +38,7 @@ def _flat(X):
 def seeded(tmp_path, cache_dir, monkeypatch):
     """The configuration (seed 7) and the store ``generate`` wrote from it."""
     monkeypatch.setenv("SIM_TACTILE_CACHE", str(cache_dir))
-    cfg = tmp_path / "seeded.toml"
+    cfg = tmp_path / "seeded.json"
     cfg.write_text(CONFIG)
     store = tmp_path / "seeded.zarr"
     generate(str(cfg), store, workers=1, progress=False, log=lambda m: None)
@@ -59,7 +57,7 @@ def test_evaluate_passes_no_seed_and_the_run_takes_the_files(tmp_path, monkeypat
         raise _Seen(kw["seed"])
 
     monkeypatch.setattr(runner, "load_task", seen)
-    cfg = tmp_path / "seeded.toml"
+    cfg = tmp_path / "seeded.json"
     cfg.write_text(CONFIG)
     ridge = Pipeline([("flat", FunctionTransformer(_flat)), ("r", RidgeClassifier())])
     for kw, want in (({}, 7), ({"seed": 3}, 3)):
