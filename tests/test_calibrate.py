@@ -348,6 +348,14 @@ def test_calibrate_biotac_on_the_real_recordings(tmp_path):
     assert min(cal.counts_per_n[0], cal.counts_per_n[10]) > 40
     assert cal.quant_step == 1.0 and all(0.2 < s < 2.0 for s in cal.noise_std)
     assert cal.n_recordings == 1000
+    # the electrodes rest at the floor (offsets are rest levels, no longer line intercepts),
+    # pdc's tare is within a count of 0, and the glitch on ele7-10 is no drift
+    assert all(-0.5 < o < 2.0 for o in cal.offset)
+    (tare,) = [n for n in cal.notes if "tare" in n]
+    assert abs(float(tare.split("found in the data: ")[1].split(" N")[0])) < 0.01
+    assert max(cal.drift_per_s[6:10]) < 0.3
+    (bent,) = [n for n in cal.notes if n.startswith("not linear from rest")]
+    assert all(f"'ele{k}'" in bent for k in (8, 9, 10, 17))
     # the calibration that ships is this fit (regenerate it with the same command if not)
     shipped = load_calibration("biotac19")
     np.testing.assert_allclose(shipped.counts_per_n, cal.counts_per_n, rtol=1e-9)

@@ -9,12 +9,15 @@ model those readings come from instead:
 
     reading = max(floor, step * round((mu + sigma * n) / step)),   n ~ N(0, 1)
 
-per channel, from the first two moments of its quiet samples (:func:`fit_rest`): the mean
-of the samples, and the variance from their first differences (half their variance, which
-a slow drift barely touches), with spikes left out (:func:`diff_variance`). The moments of
-that model are exact sums over the levels (:func:`reading_moments`), so the fitted ``mu``
-and ``sigma`` carry neither the clipping's nor the quantisation's bias (Sheppard's
-``sigma^2 + step^2 / 12`` is the unclipped limit).
+per channel (:func:`fit_rest`), from statistics that slow excursions (a drift, a light
+touch the quiet band lets through) barely move: the variance of the readings from their
+first differences (half theirs, spikes left out: :func:`diff_variance`), and the readings'
+mean where the channel is not clipped, or where it is, the share of readings at the floor
+and the histogram of the first differences. The model's statistics are exact sums over its
+levels (:func:`reading_probs`, :func:`reading_moments`; :func:`phase_var` with each quiet
+stretch at its own place on the ADC grid), so the fitted ``mu`` and ``sigma`` carry neither
+the clipping's nor the quantisation's bias (Sheppard's ``sigma^2 + step^2 / 12`` is the
+unclipped variance on average over the grid).
 
 :func:`rest_mode` finds a channel's rest level before anything is known: the commonest
 reading among its lower half (at rest a channel stays within its noise of one level; in
@@ -36,7 +39,8 @@ ROUGH_TRIM = 0.005
 #: its first differences' histogram (:func:`_diff_fit`), not from its readings' mean.
 CLIPPED_REST = 0.02
 #: A channel whose quiet readings rise above the floor less often than this cannot show
-#: its noise (all of it is below the floor): its rest is the floor and its noise 0.
+#: its noise (nearly all of it is below the floor): its rest is taken as the floor and its
+#: noise as what its differences show beyond the ADC step.
 MIN_ABOVE_FLOOR = 0.01
 
 
