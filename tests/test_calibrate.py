@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from sim_tactile.calibrate import calibrate, from_fit
-from sim_tactile.calibrate.fit import RECTIFIED_DIFF, fit_channels, fit_readout, fit_unforced
+from sim_tactile.calibrate.fit import RECTIFIED_DIFF, fit_readout, fit_unforced
+from sim_tactile.calibrate.forced import fit_channels
 from sim_tactile.cli import main
 from sim_tactile.errors import ConfigError
 from sim_tactile.sensors import get_sensor
@@ -94,9 +95,14 @@ def test_the_drift_of_a_random_walk_is_recovered_as_its_rate():
 
 
 def test_the_fit_needs_quiet_stretches_and_matching_shapes():
-    levels, forces, _ = _synthetic(n_rec=3)
+    """A force that rests at 1 N is a tare, found; one that never rests leaves nothing to
+    fit the rest levels on."""
+    levels, forces, truth = _synthetic(n_rec=40)
+    fit = fit_channels(levels, [f + 1.0 for f in forces], RATE, floor=0.0)
+    assert fit.force_rest.level == pytest.approx(1.0, abs=1e-9)
+    np.testing.assert_allclose(fit.counts_per_n, truth["gain"], rtol=RECOVERY_RTOL)
     with pytest.raises(ConfigError, match="no quiet stretch"):
-        fit_channels([x[100:300] for x in levels], [f[100:300] + 1.0 for f in forces], RATE)
+        fit_channels([x[200:380] for x in levels], [f[200:380] for f in forces], RATE)
     with pytest.raises(ConfigError, match="levels .* and force"):
         fit_channels(levels, [f[:-1] for f in forces], RATE)
 
@@ -315,7 +321,10 @@ def test_from_fit_borrows_the_gain_of_channels_the_press_does_not_load():
         fit,
         **{
             k: np.concatenate([getattr(fit, k), np.zeros(15)])
-            for k in ("counts_per_n", "offset", "r2", "noise_std", "drift_per_s")
+            for k in (
+                *("counts_per_n", "offset", "r2", "noise_std", "drift_per_s"),
+                *("intercept", "at_floor"),
+            )
         },
     )
     share = np.concatenate([[0.1, 0.2, 0.0, 0.05], np.zeros(15)])
@@ -339,6 +348,14 @@ def test_calibrate_biotac_on_the_real_recordings(tmp_path):
     assert min(cal.counts_per_n[0], cal.counts_per_n[10]) > 40
     assert cal.quant_step == 1.0 and all(0.2 < s < 2.0 for s in cal.noise_std)
     assert cal.n_recordings == 1000
+    # the electrodes rest at the floor (offsets are rest levels, no longer line intercepts),
+    # pdc's tare is within a count of 0, and the glitch on ele7-10 is no drift
+    assert all(-0.5 < o < 2.0 for o in cal.offset)
+    (tare,) = [n for n in cal.notes if "tare" in n]
+    assert abs(float(tare.split("found in the data: ")[1].split(" N")[0])) < 0.01
+    assert max(cal.drift_per_s[6:10]) < 0.3
+    (bent,) = [n for n in cal.notes if n.startswith("not linear from rest")]
+    assert all(f"'ele{k}'" in bent for k in (8, 9, 10, 17))
     # the calibration that ships is this fit (regenerate it with the same command if not)
     shipped = load_calibration("biotac19")
     np.testing.assert_allclose(shipped.counts_per_n, cal.counts_per_n, rtol=1e-9)

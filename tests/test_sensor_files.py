@@ -4,6 +4,7 @@ changed, a grid generator, taxels one by one), and every bad file refused with i
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -152,7 +153,23 @@ BAD = [
     (
         "a taxel outside the pad",
         'base = "grid3x3"\n[layout]\nx_m = [0.0, 0.02]\ny_m = [0.0, 0.0]\nsize_m = 1e-3\n',
-        ["beyond the pad", "valid"],
+        ["taxel 1 ('t1')", "beyond the pad", "x_m = 0.02 m", "valid: |x_m| + size/2 <= 0.008 m"],
+    ),
+    (
+        "a taxel across the pad's edge",
+        'base = "grid3x3"\n[layout]\nx_m = [0.0, 0.0]\ny_m = [0.0, -0.0075]\nsize_m = 2e-3\n',
+        ["taxel 1 ('t1')", "y_m = -0.0075 m", "reaching 0.0085 m", "<= 0.008 m"],
+    ),
+    (
+        "a taxel 1 m deep in a 4 mm pad",
+        'base = "grid3x3"\n[layout]\nx_m = [0.0, 1e-3]\ny_m = [0.0, 0.0]\ndepth_m = [1e-3, 1.0]\n'
+        "size_m = 1e-3\n",
+        ["taxel 1 ('t1')", "below the skin", "depth_m = 1 m", "valid: 0 <= depth_m <= 0.004 m"],
+    ),
+    (
+        "a taxel under a thinned skin",
+        'base = "biotac19"\n[pad]\nthickness_m = 2e-3\n',
+        ["taxel 0 ('ele1')", "depth_m = 0.0025 m", "<= 0.002 m", "19 taxel(s) below it"],
     ),
     (
         "a pad out of range",
@@ -262,3 +279,36 @@ def test_a_4x4_sensor_file_through_simulate_and_generate(cli, tmp_path, cache_di
     sensor.unlink()
     again = sensor_from_record(st.config["sensor_definition"])
     assert content_hash(again.to_json()) == want
+
+
+def test_every_preset_sensor_file_still_loads_and_carries_its_taxels():
+    """The pad check (taxels within the patch and the skin) passes every preset, as its
+    file and with its paper's skin stack, and a taxel on the bone (depth = thickness)."""
+    from sim_tactile.sensors import check_pad, get_sensor
+    from sim_tactile.sensors.presets import PRESETS, preset_file
+
+    for name in PRESETS:
+        s = load_sensor_file(preset_file(name))
+        check_pad(s.layout, s.finger)
+        stacked = get_sensor(name).with_paper_stack()
+        check_pad(stacked.layout, stacked.finger)
+    bone = get_sensor("biotac19")
+    check_pad(bone.layout, replace(bone.finger, thickness_m=2.5e-3))
+
+
+def test_a_bare_layout_deeper_than_the_skin_is_not_simulated():
+    """The simulation checks the same: taxels 1 m deep in a 4 mm pad are refused before
+    anything runs, naming the taxel."""
+    from sim_tactile.sensors import Layout
+    from sim_tactile.sim.simulate import simulate
+
+    deep = Layout(
+        "deep",
+        np.array([[0.0, 0.0, -1e-3], [1e-3, 0.0, -1.0]]),
+        np.full((2, 2), 1e-3),
+        np.zeros(2, int),
+    )
+    with pytest.raises(
+        ConfigError, match=r"taxel 1 \('t1'\) of the deep layout lies below the skin: depth_m = 1 m"
+    ):
+        simulate("finger7/flat", deep)

@@ -9,8 +9,9 @@ returns a :class:`~sim_tactile.sensors.calibration.Calibration`, which
 Sensors with real data here:
 
 - ``biotac19``: the public BioTac slides (seed 000). The static pressure channel ``pdc`` is
-  linear in the normal force, 100 counts per newton (seed 000, section IV-D), so every
-  sample carries its own force, and the 19 electrodes are fitted against it.
+  linear in the normal force, 100 counts per newton (seed 000, section IV-D: a *change* of
+  pdc), so every sample carries its own force, measured from pdc's rest level (its tare,
+  found in the data, :mod:`.forced`), and the 19 electrodes are fitted against it.
 - ``icub60``: the public iCub forearm slides (seed 000; compiled 1.5 s clips, the rest level
   subtracted and clipped at 0). No force was recorded and none was controlled (seed 000,
   section III-C), so what is fitted is what needs none: each taxel's noise floor on the
@@ -44,10 +45,10 @@ from .fit import (
     QUIET_SIGMAS,
     ChannelFit,
     Readout,
-    fit_channels,
     fit_readout,
     fit_unforced,
 )
+from .forced import fit_channels
 
 #: BioTac static pressure (pdc) counts per newton of normal force (seed 000, section IV-D).
 BIOTAC_PDC_COUNTS_PER_N = 100.0
@@ -114,15 +115,7 @@ def from_fit(
     """The calibration of ``sensor`` from a channel fit and the simulated load shares;
     ``notes``: what the fit assumed (default: the BioTac's, fitted against its force);
     ``readout``: a multiplexed readout found in the data (:func:`fit_readout`)."""
-    notes = (
-        list(notes)
-        if notes is not None
-        else [
-            "crosstalk: not identifiable from these data (every electrode responds to the same "
-            "normal force); left to the sensor model",
-            f"quiet stretches: {fit.n_quiet} (force <= 0.03 N for >= 0.3 s), median {fit.stretch_s:.2f} s",
-        ]
-    )
+    notes = list(notes) if notes is not None else forced_notes(fit, sensor.layout.names)
     cpn = np.nan_to_num(fit.counts_per_n, nan=0.0)
     fitted = (share >= MIN_SHARE) & (cpn > 0)
     gain = np.zeros(sensor.layout.n)
@@ -163,6 +156,58 @@ def from_fit(
     )
 
 
+#: A channel's line misses its rest level by more than this share of its rise in contact
+#: (at the typical force): its response is not linear from rest, and the notes say so.
+NONLINEAR_SHARE = 0.25
+
+
+def forced_notes(fit: ChannelFit, names) -> list[str]:
+    """What a fit against a recorded force (:func:`~.forced.fit_channels`) assumed and
+    found, for the calibration's notes (``names``: the channels')."""
+    from .forced import MAX_CLIPPED
+
+    rest, step = fit.force_rest, fit.quant_step
+    notes = [
+        "crosstalk: not identifiable from these data (every electrode responds to the same "
+        "normal force); left to the sensor model",
+        f"quiet stretches: {fit.n_quiet} (the force at its rest level for >= 0.3 s, glitches "
+        f"left out), median {fit.stretch_s:.2f} s",
+    ]
+    if rest is not None:
+        notes.append(
+            f"force rest level (tare), found in the data: {rest.level:.4g} N (the commonest "
+            f"force reading, then fitted on the quiet stretches), noise {rest.noise:.3g} N; "
+            "forces are measured from it, and the gains corrected for that noise"
+        )
+    if fit.at_floor is not None:
+        low = int(np.count_nonzero(fit.at_floor > 0.5))
+        notes.append(
+            "offset and noise: each channel's rest level and Gaussian noise on the quiet "
+            f"stretches, fitted under the ADC step ({step:g}) and the clipping at the floor"
+            + (
+                f"; {low} channels read the floor in more than half their quiet samples "
+                "(their noise is fitted to the histogram of their first differences)"
+                if low
+                else ""
+            )
+        )
+    if fit.intercept is not None:
+        rise = fit.intercept + fit.counts_per_n * fit.force_n - fit.offset
+        miss = np.abs(fit.intercept - fit.offset)
+        bad = np.flatnonzero(
+            np.isfinite(rise) & (miss > NONLINEAR_SHARE * np.maximum(np.abs(rise), fit.noise_std))
+        )
+        if bad.size:
+            notes.append(
+                f"not linear from rest: {[names[k] for k in bad]}: the line through their "
+                f"levels in contact (force bins with at most {MAX_CLIPPED:.0%} of readings at "
+                f"the floor) meets zero force at {[round(float(fit.intercept[k]), 2) for k in bad]}, "
+                "not at their rest level; the linear model (offset = rest level, gain = that "
+                f"line's slope) is off at {fit.force_n:.2f} N by the difference"
+            )
+    return notes
+
+
 def calibrate(
     sensor: str, data: object, *, materials: int = N_MATERIALS, slides: int = N_SLIDES
 ) -> Calibration:
@@ -175,7 +220,7 @@ def calibrate(
     if sensor == "icub60":
         return _calibrate_icub(sen, data)
     levels, forces, root = read_biotac_forces(data, materials=materials, slides=slides)
-    fit = fit_channels(levels, forces, BIOTAC_RATE_HZ, floor=0.0)
+    fit = fit_channels(levels, forces, BIOTAC_RATE_HZ, floor=0.0, force_floor=0.0)
     share = force_share(sen, SHARE_PLATE[sensor], fit.force_n)
     source = f"{Path(root).name}: pdc / {BIOTAC_PDC_COUNTS_PER_N:g} counts per N of normal force"
     return from_fit(sen, fit, share, len(levels), source)

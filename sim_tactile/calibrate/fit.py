@@ -1,19 +1,14 @@
 """Statistics that a sensor's real recordings and its simulation share, fitted per channel.
 
-Only quantities that both sides have are fitted:
+What every fit shares is here: :class:`ChannelFit` (the result), the ADC step
+(:func:`quant_step`: the smallest non-zero difference between levels) and the drift taken
+as a random walk (:func:`random_walk_rate`: its rate, the standard deviation of its change
+over one second, from the least-squares slopes of quiet stretches beyond what the noise
+alone gives a stretch of each length). The fits:
 
-- **the steady level under a known force**: each channel's level against the normal force,
-  as the median level in bins of force (medians, because a channel clipped at zero or
-  shaken by the texture is still centred in a bin), and a straight line through the bins:
-  its slope is the channel's change per newton, its intercept the offset;
-- **the noise floor on quiet stretches** (no contact: force below ``quiet_n`` for at least
-  ``min_quiet_s``, without 0.1 s at either end and without the response to what force is
-  left): the standard deviation of first differences over sqrt(2), without the
-  largest half percent (spikes and jumps), as recorded (quantisation included);
-- **the drift**, taken as a random walk: its rate (the standard deviation of its change
-  over one second) from the least-squares slopes of the quiet stretches, beyond what the
-  noise alone gives a stretch of each length;
-- **the ADC step**: the smallest non-zero difference between levels.
+- against a recorded normal force (the BioTac): :func:`~.forced.fit_channels`;
+- without a force (the iCub's compiled clips): :func:`fit_unforced`, and the multiplexed
+  readout such clips show, :func:`fit_readout`.
 """
 
 from __future__ import annotations
@@ -23,11 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
+from .rest import Rest
 
-#: A channel's force bin needs this many samples for its median.
-MIN_BIN_SAMPLES = 50
-#: Bins with more than this share of samples at the channel's floor (clipped) are left out.
-MAX_CLIPPED = 0.4
 #: Time cut from each end of a quiet stretch (the contact's onset and release) [s].
 QUIET_EDGE_S = 0.1
 #: Share of the largest first differences left out of the noise estimate (spikes, jumps).
@@ -50,12 +42,12 @@ class ChannelFit:
     stretch_s: float
     n_quiet: int
     force_n: float
-
-
-def _segments(force: np.ndarray, quiet_n: float, n_min: int) -> list[slice]:
-    q = np.concatenate([[False], force <= quiet_n, [False]])
-    edges = np.flatnonzero(np.diff(q.astype(np.int8)))
-    return [slice(a, b) for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a >= n_min]
+    #: the force reading's rest (its tare, in N; :mod:`.forced`), None where no force
+    force_rest: Rest | None = None
+    #: the fitted line's level at zero force (C,), None where no force
+    intercept: np.ndarray | None = None
+    #: the share of each channel's quiet readings at its floor (C,), None where not fitted
+    at_floor: np.ndarray | None = None
 
 
 def quant_step(levels: list[np.ndarray]) -> float:
@@ -71,32 +63,6 @@ def quant_step(levels: list[np.ndarray]) -> float:
         np.round(vals / step) * step, vals, rtol=0.0, atol=1e-6 * max(step, 1e-12)
     )
     return step if on_grid and step > 0 else 0.0
-
-
-def linear_response(level: np.ndarray, force: np.ndarray, floor: float | None, bin_n: float):
-    """(slope, intercept, r2) of one channel's level against the force: a line through the
-    median level in each force bin of ``bin_n`` newtons."""
-    top = np.quantile(force, 0.99)
-    edges = np.arange(0.0, top + bin_n, bin_n)
-    xs, ys, ws = [], [], []
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
-        m = (force >= a) & (force < b)
-        k = int(m.sum())
-        if k < MIN_BIN_SAMPLES:
-            continue
-        y = level[m]
-        if floor is not None and np.mean(y <= floor) > MAX_CLIPPED:
-            continue
-        xs.append(float(np.median(force[m])))
-        ys.append(float(np.median(y)))
-        ws.append(k)
-    if len(xs) < 2:
-        return np.nan, np.nan, np.nan
-    slope, intercept = np.polyfit(xs, ys, 1, w=np.sqrt(ws))
-    pred = intercept + slope * force
-    var = np.var(level)
-    r2 = 1.0 - np.var(level - pred) / var if var > 0 else 0.0
-    return float(slope), float(intercept), float(r2)
 
 
 def _slope_var_per_noise(n: int) -> float:
@@ -136,71 +102,6 @@ def random_walk_rate(stretches: list[np.ndarray], noise: np.ndarray, rate_hz: fl
     return np.sqrt(np.maximum(num / den, 0.0))
 
 
-def fit_channels(
-    levels: list[np.ndarray],
-    forces: list[np.ndarray],
-    rate_hz: float,
-    *,
-    quiet_n: float = 0.03,
-    min_quiet_s: float = 0.3,
-    bin_n: float = 0.05,
-    floor: float | None = 0.0,
-) -> ChannelFit:
-    """Fit every channel of recordings ``levels`` (each (T, C)) against their normal forces
-    ``forces`` (each (T,), newtons) sampled at ``rate_hz``. ``floor``: the level at which the
-    data are clipped (None: not clipped)."""
-    if not levels or len(levels) != len(forces):
-        raise ConfigError(
-            f"calibration needs recordings with their forces: got {len(levels)} recordings "
-            f"and {len(forces)} force traces"
-        )
-    C = levels[0].shape[1]
-    for k, (x, f) in enumerate(zip(levels, forces, strict=True)):
-        if x.ndim != 2 or x.shape[1] != C or f.shape != (x.shape[0],):
-            raise ConfigError(
-                f"recording {k}: levels {x.shape} and force {f.shape}; valid: (T, {C}) and (T,)"
-            )
-    X = np.concatenate(levels)
-    F = np.concatenate(forces)
-    fits = [linear_response(X[:, c], F, floor, bin_n) for c in range(C)]
-    slope, intercept, r2 = (np.array(v) for v in zip(*fits, strict=True))
-    step = quant_step(levels)
-    n_min = max(3, round(min_quiet_s * rate_hz))
-    edge = round(QUIET_EDGE_S * rate_hz)
-    response = np.nan_to_num(slope)
-    diffs, stretches = [], []
-    for x, f in zip(levels, forces, strict=True):
-        for s in _segments(f, quiet_n, n_min + 2 * edge):
-            # away from the contact's onset and release, and without what force is left
-            s = slice(s.start + edge, s.stop - edge)
-            seg = x[s] - np.outer(f[s], response)
-            diffs.append(np.diff(seg, axis=0))
-            stretches.append(seg)
-    if not stretches:
-        raise ConfigError(
-            f"no quiet stretch (force <= {quiet_n} N for {min_quiet_s} s) in the recordings: "
-            "the noise floor and the drift cannot be fitted"
-        )
-    D = np.concatenate(diffs)
-    noise = np.empty(C)
-    for c in range(C):
-        noise[c] = trimmed_noise(D[:, c])
-    drift = random_walk_rate(stretches, noise, rate_hz)
-    lengths = np.array([seg.shape[0] / rate_hz for seg in stretches])
-    contact = F > quiet_n
-    return ChannelFit(
-        slope,
-        intercept,
-        r2,
-        noise,
-        drift,
-        step,
-        float(np.median(lengths)),
-        len(stretches),
-        float(np.median(F[contact])) if contact.any() else float("nan"),
-    )
-
-
 #: A Gaussian noise of standard deviation s about a rest level at the clipping floor, clipped
 #: there, has first differences of standard deviation sqrt(2) * RECTIFIED_DIFF * s
 #: (the variance of max(n, 0) is s^2 (1/2 - 1/(2 pi)): sqrt of that is 0.5838 s).
@@ -222,7 +123,7 @@ def fit_unforced(
 
     - noise: a channel's recordings whose maximum stays within QUIET_SIGMAS noise deviations
       of the floor are quiet; the noise is the one whose clipped Gaussian gives their first
-      differences' spread (trimmed as in :func:`fit_channels`), the bound and the noise found
+      differences' spread (:func:`trimmed_noise`), the bound and the noise found
       together by a fixed point from 1 count;
     - the steady level in contact: the median over the recordings in which the channel rises
       ACTIVE_SIGMAS deviations above the floor of its median level there; over ``force_n``

@@ -2,8 +2,8 @@
 
 ``sim-tactile calibrate SENSOR --data PATH --out FILE.toml`` fits, per channel, what real
 recordings and the simulation share (:mod:`sim_tactile.calibrate`): each channel's change per
-newton of normal force, its offset, its noise floor and drift on quiet stretches, and the
-ADC step. This module holds the result, writes and reads it as TOML (read as data with
+newton of normal force, its rest level (offset), its noise floor and drift on quiet
+stretches, and the ADC step. This module holds the result, writes and reads it as TOML (read as data with
 :mod:`tomllib`: no code runs, every value is checked and named in its error), and applies it
 to a sensor (:func:`calibrated`): the transducer takes one gain per channel, and the
 imperfections take the fitted noise, drift, offset and step.
@@ -51,10 +51,12 @@ class Calibration:
     simulated sensor takes from it.
 
     - ``counts_per_n``: change of the channel per newton of normal force (data units / N);
-    - ``offset``: the channel's level at zero force (data units);
-    - ``noise_std``: standard deviation of its noise on quiet stretches (data units, as
-      recorded, quantisation included); ``noise_model``: the white noise to add before the
-      simulated ADC step, sqrt(noise_std^2 - step^2 / 12);
+    - ``offset``: the channel's level at rest, at zero force (data units), found on the
+      recordings' quiet stretches;
+    - ``noise_std``: standard deviation of its noise on quiet stretches (data units) as the
+      ADC records it where not clipped, quantisation included; ``noise_model``: the white
+      noise to add before the simulated ADC step, sqrt(noise_std^2 - step^2 / 12) (the
+      fit's Gaussian noise: :mod:`sim_tactile.calibrate.rest`);
     - ``drift_per_s``: the drift as a random walk, its rate: the standard deviation of its
       change over one second (units; the simulation's ``drift_std_per_sqrt_s``), fitted to
       the slopes of the quiet stretches beyond what the noise gives them;

@@ -45,7 +45,9 @@ With a ``base``, ``[layout]`` replaces the base's taxels whole; ``[pad]``, ``[im
 and a ``[transducer]`` without a ``kind`` change the base's fields one by one, and
 ``[pad.stack]`` or a ``[transducer]`` with a ``kind`` replace the base's. Every value is
 checked before anything runs; an error names the file, the key, the value and the valid
-range. :func:`~.file_data.sensor_to_data` writes a sensor in this form (the presets' files in
+range. Every taxel must lie on the pad: its footprint within the pad's patch in x and y,
+its depth within the skin's thickness (:func:`~.sensor.check_pad` names the one that does
+not). :func:`~.file_data.sensor_to_data` writes a sensor in this form (the presets' files in
 the project's ``assets/sensors`` are written so), and a data set records it, so that its
 sensor can be re-created without the file (:func:`~.file_data.sensor_from_record`).
 """

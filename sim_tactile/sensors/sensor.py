@@ -94,12 +94,30 @@ class Sensor:
 
 
 def check_pad(layout: Layout, finger: Finger) -> None:
-    """Raise a ConfigError unless ``finger``'s pad carries every taxel of ``layout``."""
-    ex, ey = layout.extent_m
-    px, py = finger.patch_m
-    if ex > px / 2 + 1e-9 or ey > py / 2 + 1e-9:
+    """Raise a ConfigError unless ``finger``'s pad carries every taxel of ``layout``: each
+    taxel's footprint within the pad's patch in x and y (``|x| + size / 2 <= patch / 2``)
+    and its depth within the skin (``0 <= depth <= thickness_m``). The error names the
+    taxel furthest out, its value and the valid range."""
+    pos, half = layout.positions, layout.sizes / 2
+    reach = np.abs(pos[:, :2]) + half  # (N, 2) [m]
+    for axis, key in ((0, "x_m"), (1, "y_m")):
+        lim = finger.patch_m[axis] / 2
+        out = np.flatnonzero(reach[:, axis] > lim + 1e-9)
+        if out.size:
+            k = int(out[np.argmax(reach[out, axis])])
+            raise ConfigError(
+                f"taxel {k} ({layout.names[k]!r}) of the {layout.name} layout lies beyond the "
+                f"pad: {key} = {pos[k, axis]:g} m, its {2 * half[k, axis]:g} m footprint "
+                f"reaching {reach[k, axis]:g} m from the pad's centre; valid: |{key}| + size/2 "
+                f"<= {lim:g} m, the pad's half-patch ({out.size} taxel(s) beyond it: the pad "
+                f"is smaller than the {layout.name} layout)"
+            )
+    depth = layout.depth_m
+    out = np.flatnonzero(depth > finger.thickness_m * (1 + 1e-9))
+    if out.size:
+        k = int(out[np.argmax(depth[out])])
         raise ConfigError(
-            f"the {layout.name} layout spans +-({ex:g}, {ey:g}) m, beyond the pad's "
-            f"+-({px / 2:g}, {py / 2:g}) m: the pad is smaller than the {layout.name} layout; "
-            "valid: a pad that carries the taxels"
+            f"taxel {k} ({layout.names[k]!r}) of the {layout.name} layout lies below the "
+            f"skin: depth_m = {depth[k]:g} m; valid: 0 <= depth_m <= {finger.thickness_m:g} m, "
+            f"the pad's thickness_m ({out.size} taxel(s) below it)"
         )

@@ -30,6 +30,33 @@ from .skin import SkinModel, SpectralSkin
 
 #: Velocity of the friction regularisation [m/s]: Coulomb drag mu*N*tanh(v / V_STICK).
 V_STICK = 1e-3
+#: A slide whose drag carries less than this share of mu*N (:func:`drag_factor`) is reported
+#: as regularised: below V_STICK * atanh(DRAG_FULL), 4.95 mm/s.
+DRAG_FULL = 0.9999
+
+
+def drag_factor(speed_m_s: float) -> float:
+    """The share of the Coulomb drag mu*N that the regularised drag carries at a steady
+    slide speed ``speed_m_s`` [m/s]: tanh(|v| / V_STICK) (0.0997 at 0.1 mm/s, 0.9999 at
+    4.95 mm/s)."""
+    return math.tanh(abs(speed_m_s) / V_STICK)
+
+
+def drag_warning(speed_m_s: float) -> str | None:
+    """The warning for a slide at ``speed_m_s`` [m/s] whose drag the regularisation holds
+    below :data:`DRAG_FULL` of mu*N (None where it does not, or where nothing slides)."""
+    f = drag_factor(speed_m_s)
+    if speed_m_s == 0 or f >= DRAG_FULL:
+        return None
+    return (
+        f"the slide's friction drag is regularised: at {abs(speed_m_s) * 1e3:.3g} mm/s, "
+        f"{abs(speed_m_s) / V_STICK:.3g} V_STICK (V_STICK = {V_STICK * 1e3:g} mm/s), "
+        f"mu N tanh(v / V_STICK) carries {f:.4g} of mu N, so meta mean_drag_n is "
+        f"{1 / f:.3g}x low (meta drag_factor); slide faster than "
+        f"{V_STICK * math.atanh(DRAG_FULL) * 1e3:.3g} mm/s for the full drag"
+    )
+
+
 #: Steps between checks of the dynamic coupling's omega * dt.
 _STIFFNESS_CHECK_STEPS = 50
 
@@ -147,9 +174,10 @@ class Runner:
         taxel_out: np.ndarray | None = None,
     ) -> float:
         """One step; returns the skin's normal load [N]. ``z_vel``: move the pad down at
-        this speed (the approach: no force control), else hold ``force_cmd`` [N] (quasi-
-        static: exactly; dynamic: through the damped bone). ``slide_v``: the slide's speed
-        command [m/s]. ``taxel_out``: receives the taxel loads [N]."""
+        this speed (the approach: no force control; ``force_cmd`` is then the force it
+        approaches, named in errors only), else hold ``force_cmd`` [N] (quasi-static:
+        exactly; dynamic: through the damped bone). ``slide_v``: the slide's speed command
+        [m/s]. ``taxel_out``: receives the taxel loads [N]."""
         if self.hold is not None and z_vel is None and force_cmd > 0:
             return self._step_held(force_cmd, slide_v, taxel_out)
         s, dd = self.s, self.d_dyn
@@ -169,7 +197,7 @@ class Runner:
         dd.qfrc_applied[s.jx] = 0.0  # the arm holds its speed: it reacts the drag
         dd.ctrl[0] = slide_v
         mujoco.mj_step(s.m_dyn, dd)
-        self._check_depth(force_cmd)
+        self._check_depth(force_cmd, Fs)
         if taxel_out is not None:
             np.matmul(s.W, loads, out=taxel_out)
         return Fs
@@ -189,7 +217,7 @@ class Runner:
         mujoco.mj_step(self._m_dyn, self.d_dyn)
         z = qpos[jz]
         if self.z0 + z < -self.max_depth or not (math.isfinite(z) and abs(z) < 0.05):
-            self._check_depth(force_cmd)
+            self._check_depth(force_cmd, Fs)
         return Fs
 
     def _after_skin(self, Fs: float, top: float, force_cmd: float, slide_v: float) -> float:
@@ -227,17 +255,18 @@ class Runner:
             )
         self._stiff_check = _STIFFNESS_CHECK_STEPS
 
-    def _check_depth(self, force_cmd: float) -> None:
-        """Raise if the pad is below what the skin carries, or ran away."""
+    def _check_depth(self, force_cmd: float, load_n: float) -> None:
+        """Raise if the pad is below what the skin carries, or ran away. ``force_cmd``: the
+        force commanded (or approached) [N]; ``load_n``: the skin's load at this depth [N]."""
         z = self._qpos[self._jz]
         low = self.z0 + z
         if low < -self.max_depth:
             raise PhysicsError(
                 f"skin pressed to the bottom: the pad's lowest point is {-low * 1e3:.3g} mm below "
                 f"the plate's base surface, beyond {self.max_depth * 1e3:.3g} mm "
-                f"({self.depth_limit}; the skin is {self.max_pen_allowed * 1e3:.3g} mm thick): "
-                f"{force_cmd:g} N is more than this pad carries here; lower the force or use a "
-                "thicker or stiffer skin"
+                f"({self.depth_limit}; the skin is {self.max_pen_allowed * 1e3:.3g} mm thick), "
+                f"where the pad carries {load_n:.3g} N of the {force_cmd:g} N commanded: more "
+                "than this pad carries here; lower the force or use a thicker or stiffer skin"
             )
         if not (math.isfinite(z) and abs(z) < 0.05):
             raise PhysicsError(f"the finger ran away (z = {z:.3g} m): the simulation diverged")

@@ -38,7 +38,7 @@ from .protocol import (
     Protocol,
     SlideWindow,
 )
-from .runner import Runner, StepOptions
+from .runner import Runner, StepOptions, drag_factor, drag_warning
 from .skin import make_skin
 
 #: A slide whose mean normal force strays further than this from the target is flagged.
@@ -201,6 +201,7 @@ def _simulate(
         )
     if proto.force_control != "position":  # there the load follows the texture
         warnings += _force_warnings(slide.forces, proto.force_n, proto.speed_m_s)
+    warnings += [w for w in (drag_warning(proto.speed_m_s),) if w]
     out = slide.loads
     # micro-roughness acts through the contact patch on top of the finger's simulation
     micro = micro_loads(plate, layout, slide.x_pad, out > 1e-9, finger.e_star_pa, proto.rate_hz)
@@ -232,6 +233,8 @@ def _simulate(
         "x_pad_m": slide.x_pad.tolist(),
         "normal_force_n": slide.forces.tolist(),
         "mean_drag_n": runner.drag_sum / max(runner.n_slide_steps, 1),
+        "drag_factor": drag_factor(proto.speed_m_s),
+        "drag_regularised": drag_warning(proto.speed_m_s) is not None,
         "versions": {
             "sim_tactile": __version__,
             "mujoco": mujoco.__version__,
@@ -315,7 +318,7 @@ def _approach(runner: Runner, force_n: float, touch: float = 0.2) -> None:
     force (a fifth before a press; the whole of it under position control)."""
     t = 0.0
     while True:
-        Fs = runner.step(z_vel=-APPROACH_SPEED, force_cmd=0.0, slide_v=0.0)
+        Fs = runner.step(z_vel=-APPROACH_SPEED, force_cmd=force_n, slide_v=0.0)
         t += runner.dt
         if Fs >= touch * force_n:
             return
@@ -334,10 +337,10 @@ def _touch(runner: Runner, force_n: float) -> None:
     h, above = APPROACH_SPEED * runner.dt, True
     for _ in range(TOUCH_ITER):
         h /= 2
-        Fs = runner.step(z_vel=(h if above else -h) / runner.dt, force_cmd=0.0, slide_v=0.0)
+        Fs = runner.step(z_vel=(h if above else -h) / runner.dt, force_cmd=force_n, slide_v=0.0)
         above = Fs >= force_n
     if not above:  # end on the side that carries the force
-        runner.step(z_vel=-h / runner.dt, force_cmd=0.0, slide_v=0.0)
+        runner.step(z_vel=-h / runner.dt, force_cmd=force_n, slide_v=0.0)
 
 
 def _press_and_settle(runner: Runner, proto: Protocol) -> list[str]:

@@ -151,7 +151,7 @@ def evaluate(
     *,
     quick: bool = False,
     repeats: int | None = None,
-    seed: int = 0,
+    seed: int | None = None,
     out: str | Path | None = None,
     data: str | Path | None = None,
     store: str | Path | None = None,
@@ -163,7 +163,9 @@ def evaluate(
     protocol, beside its built-in rows (``classifiers``: which of them; ``"none"``: only the
     user's), and return the report as ``run`` makes it. With ``out`` the report and its
     figures are written there, as ``run --out`` writes them; without, into a temporary
-    folder that is removed."""
+    folder that is removed. ``seed``: the splits' and models' seed; None, as ``run``
+    without ``--seed``: a configuration file's own seed (which its slides and store were
+    made with), else 0."""
     if not methods:
         raise ConfigError("methods is empty; give name -> estimator or (encoder, estimator)")
     import tempfile

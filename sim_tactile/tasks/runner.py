@@ -187,7 +187,7 @@ def run_task(
     data: str | Path | None = None,
     classifiers: Sequence[str] | str | None = None,
     repeats: int | None = None,
-    seed: int | None = 0,
+    seed: int | None = None,
     log: Callable[[str], None] | None = None,
     store: str | Path | None = None,
     sensor_config: str | Path | None = None,
@@ -201,8 +201,9 @@ def run_task(
         data: folder of the real data set (tasks ``*-real-v1``).
         classifiers: names (list or ``"a,b"``) instead of the task's default set.
         repeats: number of splits for every classifier instead of the task's numbers.
-        seed: seeds the splits and every model (None: 0, or a configuration file's seed,
-            which then also seeds its slides, as ``generate`` does).
+        seed: seeds the splits and every model (None, the default here as on the command
+            line: a configuration file's seed, which then also seeds its slides, as
+            ``generate`` does; 0 for a task).
         store: read the data from this store (``sim-tactile generate``) instead.
         sensor_config: a calibration file (``sim-tactile calibrate``) for the task's sensor.
         methods: the user's methods, name -> estimator or (encoder, estimator)
