@@ -20,7 +20,7 @@ import time
 import numpy as np
 from scipy import fft
 
-from sim_tactile.sim.contact.spectral import Spectral
+from sim_tactile.sim.skin.contact.spectral import Spectral
 
 
 def batched_apply(S: Spectral, P: np.ndarray) -> np.ndarray:

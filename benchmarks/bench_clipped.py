@@ -21,9 +21,9 @@ from dataclasses import replace
 
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim import measured_errors
-from sim_tactile.sim.fidelity import choose_fidelity
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.plan import measured_errors
+from sim_tactile.sim.plan.fidelity import choose_fidelity
+from sim_tactile.sim.slide import simulate
 from sim_tactile.tasks import get_task
 
 #: (x pitch [m], y pitch [m] or None, clipped, anchored lattice's wall cells [m] or None)

@@ -30,8 +30,8 @@ from threadpoolctl import threadpool_limits
 
 from sim_tactile.bench.speed_error import run_speed_error
 from sim_tactile.bench.sweep import Sweep
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import prepare
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.slide import prepare
 
 V = 0.06
 PLATE = "finger7/ridges-4"
@@ -95,7 +95,7 @@ def loop_overhead(repeats: int = 5) -> dict:
     - minimal: the least a user's own script must do for the same physics: the depth map (the
       compiled collider where the plate allows it, else MuJoCo's collider), the skin's
       force-holding contact solve, and mj_step. Where the step solves a reduced problem
-      (:class:`sim_tactile.sim.held.CompiledHeldStep`: collider probes per column, the mirror
+      (:class:`sim_tactile.sim.step.held.CompiledHeldStep`: collider probes per column, the mirror
       half), the minimal loop calls the same reduced collider and solver, so both do the same
       work.
 
@@ -103,7 +103,7 @@ def loop_overhead(repeats: int = 5) -> dict:
     """
     import copy
 
-    from sim_tactile.sim.held import CompiledHeldStep
+    from sim_tactile.sim.step.held import CompiledHeldStep
 
     pressed = prepare(PLATE, "grid3x3", protocol=Protocol(speed_m_s=V, duration_s=0.3))
     run = pressed.runner

@@ -15,8 +15,8 @@ import time
 
 import numpy as np
 
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.slide import simulate
 from sim_tactile.tasks.defs.finger7 import FINGER7_V2_FINGER
 
 PLATES = ("finger7/ridges-4", "finger7/ridges-8", "finger7/bumps-4x4", "finger7/bumps-6x6")

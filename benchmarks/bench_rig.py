@@ -18,8 +18,8 @@ import numpy as np
 
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.rig import ProbeRig
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.plan.rig import ProbeRig
 from sim_tactile.sim.rig_sim import probe_contact, probe_grid, reading_lines, simulate_rig
 
 PLATES = ("multilayer3/flat", "multilayer3/grating-9", "multilayer3/hemispheres-6x6")

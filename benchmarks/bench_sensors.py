@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.slide import simulate
 
 PLATE = "textures20/grating-3.0mm"
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "datasets" / "biotac_slide_20_50"

@@ -10,7 +10,7 @@ inverse are read from a cache after the first run at each pitch, as when a data 
 made), and the largest
 difference between the two recordings relative to their peak. The dense solve's matrices
 grow as N^2 and its factorisation as N^3, so it is skipped above ``--dense-max`` nodes.
-``DENSE_MAX_NODES`` in ``sim_tactile/sim/skin.py`` is set from this table: the node count
+``DENSE_MAX_NODES`` in ``sim_tactile/sim/skin/models.py`` is set from this table: the node count
 above which the spectral slide is the faster.
 """
 
@@ -30,8 +30,8 @@ import numpy as np
 from sim_tactile.cache import ArtefactCache
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim.runner import StepOptions
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.slide import simulate
+from sim_tactile.sim.step.runner import StepOptions
 
 
 def _run(plate: str, sensor: str, pitch_m: float, solver: str, cache=None):

@@ -40,10 +40,9 @@ from sim_tactile.bench import physics
 from sim_tactile.cache import default_root
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim import measured_errors
-from sim_tactile.sim.anchored_lines import anchor_refusals
-from sim_tactile.sim.clipped import has_walls
-from sim_tactile.sim.fidelity import choose_fidelity
+from sim_tactile.sim.plan import measured_errors
+from sim_tactile.sim.plan.fidelity import choose_fidelity
+from sim_tactile.sim.plan.lattices import anchor_refusals, has_walls
 from sim_tactile.slides import SlideSet
 from sim_tactile.tasks import get_task, task_ids
 

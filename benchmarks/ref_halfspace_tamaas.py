@@ -4,7 +4,7 @@
 
 A flat pad (grid3x3's: 12 mm with 2 mm edge fillets, E = 0.3 MPa, nu = 0.5) is pressed with
 1 N on a plate at several offsets along the slide. The project's half-space contact solve on
-its node grid (the active set of :class:`~sim_tactile.sim.contact.ActiveSet`, the depth of
+its node grid (the active set of :class:`~sim_tactile.sim.skin.contact.ActiveSet`, the depth of
 each node from the plate's height at its centre) is set against Tamaas's FFT boundary-element
 solve (Polonsky-Keer) of the same gap on a 0.0625 mm grid over a 40 mm periodic cell
 (:mod:`sim_tactile.bench.physics`, which ``bench speed-error`` uses for every scene). Both

@@ -1,6 +1,6 @@
 """The figure of what clipping the node patches changes: grid3x3's row that meets the bumps
 of ``finger7/bumps-4x4`` (1 N, 60 mm/s, ideal loads, 1 mm nodes), with whole patches and
-with the patches clipped at the bumps' walls and the taxels' edges (``sim.clipped``).
+with the patches clipped at the bumps' walls and the taxels' edges (``sim.skin.clipped``).
 
     python docs/make_clipped_figure.py OUT.png
 """
@@ -18,9 +18,9 @@ import numpy as np  # noqa: E402
 
 from sim_tactile.plates import get_plate  # noqa: E402
 from sim_tactile.sensors import get_sensor  # noqa: E402
-from sim_tactile.sim.fidelity import choose_fidelity  # noqa: E402
-from sim_tactile.sim.protocol import Protocol  # noqa: E402
-from sim_tactile.sim.simulate import simulate  # noqa: E402
+from sim_tactile.sim.plan.fidelity import choose_fidelity  # noqa: E402
+from sim_tactile.sim.plan.protocol import Protocol  # noqa: E402
+from sim_tactile.sim.slide import simulate  # noqa: E402
 
 
 def main(out: str) -> None:

@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from sim_tactile.cache import ArtefactCache  # noqa: E402
 from sim_tactile.sensors import get_sensor  # noqa: E402
 from sim_tactile.sensors.stack import Layer, Stack  # noqa: E402
-from sim_tactile.sim.simulate import simulate  # noqa: E402
+from sim_tactile.sim.slide import simulate  # noqa: E402
 
 
 def main(out: str) -> None:

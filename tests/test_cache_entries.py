@@ -18,7 +18,7 @@ from sim_tactile.plates import build
 from sim_tactile.plates.build import artefact_key
 from sim_tactile.plates.presets import get_plate
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.slides import SlideJob, run_slides
 from sim_tactile.slides.jobs import SLIDE_EXT
 
@@ -140,8 +140,8 @@ def test_a_slide_entry_under_another_key_is_simulated_again(tmp_path):
 
 def test_a_tampered_skin_is_computed_again(tmp_path):
     from sim_tactile.scene.nodes import skin_grid
-    from sim_tactile.sim import skin as skin_module
-    from sim_tactile.sim.skin import make_skin
+    from sim_tactile.sim.skin import models as skin_module
+    from sim_tactile.sim.skin.models import make_skin
 
     cache = ArtefactCache(tmp_path)
     finger = get_sensor("grid3x3").finger

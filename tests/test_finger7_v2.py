@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from sim_tactile.errors import ConfigError
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.slide import simulate
 from sim_tactile.slides import SlideSet
 from sim_tactile.tasks import get_task
 from sim_tactile.tasks.defs.finger7 import FINGER7_PLATES, FINGER7_V2_FINGER

@@ -396,7 +396,7 @@ def test_real_recordings_take_the_same_form(tmp_path, dataset_dir):
 def tiny_task():
     """A registered task whose quick data is the tiny set (removed again afterwards)."""
     from sim_tactile.encoders.encodings import threshold_encoding
-    from sim_tactile.sim.protocol import Protocol
+    from sim_tactile.sim.plan.protocol import Protocol
     from sim_tactile.slides import SlideSet
     from sim_tactile.tasks import Settings, TaskSpec, register
     from sim_tactile.tasks.registry import unregister

@@ -93,11 +93,13 @@ def test_a_kernel_follows_an_edit_of_a_jitted_callee_in_another_file(tmp_path):
 
 
 def test_the_stamp_follows_the_modules_a_kernel_imports():
-    held = hashing.import_closure("sim_tactile.sim.held")
-    assert "sim_tactile.sim.shapes" in held  # through the collider
-    assert kernel_stamp("sim_tactile.sim.held") != kernel_stamp("sim_tactile.sim.shapes")
-    assert kernel_stamp("sim_tactile.sim.held") == hashing.code_version(
-        "sim_tactile.sim.held", libraries=("numba", "numpy")
+    held = hashing.import_closure("sim_tactile.sim.step.held")
+    assert "sim_tactile.sim.collide.shapes" in held  # through the collider
+    assert kernel_stamp("sim_tactile.sim.step.held") != kernel_stamp(
+        "sim_tactile.sim.collide.shapes"
+    )
+    assert kernel_stamp("sim_tactile.sim.step.held") == hashing.code_version(
+        "sim_tactile.sim.step.held", libraries=("numba", "numpy")
     )
 
 
@@ -128,8 +130,7 @@ def test_the_import_scan_finds_every_import_of_every_module():
 _SLIDE = """
 import sys
 import numpy as np
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim import Protocol, simulate
 proto = Protocol(speed_m_s=0.06, force_n=1.0, duration_s=0.3, start="texture")
 res = simulate("textures20/cylinders-3.0mm", "grid3x3", protocol=proto, fidelity="L0", seed=1)
 np.save(sys.argv[1], res.recording.data)
@@ -138,8 +139,8 @@ np.save(sys.argv[1], res.recording.data)
 
 @pytest.mark.slow
 def test_a_slide_moves_when_a_collider_shape_in_another_file_is_edited(tmp_path):
-    """The tracker's case: raise the cylinders' tops (sim/shapes.py::cylinder_distance, which
-    the compiled collider in sim/collide.py calls) by 0.2 mm in place. The next slide moves,
+    """The tracker's case: raise the cylinders' tops (sim/collide/shapes.py::cylinder_distance,
+    which the compiled collider in sim/collide/primitive.py calls) by 0.2 mm in place. The next slide moves,
     and equals bit for bit the slide of a process that compiled the edited code afresh."""
     pkg = _copy_package(tmp_path, with_caches=True)
     env = _env(pkg, tmp_path)
@@ -150,7 +151,7 @@ def test_a_slide_moves_when_a_collider_shape_in_another_file_is_edited(tmp_path)
         return np.load(out)
 
     before = slide("before", env)
-    shapes = pkg / "sim" / "shapes.py"
+    shapes = pkg / "sim" / "collide" / "shapes.py"
     text = shapes.read_text()
     old = "    if qr <= 0.0 and upright:\n        return lz - hz\n"
     assert old in text

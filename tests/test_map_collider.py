@@ -1,4 +1,4 @@
-"""The height-map plates' collider (:class:`~sim_tactile.sim.height_collider.MapCollider`):
+"""The height-map plates' collider (:class:`~sim_tactile.sim.collide.height.MapCollider`):
 its bilinear height against ``height_at`` bit for bit, its compiled loop against its numpy
 reference, against MuJoCo's height-field collider on a smooth map, in the compiled held step,
 and slides over a height-map grating (the finger and the probe rig) that obey the grating
@@ -16,21 +16,22 @@ from sim_tactile.plates.features import map_height
 from sim_tactile.scene.model import build_scene
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, get_layout, get_sensor
-from sim_tactile.sim.collide import QS_MARGIN_M, MujocoCollider, make_collider, node_margin_m
-from sim_tactile.sim.fidelity import feature_scale_m, texture_period
-from sim_tactile.sim.height_collider import (
+from sim_tactile.sim.collide.choose import QS_MARGIN_M, make_collider, node_margin_m
+from sim_tactile.sim.collide.height import (
     MapCollider,
     map_depths_kernel,
     map_height_at,
     map_surface_at,
 )
-from sim_tactile.sim.held import CompiledHeldStep
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.rig import ProbeRig
+from sim_tactile.sim.collide.reference import MujocoCollider
+from sim_tactile.sim.plan.fidelity import feature_scale_m, texture_period
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.plan.rig import ProbeRig
 from sim_tactile.sim.rig_sim import probe_contact, probe_grid, simulate_rig
-from sim_tactile.sim.runner import StepOptions
-from sim_tactile.sim.simulate import simulate
-from sim_tactile.sim.skin import CoupledSkin
+from sim_tactile.sim.skin.models import CoupledSkin
+from sim_tactile.sim.slide import simulate
+from sim_tactile.sim.step.held import CompiledHeldStep
+from sim_tactile.sim.step.runner import StepOptions
 
 MM = 1e-3
 #: The grating: ridges 2 mm wide every 4 mm along x, 0.3 mm high, sampled every 50 um. (At a

@@ -212,7 +212,7 @@ def test_cached_by_content_not_by_path(files, tmp_path):
     """Editing a CAD file makes another plate, so its slides have other cache keys; the same
     bytes at another path are the same plate."""
     from sim_tactile.sensors import get_sensor
-    from sim_tactile.sim.protocol import Protocol
+    from sim_tactile.sim.plan.protocol import Protocol
     from sim_tactile.slides.jobs import SlideJob
 
     sensor = get_sensor("grid3x3")

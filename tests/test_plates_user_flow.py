@@ -129,7 +129,7 @@ def test_editing_a_part_never_reuses_its_old_slides(tmp_path):
     from sim_tactile.cache import ArtefactCache
     from sim_tactile.plates import get_plate
     from sim_tactile.sensors import get_sensor
-    from sim_tactile.sim.protocol import Protocol
+    from sim_tactile.sim.plan.protocol import Protocol
     from sim_tactile.slides.jobs import SlideJob
     from sim_tactile.slides.run import run_slides
 

@@ -19,7 +19,7 @@ import ref_halfspace_tamaas as ref  # noqa: E402
 from sim_tactile.bench import physics  # noqa: E402
 from sim_tactile.plates import get_plate  # noqa: E402
 from sim_tactile.sensors import get_sensor  # noqa: E402
-from sim_tactile.sim.press import hertz  # noqa: E402
+from sim_tactile.sim.static_press import hertz  # noqa: E402
 
 #: Tamaas on Hertz's sphere (a 32 mm periodic cell at 0.0625 mm): its own discretisation
 HERTZ_RTOL = 5e-3

@@ -12,8 +12,8 @@ from sim_tactile.errors import ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.scene.layered import layered_subsurface_weights
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim.protocol import SPEED_RAMP_S, Protocol
-from sim_tactile.sim.rig import ProbePass, ProbeRig
+from sim_tactile.sim.plan.protocol import SPEED_RAMP_S, Protocol
+from sim_tactile.sim.plan.rig import ProbePass, ProbeRig
 from sim_tactile.sim.rig_sim import probe_contact, probe_grid, reading_lines, simulate_rig
 from sim_tactile.slides import SlideSet
 from sim_tactile.tasks import get_task

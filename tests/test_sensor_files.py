@@ -300,7 +300,7 @@ def test_a_bare_layout_deeper_than_the_skin_is_not_simulated():
     """The simulation checks the same: taxels 1 m deep in a 4 mm pad are refused before
     anything runs, naming the taxel."""
     from sim_tactile.sensors import Layout
-    from sim_tactile.sim.simulate import simulate
+    from sim_tactile.sim.slide import simulate
 
     deep = Layout(
         "deep",

@@ -8,8 +8,8 @@ import pytest
 
 from sim_tactile.errors import ConfigError, UnknownNameError
 from sim_tactile.sensors import Finger, Imperfections, get_sensor, sensor_names
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.slide import simulate
 
 FAMILIES = [
     "finger7/flat",

@@ -9,8 +9,8 @@ import pytest
 from sim_tactile.errors import UnknownNameError
 from sim_tactile.sensors import get_sensor, sensor_names
 from sim_tactile.sensors.paper_stacks import PAPER_STACKS, paper_stack
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.slide import simulate
 
 #: each preset's task scene: the plate it slides over and its nominal force [N]
 SCENES = {

@@ -11,10 +11,10 @@ import pytest
 from sim_tactile import cache as cache_module
 from sim_tactile.cache import ArrayMemo, array_digest, setup_memo
 from sim_tactile.scene import model as model_module
-from sim_tactile.sim import skin as skin_module
-from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.sim.rig_sim import _read_lines
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.skin import models as skin_module
+from sim_tactile.sim.slide import simulate
 
 
 @pytest.fixture(autouse=True)

@@ -1,4 +1,4 @@
-"""The node lattice anchored to the plate's walls (sim.anchored)."""
+"""The node lattice anchored to the plate's walls (sim.skin.anchored)."""
 
 from __future__ import annotations
 
@@ -11,20 +11,20 @@ from sim_tactile.bench import physics
 from sim_tactile.errors import ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import Finger, get_sensor
-from sim_tactile.sim import measured_errors as me
-from sim_tactile.sim.anchored import AnchoredLattice, _surface, lattice_compliance
-from sim_tactile.sim.anchored_lines import check_anchorable, period_lines
-from sim_tactile.sim.clipped import hold_force, rect_compliance, wall_lines
-from sim_tactile.sim.fidelity import choose_fidelity
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.plan import measured_errors as me
+from sim_tactile.sim.plan.fidelity import choose_fidelity
+from sim_tactile.sim.plan.lattices import check_anchorable, period_lines, wall_lines
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.skin.anchored import AnchoredLattice, _surface, lattice_compliance
+from sim_tactile.sim.skin.clipped import hold_force, rect_compliance
+from sim_tactile.sim.slide import simulate
 
 #: The anchored 0.5 / 2 / 2 mm lattice's taxel loads against Tamaas (grid3x3, 1 N, four
 #: offsets): measured 6.6% on finger7/ridges-4 and 7.3% on bumps-4x4 (docs/physics.md);
 #: the pad's own lattice there is 13.5% (0.25 x 2 mm) and 100% (1 mm) off.
 ANCHORED_VS_TAMAAS = 0.10
 #: Two independent solves of the same cells (the kernels' block-updated inverse and the
-#: LU active set of sim.clipped) agree to round-off.
+#: LU active set of sim.skin.clipped) agree to round-off.
 SOLVERS_AGREE = 1e-9
 
 F7 = ("finger7/ridges-2", "finger7/ridges-4", "finger7/ridges-8", "finger7/bumps-3x3")
@@ -78,7 +78,7 @@ def test_a_press_equals_an_independent_active_set_on_the_same_cells(name):
     plate = get_plate(name)
     loads = physics.anchored_press(lat, plate, 1.0, 1.3e-3)
     assert lat.f.sum() == pytest.approx(1.0, rel=1e-9)
-    # the same cells, gaps and compliance through sim.clipped's LU active set
+    # the same cells, gaps and compliance through sim.skin.clipped's LU active set
     pen = lat.pen.copy()
     c = np.flatnonzero(np.isfinite(pen))
     p, _, _ = hold_force(pen[c], np.ones(c.size), lat.C[np.ix_(c, c)], 1.0)

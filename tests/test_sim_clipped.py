@@ -1,4 +1,4 @@
-"""Node patches clipped at the plate's walls and the taxels' edges (sim.clipped)."""
+"""Node patches clipped at the plate's walls and the taxels' edges (sim.skin.clipped)."""
 
 from __future__ import annotations
 
@@ -16,17 +16,16 @@ from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, Sensor, get_sensor
 from sim_tactile.sensors.layouts import grid_layout
 from sim_tactile.sensors.stack import Layer, Stack
-from sim_tactile.sim import measured_errors as me
-from sim_tactile.sim.clipped import (
+from sim_tactile.sim.plan import measured_errors as me
+from sim_tactile.sim.plan.fidelity import choose_fidelity
+from sim_tactile.sim.plan.lattices import check_clippable, wall_lines
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.skin.clipped import (
     ClippedPatches,
     assemble,
-    check_clippable,
     rect_compliance,
-    wall_lines,
 )
-from sim_tactile.sim.fidelity import choose_fidelity
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.slide import simulate
 
 #: A clipped 1 mm lattice's taxel loads against Tamaas on finger7/bumps-4x4 (grid3x3, 1 N):
 #: measured 2.7% over the four offsets (0.3% to 3.0% each; docs/physics.md); whole patches at
@@ -43,9 +42,9 @@ def _cp(plate="finger7/bumps-4x4", pitch=1e-3, sensor="grid3x3", y0=0.0):
 
 
 def test_the_clipped_solve_takes_the_whole_patch_solvers_tolerance():
-    from sim_tactile.sim import clipped, contact
+    from sim_tactile.sim.skin import clipped, contact
 
-    assert clipped.TOL_REL == contact.TOL_REL
+    assert (clipped.TOL_REL, clipped.MAX_ITER) == (contact.TOL_REL, contact.MAX_ITER)
 
 
 def test_rect_compliance_is_loves_solution_on_a_lattice():

@@ -12,18 +12,15 @@ from sim_tactile.plates import get_plate, height_at
 from sim_tactile.scene.model import build_scene
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, get_layout, get_sensor
-from sim_tactile.sim.collide import (
-    MujocoCollider,
-    PrimitiveCollider,
-    make_collider,
-    penetration_map,
-)
-from sim_tactile.sim.fidelity import choose_fidelity
-from sim_tactile.sim.height_collider import ProfileCollider, interp_at
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.runner import StepOptions
-from sim_tactile.sim.shapes import cylinder_distance, ridge_distance
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.collide.choose import make_collider
+from sim_tactile.sim.collide.height import ProfileCollider, interp_at
+from sim_tactile.sim.collide.primitive import PrimitiveCollider
+from sim_tactile.sim.collide.reference import MujocoCollider, penetration_map
+from sim_tactile.sim.collide.shapes import cylinder_distance, ridge_distance
+from sim_tactile.sim.plan.fidelity import choose_fidelity
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.slide import simulate
+from sim_tactile.sim.step.runner import StepOptions
 
 
 def _scene(plate: str, margin: float, cache):

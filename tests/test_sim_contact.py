@@ -8,7 +8,7 @@ from scipy.optimize import nnls
 
 from sim_tactile.errors import PhysicsError
 from sim_tactile.scene.elastic import compliance_matrix
-from sim_tactile.sim.contact import halfspace, winkler
+from sim_tactile.sim.skin.contact import halfspace, winkler
 
 #: Agreement of two exact solvers of the same problem, relative to the largest pressure.
 SOLVER_RTOL = 1e-8
@@ -67,7 +67,7 @@ def test_no_penetration_no_load_and_winkler_is_local():
 
 
 def test_numba_readout_equals_numpy_reference():
-    from sim_tactile.sim.collide import penetration_map, penetration_map_reference
+    from sim_tactile.sim.collide.reference import penetration_map, penetration_map_reference
 
     rng = np.random.default_rng(3)
     node_of_geom = np.array([-1, -1, 0, 1, 2, 3, 4, -1])
@@ -86,7 +86,7 @@ def test_numba_readout_equals_numpy_reference():
 def test_active_set_updates_agree_with_the_fresh_solve(with_k):
     """The incrementally updated inverse gives the fresh solve's pressures while the contact
     set grows, shrinks, jumps and empties, including through its periodic rebuilds."""
-    from sim_tactile.sim.contact import ActiveSet
+    from sim_tactile.sim.skin.contact import ActiveSet
 
     C, pen = _problem(1, n=11)
     K = np.linalg.inv(C) if with_k else None
@@ -113,7 +113,7 @@ def test_active_set_updates_agree_with_the_fresh_solve(with_k):
 
 
 def test_active_set_is_deterministic():
-    from sim_tactile.sim.contact import ActiveSet
+    from sim_tactile.sim.skin.contact import ActiveSet
 
     C, pen = _problem(2)
     outs = []
@@ -144,7 +144,7 @@ def _layered_problem():
 
 
 def test_a_bulging_skin_brings_nodes_below_the_plate_into_contact():
-    from sim_tactile.sim.contact import ActiveSet
+    from sim_tactile.sim.skin.contact import ActiveSet
 
     C, pen = _layered_problem()
     assert (C < 0).any()
@@ -159,7 +159,7 @@ def test_a_bulging_skin_brings_nodes_below_the_plate_into_contact():
 def test_a_bulging_skin_holds_its_force():
     """Held at a total pressure: the shift and pressures satisfy the contact conditions at
     every node, the bulged ones included, and sum to the total."""
-    from sim_tactile.sim.contact import ActiveSet
+    from sim_tactile.sim.skin.contact import ActiveSet
 
     C, pen = _layered_problem()
     total = 2 * _reference(C, pen).sum()
@@ -181,7 +181,7 @@ def test_friction_coupled_contact_solves_the_unsymmetric_problem():
     the trailing (-x) side."""
     from sim_tactile.scene.tractions import shear_normal_compliance
     from sim_tactile.sensors.stack import Layer, Stack
-    from sim_tactile.sim.contact import REFRESH, ActiveSet
+    from sim_tactile.sim.skin.contact import REFRESH, ActiveSet
 
     C, pen = _layered_problem()
     xs = np.arange(-12, 13) * 0.25e-3
@@ -223,7 +223,7 @@ def test_the_unsymmetric_block_updates_follow_a_sliding_contact():
     from sim_tactile.scene.layered import layered_compliance_matrix
     from sim_tactile.scene.tractions import shear_normal_compliance
     from sim_tactile.sensors.stack import Layer, Stack
-    from sim_tactile.sim.contact import ActiveSet
+    from sim_tactile.sim.skin.contact import ActiveSet
 
     xs = np.arange(-12, 13) * 0.25e-3
     X, Y = np.meshgrid(xs, xs[::3])
@@ -260,7 +260,7 @@ def test_block_updates_stay_the_inverse_while_ridges_slide_under_fine_nodes():
     periodic rebuild (the mirror taxels then read 3% apart); the drift check rebuilds first.
     Every step's pressures equal a fresh factorisation of their set, and the inverse stays
     the inverse."""
-    from sim_tactile.sim.contact import ActiveSet
+    from sim_tactile.sim.skin.contact import ActiveSet
 
     xs = (np.arange(64) - 31.5) * 0.25e-3
     ys = (np.arange(8) - 3.5) * 2e-3

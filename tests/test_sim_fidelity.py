@@ -10,7 +10,7 @@ from sim_tactile.errors import ConfigError
 from sim_tactile.plates import Bumps, Plate, get_plate
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, get_sensor
-from sim_tactile.sim.fidelity import (
+from sim_tactile.sim.plan.fidelity import (
     AUTO_OMEGA_DT,
     DT_MAX_S,
     MAX_NODES,
@@ -19,7 +19,7 @@ from sim_tactile.sim.fidelity import (
     choose_fidelity,
     flat_stiffness,
 )
-from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.plan.protocol import Protocol
 
 
 def _auto(

@@ -10,14 +10,14 @@ from sim_tactile.plates import get_plate
 from sim_tactile.scene.model import build_scene
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, get_layout
-from sim_tactile.sim import contact
-from sim_tactile.sim import held as H
-from sim_tactile.sim.collide import PrimitiveCollider
-from sim_tactile.sim.held import CompiledHeldStep, _mirror_of, _mirror_symmetric
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.runner import StepOptions
-from sim_tactile.sim.simulate import simulate
-from sim_tactile.sim.skin import CoupledSkin
+from sim_tactile.sim.collide.primitive import PrimitiveCollider
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.skin import contact
+from sim_tactile.sim.skin.models import CoupledSkin
+from sim_tactile.sim.slide import simulate
+from sim_tactile.sim.step import held as H
+from sim_tactile.sim.step.held import CompiledHeldStep, _mirror_of, _mirror_symmetric
+from sim_tactile.sim.step.runner import StepOptions
 
 MARGIN = 0.5e-3
 #: Two exact solutions of the same slide (reduced and full problem, compiled and plain loop)

@@ -17,7 +17,7 @@ from sim_tactile.scene.layered import (
     layered_subsurface_weights,
 )
 from sim_tactile.scene.tractions import shear_normal_compliance, shear_subsurface_weights
-from sim_tactile.sim.contact import ActiveSet
+from sim_tactile.sim.skin.contact import ActiveSet
 
 #: identities that hold to rounding
 EXACT_RTOL = 1e-10

@@ -9,8 +9,8 @@ import pytest
 
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim import measured_errors as me
-from sim_tactile.sim.fidelity import choose_fidelity
+from sim_tactile.sim.plan import measured_errors as me
+from sim_tactile.sim.plan.fidelity import choose_fidelity
 from sim_tactile.tasks import get_task
 
 #: How far a re-measured error may move from the stored one (percentage points as a

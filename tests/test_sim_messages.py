@@ -12,9 +12,9 @@ import pytest
 from sim_tactile.errors import PhysicsError
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import Finger
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.runner import DRAG_FULL, V_STICK, drag_factor, drag_warning
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.slide import simulate
+from sim_tactile.sim.step.runner import DRAG_FULL, V_STICK, drag_factor, drag_warning
 
 #: The slide's speed ramp and the force loop keep the measured drag a little under the
 #: steady one (0.94 of it at 0.1 mm/s, 0.99 at 60 mm/s over 0.2 s).

@@ -12,7 +12,7 @@ from scipy.optimize import nnls
 from sim_tactile.scene.layered import layer_response
 from sim_tactile.sensors import Finger
 from sim_tactile.sensors.stack import Layer, Stack
-from sim_tactile.sim.press import hertz, press
+from sim_tactile.sim.static_press import hertz, press
 
 R, E, F = 8e-3, 0.3e6, 1.0
 #: The issue's tolerances against Hertz.

@@ -8,9 +8,9 @@ import pytest
 
 from sim_tactile.errors import ConfigError, PhysicsError
 from sim_tactile.scene.elastic import compliance_matrix
-from sim_tactile.sim.contact import ActiveSet, halfspace, winkler_force
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.skin.contact import ActiveSet, halfspace, winkler_force
+from sim_tactile.sim.slide import simulate
 
 QS = "quasi-static"
 

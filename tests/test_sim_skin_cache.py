@@ -8,10 +8,10 @@ import pytest
 from sim_tactile.cache import ArrayMemo, ArtefactCache
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim import skin as skin_module
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
-from sim_tactile.sim.skin import CACHE_MIN_NODES, CoupledSkin, make_skin
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.skin import models as skin_module
+from sim_tactile.sim.skin.models import CACHE_MIN_NODES, CoupledSkin, make_skin
+from sim_tactile.sim.slide import simulate
 
 
 @pytest.fixture(autouse=True)

@@ -10,8 +10,8 @@ from scipy import ndimage
 from sim_tactile.errors import ConfigError, UnknownNameError
 from sim_tactile.records import Recording
 from sim_tactile.sensors import Finger
-from sim_tactile.sim.protocol import Protocol
-from sim_tactile.sim.simulate import simulate
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.slide import simulate
 
 MM = 1e-3
 RIDGE_PITCH_M = 9 * MM  # finger7/ridges-4: 36 mm / 4

@@ -14,11 +14,11 @@ from sim_tactile.scene.layered import layered_compliance_matrix, layered_complia
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import resolve_sensor
 from sim_tactile.sensors.stack import Layer, Stack
-from sim_tactile.sim.contact import ActiveSet, spectral
-from sim_tactile.sim.contact.spectral import TOL, Spectral
-from sim_tactile.sim.runner import StepOptions
-from sim_tactile.sim.simulate import simulate
-from sim_tactile.sim.skin import CoupledSkin, SpectralSkin, make_skin
+from sim_tactile.sim.skin.contact import ActiveSet, spectral
+from sim_tactile.sim.skin.contact.spectral import TOL, Spectral
+from sim_tactile.sim.skin.models import CoupledSkin, SpectralSkin, make_skin
+from sim_tactile.sim.slide import simulate
+from sim_tactile.sim.step.runner import StepOptions
 
 E = 0.4e6
 #: How close the two solves' pressures come, relative to the peak: the iteration stops when
@@ -315,7 +315,7 @@ def test_the_compiled_iteration_agrees_with_the_numpy_one(total, monkeypatch):
 def test_the_direct_transforms_are_scipy_ffts_bit_for_bit(shape):
     """The product through scipy.fft's pocketfft binding is the public functions' product,
     to the bit, and again with the buffers reused."""
-    from sim_tactile.sim.contact import spectral
+    from sim_tactile.sim.skin.contact import spectral
 
     assert spectral._DIRECT  # this scipy has the binding: the fast path is the one tested
     rng = np.random.default_rng(shape[0] * 100 + shape[1])

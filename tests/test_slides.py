@@ -18,7 +18,7 @@ import sim_tactile
 from sim_tactile.errors import ConfigError
 from sim_tactile.plates import Plate, Ridges, get_plate
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.slides import SlideJob, SlideSet, make_backend, run_slides, stream
 from sim_tactile.slides.jobs import SLIDE_MODULES
 
@@ -137,7 +137,13 @@ def test_the_slide_code_is_the_simulations_import_closure():
     from sim_tactile.hashing import import_closure
 
     closure = import_closure(*SLIDE_MODULES)
-    for m in ("plates.presets", "plates.spec", "plates.mjcf", "sim.held", "sensors.transducers"):
+    for m in (
+        "plates.presets",
+        "plates.spec",
+        "plates.mjcf",
+        "sim.step.held",
+        "sensors.transducers",
+    ):
         assert f"sim_tactile.{m}" in closure, m
     for m in ("learn", "tasks", "datasets.store", "generate", "cli"):  # nothing downstream
         assert not any(c.startswith(f"sim_tactile.{m}") for c in closure), m
@@ -164,7 +170,7 @@ def test_the_slide_key_follows_the_measured_errors_table(tmp_path, monkeypatch):
 
 _SCRIPT = """
 import json, sys
-from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.slides import SlideSet, run_slides
 ss = SlideSet(("finger7/flat", "finger7/ridges-2"), "grid3x3",
               Protocol(duration_s=0.4, speed_jitter=0.05), slides=2, quick_slides=2)

@@ -14,7 +14,7 @@ from sim_tactile.calibrate.motion import biotac_force, clip_level_variation
 from sim_tactile.errors import ConfigError
 from sim_tactile.plates import get_plate, height_at, preset_names
 from sim_tactile.plates.presets import LONG_AREA_M, LONG_FAMILY
-from sim_tactile.sim.protocol import START_MARGIN_M, Protocol, SlideWindow
+from sim_tactile.sim.plan.protocol import START_MARGIN_M, Protocol, SlideWindow
 from sim_tactile.slides.config import _protocol
 from sim_tactile.tasks import get_task
 from sim_tactile.tasks.defs import textures20 as t20
@@ -76,7 +76,7 @@ def test_each_long_plate_is_its_short_plate_extended(name):
 
 
 def test_a_v2_slide_stays_on_the_texture_for_its_window():
-    from sim_tactile.sim.simulate import simulate
+    from sim_tactile.sim.slide import simulate
 
     ss = get_task("textures20-biotac19-v2").get_data
     r = simulate(LONG_FAMILY + "grating-4.0mm", ss.sensor, protocol=ss.protocol, seed=2)

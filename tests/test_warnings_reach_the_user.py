@@ -6,7 +6,7 @@ from __future__ import annotations
 from sim_tactile.cache import ArtefactCache
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import get_sensor
-from sim_tactile.sim.protocol import Protocol
+from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.slides import SlideJob, run_slides
 
 ALIAS = "the taxel array aliases the texture"

@@ -9,7 +9,7 @@ from scipy import ndimage
 from ..plates import Plate, features
 from ..records import Recording
 from ..sensors import Finger, Layout
-from ..sim.protocol import SPEED_RAMP_S, START_MARGIN_M
+from ..sim.plan.protocol import SPEED_RAMP_S, START_MARGIN_M
 
 
 def probe_taxel(layout: Layout) -> int:

@@ -6,7 +6,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..sim.fidelity import LEVELS
+from ..sim.plan.fidelity import LEVELS
 from ..tables import markdown_table
 
 

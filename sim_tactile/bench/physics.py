@@ -44,10 +44,10 @@ from ..plates import Plate, height_at
 from ..scene.elastic import subsurface_weights
 from ..scene.nodes import skin_grid
 from ..sensors import Sensor
-from ..sim.anchored import AnchoredLattice
-from ..sim.clipped import ClippedPatches
-from ..sim.fidelity import texture_period
-from ..sim.skin import make_skin
+from ..sim.plan.fidelity import texture_period
+from ..sim.skin.anchored import AnchoredLattice
+from ..sim.skin.clipped import ClippedPatches
+from ..sim.skin.models import make_skin
 
 #: the reference's grid spacing [m]
 REF_SPACING_M = 0.0625e-3
@@ -106,7 +106,7 @@ def reference_axis(n: int, spacing: float) -> np.ndarray:
     """The ``n`` cell centres [m] along one axis of the reference's cell: their faces on the
     multiples of ``spacing`` (the centres half a cell off), so that edges at round
     coordinates fall between cells, never through a row of centres (the reference named in
-    every measured row's key, :data:`~sim_tactile.sim.measured_errors.REFERENCE`)."""
+    every measured row's key, :data:`~sim_tactile.sim.plan.measured_errors.REFERENCE`)."""
     return (np.arange(n) - n // 2 + 0.5) * spacing
 
 
@@ -248,7 +248,7 @@ def reference(
 
 def clipped_press(cp: ClippedPatches, grid, plate, force_n, offset) -> np.ndarray:
     """The taxel loads [N] of the node grid's patches clipped at the plate's walls and the
-    taxels' edges (``cp``, :mod:`~sim_tactile.sim.clipped`) with the pad at ``offset``, held
+    taxels' edges (``cp``, :mod:`~sim_tactile.sim.skin.clipped`) with the pad at ``offset``, held
     at ``force_n``."""
     z_top = float(np.nanmax(height_at(plate, grid.xy[:, 0] + offset, grid.xy[:, 1])))
     (_, _, hx, hy, cell, _), cand, p, _ = cp.solve(offset, z_top + 1e-3, force_n)
@@ -257,7 +257,7 @@ def clipped_press(cp: ClippedPatches, grid, plate, force_n, offset) -> np.ndarra
 
 def anchored_press(lat: AnchoredLattice, plate, force_n, offset) -> np.ndarray:
     """The taxel loads [N] of the lattice anchored to the plate's walls (``lat``,
-    :mod:`~sim_tactile.sim.anchored`) with the pad at ``offset``, held at ``force_n``."""
+    :mod:`~sim_tactile.sim.skin.anchored`) with the pad at ``offset``, held at ``force_n``."""
     x = np.linspace(-lat.half_x, lat.half_x, 257)
     top = float(np.nanmax(height_at(plate, x[:, None] + offset, x[None, :] + lat.y0)))
     _, off = lat.solve(offset, top + 1e-3, force_n)

@@ -1,7 +1,7 @@
 """Speed against error of the soft finger's fidelity levels, on each task's scene.
 
 For every scene (the setup of a task: plate, sensor with its pad, speed and force) the sweep
-runs each fidelity level (:mod:`sim_tactile.sim.fidelity`) at its auto setting and at
+runs each fidelity level (:mod:`sim_tactile.sim.plan.fidelity`) at its auto setting and at
 multiples of its auto time step and node pitch, and the Hertz press at a range of node
 pitches. Each configuration is one row, all quantities SI:
 
@@ -52,11 +52,11 @@ from ..plates import Plate, get_plate
 from ..records import Recording
 from ..scene.nodes import skin_grid
 from ..sensors import Finger, get_sensor
-from ..sim.anchored_lines import anchored_cells
-from ..sim.fidelity import choose_fidelity, steps_per_sample
-from ..sim.press import hertz, press
-from ..sim.protocol import Protocol
-from ..sim.simulate import simulate
+from ..sim.plan.fidelity import choose_fidelity, steps_per_sample
+from ..sim.plan.lattices import anchored_cells
+from ..sim.plan.protocol import Protocol
+from ..sim.slide import simulate
+from ..sim.static_press import hertz, press
 from . import physics
 from .closed_forms import feature_spacing_m, probe_taxel, pulse_period, quick_duration
 from .pareto import markdown, pct, plot_pareto

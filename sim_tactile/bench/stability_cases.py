@@ -15,8 +15,8 @@ from .stability import Case, Measured, short
 def _slide(plate="finger7/ridges-4", *, force_n=1.0, force_tol=0.05, expect_warning=None, **kw):
     """Simulate (ideal loads) and measure. ``force_tol``: allowed relative deviation of the
     slide's mean normal force from the command (None: not checked, only reported)."""
-    from ..sim.protocol import Protocol
-    from ..sim.simulate import simulate
+    from ..sim.plan.protocol import Protocol
+    from ..sim.slide import simulate
 
     proto_kw = {
         k: kw.pop(k)
@@ -133,7 +133,7 @@ def skin_pressed_to_bottom() -> Measured:
 
 def static_press_beyond_skin() -> Measured:
     from ..sensors import Finger
-    from ..sim.press import press
+    from ..sim.static_press import press
 
     finger = Finger(shape="sphere", radius_m=8e-3, size_m=(8e-3, 8e-3), thickness_m=0.5e-3)
     r = press(finger, 5.0, readout_pitch_m=0.5e-3)
@@ -195,8 +195,8 @@ def neuron_nan_input() -> Measured:
 def _dead_and_noisy() -> tuple[np.ndarray, float]:
     """Three slides (time x 9 taxels) of an L0 slide over ridges-4, taxel 0 dead (all zero)
     and taxel 1 buried in noise of 5x the largest load (negative values included)."""
-    from ..sim.protocol import Protocol
-    from ..sim.simulate import simulate
+    from ..sim.plan.protocol import Protocol
+    from ..sim.slide import simulate
 
     rec = simulate(
         "finger7/ridges-4",

@@ -7,8 +7,8 @@ from dataclasses import dataclass, replace
 
 from .. import _validate as v
 from ..errors import ConfigError
-from ..sim.fidelity import LEVELS
-from ..sim.protocol import FORCE_CONTROLS
+from ..sim.plan.fidelity import LEVELS
+from ..sim.plan.protocol import FORCE_CONTROLS
 from .scenes import default_left_out, scenes
 
 #: Every scene's key, in order.

@@ -92,8 +92,8 @@ def read_biotac_forces(
 def force_share(sensor: Sensor, plate: str, force_n: float) -> np.ndarray:
     """Each taxel's load per newton of normal force when the simulated sensor rests on
     ``plate`` pressed with ``force_n`` (the ideal loads, before the transducer)."""
-    from ..sim.protocol import Protocol
-    from ..sim.simulate import prepare
+    from ..sim.plan.protocol import Protocol
+    from ..sim.slide import prepare
 
     proto = Protocol(force_n=force_n, force_jitter=0.0, offset_jitter_m=0.0, speed_jitter=0.0)
     pressed = prepare(plate, sensor, protocol=proto)

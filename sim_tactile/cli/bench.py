@@ -22,7 +22,7 @@ def cmd_bench_speed_error(args: argparse.Namespace) -> int:
     from ..bench.pareto import markdown
     from ..bench.speed_error import run_speed_error
     from ..bench.sweep import ALL_SCENES, sweep_for
-    from ..sim.fidelity import LEVELS
+    from ..sim.plan.fidelity import LEVELS
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():

@@ -7,15 +7,15 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..errors import ConfigError
-from ..sim.fidelity import FIDELITIES, PRESS_LEVELS
-from ..sim.protocol import FORCE_CONTROLS, STARTS
+from ..sim.plan.fidelity import FIDELITIES, PRESS_LEVELS
+from ..sim.plan.protocol import FORCE_CONTROLS, STARTS
 from ._common import add_command, add_plate_args, emit, log, plate_of
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    from ..sim.plan.protocol import Protocol
     from ..sim.plots import plot_heatmap, plot_traces
-    from ..sim.protocol import Protocol
-    from ..sim.simulate import simulate
+    from ..sim.slide import simulate
 
     out = Path(args.out)
     if out.suffix != ".npz":
@@ -115,7 +115,7 @@ def _press_stack(args: argparse.Namespace):
 
 def cmd_press(args: argparse.Namespace) -> int:
     from ..sensors import Finger
-    from ..sim.press import hertz, press, sphere_pad_size_m
+    from ..sim.static_press import hertz, press, sphere_pad_size_m
 
     r = args.radius
     stack = _press_stack(args)

@@ -5,7 +5,7 @@ two joints (``slide_x`` along the slide, driven by a velocity actuator; ``press_
 the plate, force-controlled). Each skin node is a small sphere on the bone at the pad's
 undeformed surface; a collider reports each node's signed distance to the plate (its
 penetration-depth map). The skin's elastic response is computed from that map by a skin
-model (:mod:`sim_tactile.sim.skin`) and applied back to the bone, so MuJoCo integrates the
+model (:mod:`sim_tactile.sim.skin.models`) and applied back to the bone, so MuJoCo integrates the
 finger while the skin is quasi-static (its own resonance, above 1 kHz for a few grams of
 silicone, lies far above the texture frequencies). The scene also holds ``W``, how the
 nodes' loads reach the taxels (:func:`~sim_tactile.scene.elastic.subsurface_weights`).

@@ -1,10 +1,10 @@
-"""One slide of the probe rig (:mod:`.rig`): a rigid textured probe held at a force, sliding
+"""One slide of the probe rig (:mod:`.plan.rig`): a rigid textured probe held at a force, sliding
 over a flat sensor that lies on a rigid bed, and what the sensor's elements read.
 
 **The scene.** MuJoCo carries the probe: a body on two slide joints above the static bed and
 sensor sheet, ``slide_x`` driven by a velocity actuator along the pass's speed command,
 ``press_z`` held at the height where the sensor carries the commanded force (the held force
-of :data:`~.protocol.FORCE_CONTROLS` ``quasi-static``, the only control the rig takes). The
+of :data:`~.plan.protocol.FORCE_CONTROLS` ``quasi-static``, the only control the rig takes). The
 probe's position in each step is MuJoCo's.
 
 **The contact is stationary in the probe's frame.** The sensor's skin is a stack of
@@ -12,15 +12,15 @@ homogeneous layers on the bed (the sensor's ``finger.stack``), wider than the pr
 covering the track (an assumption, ``docs/probe_rig.md``), so its response does not depend
 on where on it the probe is: under a held force and without friction, the probe's contact
 pressure in its own frame is the same at every step. It is solved once per slide, on the
-probe face's node lattice (:class:`~.skin.SpectralSkin`: the stack's compliance applied by
+probe face's node lattice (:class:`~.skin.models.SpectralSkin`: the stack's compliance applied by
 FFT, the contact set found exactly). An element then reads the stress field that the probe
 carries along: :func:`reading_lines` convolves the node loads with each element's kernel
 (the stack's vertical stress at the element's depth, integrated over its area:
 :func:`~sim_tactile.scene.layered.layered_subsurface_weights`) by FFT, on lines at a quarter
 of the node pitch along the slide, and each step reads it where the element is.
 
-Each sample is the trapezoid mean over its period (:class:`~.simulate.SampleAverager`); the
-sensor's transducer and seeded imperfections follow, as in :func:`~.simulate.simulate`.
+Each sample is the trapezoid mean over its period (:class:`~.step.sampling.SampleAverager`); the
+sensor's transducer and seeded imperfections follow, as in :func:`~.slide.simulate`.
 """
 
 from __future__ import annotations
@@ -32,7 +32,6 @@ import time
 import mujoco
 import numpy as np
 
-from .. import __version__
 from .._jit import njit
 from ..errors import ConfigError, PhysicsError
 from ..plates import Plate, get_plate, height_at
@@ -42,11 +41,11 @@ from ..scene.layered import layered_subsurface_weights
 from ..scene.model import add_velocity_servo
 from ..scene.nodes import SkinGrid
 from ..sensors import Finger, Sensor, resolve_sensor
-from .height_collider import interp_at
-from .protocol import Protocol
-from .rig import ProbePass, ProbeRig
-from .simulate import SampleAverager, SimResult
-from .skin import SpectralSkin
+from .collide.height import interp_at
+from .plan.protocol import Protocol
+from .plan.rig import ProbePass, ProbeRig
+from .skin.models import SpectralSkin
+from .step.sampling import SampleAverager, SimResult, sensor_output, versions, window_meta
 
 #: Sub-positions per node pitch at which the reading lines are computed (linear between).
 LINE_SUBSTEPS = 4
@@ -255,22 +254,10 @@ def simulate_rig(
     )
     slide_wall = time.perf_counter() - t0
     warnings = _lag_warnings(x_probe, pas, rate, rig.node_pitch_m)
-    units, transducer = "N", "ideal"
-    if not ideal and sensor.transducer is not None:
-        out = sensor.transduce(out, rate, np.random.default_rng([seed, 1]))
-        units, transducer = sensor.units, sensor.transducer_json()
+    out, units, transducer = sensor_output(out, sensor, rate, seed, ideal)
     wall = time.perf_counter() - t_wall
     meta = {
-        "plate": plate.name or plate.hash,
-        "plate_hash": plate.hash,
-        "plate_params": plate.params(),
-        "layout": layout.name,
-        "sensor": sensor.name,
-        "channel_names": list(layout.names),
-        "finger": finger.to_json(),
-        "protocol": proto.to_json(),
-        "protocol_nominal": nominal.to_json(),
-        "seed": seed,
+        **window_meta(plate, sensor, finger, proto, nominal, seed),
         "scene": "probe rig",
         "rig": rig.to_json(),
         "direction": sign,
@@ -285,11 +272,7 @@ def simulate_rig(
         "contact_area_m2": float(np.count_nonzero(p > 0) * grid.area_m2),
         "normal_force_n": [proto.force_n] * n_samples,
         "mean_drag_n": 0.0,
-        "versions": {
-            "sim_tactile": __version__,
-            "mujoco": mujoco.__version__,
-            "numpy": np.__version__,
-        },
+        "versions": versions(),
         "warnings": warnings,
         "sim_s": n_samples / rate,
         "wall_s": wall,
@@ -363,7 +346,7 @@ def _check_rig_inputs(plate: Plate, sensor: Sensor, finger: Finger, protocol: Pr
 @njit
 def _read_lines(xt, x, u, R, out):
     """``out[i] = np.interp(xt[i] - x, u, R[i], left=0, right=0)`` for every element, with
-    numpy's arithmetic (:func:`~.height_collider.interp_at`; the same numbers bit for bit, tested),
+    numpy's arithmetic (:func:`~.collide.height.interp_at`; the same numbers bit for bit, tested),
     in one call: the slide's steps had spent most of their time in 18 calls of
     ``np.interp`` each."""
     for i in range(xt.size):

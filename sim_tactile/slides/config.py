@@ -54,9 +54,9 @@ from ..plates import get_plate, preset_names
 from ..plates.user import is_user_plate, parse_ref
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
 from ..sensors.files import load_sensor_file
-from ..sim.fidelity import FIDELITIES
-from ..sim.protocol import Protocol
-from ..sim.rig import ProbeRig
+from ..sim.plan.fidelity import FIDELITIES
+from ..sim.plan.protocol import Protocol
+from ..sim.plan.rig import ProbeRig
 from .slide_set import SLIDES_RANGE, SlideSet
 
 #: The keys of a configuration file, and what each takes.

@@ -22,13 +22,13 @@ from ..hashing import code_version, content_hash, file_digest
 from ..plates import Plate
 from ..records import Recording
 from ..sensors import Finger, Sensor
-from ..sim import measured_errors
-from ..sim.protocol import Protocol, SlideWindow
-from ..sim.rig import ProbeRig
+from ..sim.plan import measured_errors
+from ..sim.plan.protocol import Protocol, SlideWindow
+from ..sim.plan.rig import ProbeRig
 
 #: The module whose import closure makes a slide (with this one, which calls it), and the
 #: libraries whose versions change what it computes.
-SLIDE_MODULES = ("sim_tactile.sim.simulate", "sim_tactile.sim.rig_sim", "sim_tactile.slides.jobs")
+SLIDE_MODULES = ("sim_tactile.sim.slide", "sim_tactile.sim.rig_sim", "sim_tactile.slides.jobs")
 SLIDE_LIBRARIES = ("mujoco", "numba", "numpy", "scipy")
 #: Data files the slide's code reads and whose content changes a slide: the measured errors
 #: from which ``auto`` picks its node grid.
@@ -61,7 +61,7 @@ class SlideJob:
     finger: Finger | None = None
     #: the node pitch along the slide [m] when the set fixes it (None: the fidelity's)
     pitch_m: float | None = None
-    #: the probe rig that makes the slide (:mod:`~sim_tactile.sim.rig`), else the finger scene
+    #: the probe rig that makes the slide (:mod:`~sim_tactile.sim.plan.rig`), else the finger scene
     rig: ProbeRig | None = None
     #: what the job is called in messages (its plate's name and place in a set)
     label: str = field(default="", compare=False)
@@ -71,7 +71,7 @@ class SlideJob:
         return self.protocol.drawn(self.seed)
 
     def n_samples(self) -> int:
-        """Samples the slide records (its window, :class:`~sim_tactile.sim.protocol.SlideWindow`;
+        """Samples the slide records (its window, :class:`~sim_tactile.sim.plan.protocol.SlideWindow`;
         on the rig, ``duration_s``)."""
         if self.rig is not None:
             proto = self.protocol.at_rate(self.sensor.rate_hz)
@@ -103,9 +103,9 @@ class SlideJob:
         return content_hash({**self.describe(), "code": slide_code_version()})
 
     def simulate(self, cache: ArtefactCache | None = None):
-        """Simulate the slide; a :class:`~sim_tactile.sim.simulate.SimResult`. An error names
+        """Simulate the slide; a :class:`~sim_tactile.sim.slide.SimResult`. An error names
         the plate and the seed."""
-        from ..sim.simulate import simulate
+        from ..sim.slide import simulate
 
         try:
             if self.rig is not None:

@@ -24,8 +24,8 @@ from ..plates.user import is_user_plate, parse_ref
 from ..records import TactileDataset
 from ..sensors import Finger, Sensor, get_sensor, sensor_names
 from ..sensors.calibration import Calibration, calibrated
-from ..sim.protocol import Protocol, SlideWindow
-from ..sim.rig import ProbeRig
+from ..sim.plan.protocol import Protocol, SlideWindow
+from ..sim.plan.rig import ProbeRig
 from .jobs import SlideJob
 from .run import run_slides
 
@@ -73,7 +73,7 @@ class SlideSet:
     calibration: a sensor calibration (``sim-tactile calibrate``) applied to the sensor.
     pitch_m: the skin's node pitch [m] along the slide, fixed for every slide (None: the
         fidelity's choice; the level's pitch across the slide follows it as in ``simulate``).
-    rig: the slides are made on this probe rig (:mod:`~sim_tactile.sim.rig`: the plate's
+    rig: the slides are made on this probe rig (:mod:`~sim_tactile.sim.plan.rig`: the plate's
         texture on a probe sliding over the sensor, which lies on a bed; ``finger`` is then the
         sensor's skin and ``protocol.duration_s`` the window), not by the finger scene.
     sensor_spec: the sensor's whole definition where it is not a preset (a sensor file's,

@@ -15,7 +15,7 @@ from ...encoders import IzhikevichEncoder
 from ...encoders.encodings import EncodingContext, Steps
 from ...sensors import get_sensor
 from ...sensors.pad import Finger
-from ...sim.protocol import Protocol
+from ...sim.plan.protocol import Protocol
 from ...slides import SlideSet
 from ..registry import BenchScene, PaperCell, Run, Settings, TaskSpec, register
 

@@ -4,7 +4,7 @@ LDA, linear SVM and SRC on spike features, 10/200 per texture over 1000 splits.
 - ``multilayer3-v1``: two 3x3 layers on a soft 16 mm pad cross three textures at 5 N;
 - ``multilayer3-v2``: the paper's rig: the sensor's stack lies on the rig's rigid bed and a
   rigid probe carrying each 36 x 36 mm texture presses on it with 5 N and slides across it
-  at 65 mm/s, one way or the other, between pauses, in 5 s windows (:mod:`~sim_tactile.sim.rig`).
+  at 65 mm/s, one way or the other, between pauses, in 5 s windows (:mod:`~sim_tactile.sim.plan.rig`).
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from __future__ import annotations
 from ...encoders import IzhikevichEncoder
 from ...encoders.encodings import EncodingContext, Steps
 from ...sensors import get_sensor
-from ...sim.protocol import Protocol
-from ...sim.rig import ProbeRig
+from ...sim.plan.protocol import Protocol
+from ...sim.plan.rig import ProbeRig
 from ...slides import SlideSet
 from ..registry import BenchScene, PaperCell, Run, Settings, TaskSpec, register
 

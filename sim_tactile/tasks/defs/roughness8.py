@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from ...encoders import IzhikevichEncoder
 from ...encoders.encodings import EncodingContext, Steps
-from ...sim.protocol import Protocol
+from ...sim.plan.protocol import Protocol
 from ...slides import SlideSet
 from ..registry import BenchScene, PaperCell, Run, Settings, TaskSpec, register
 

@@ -17,7 +17,7 @@ from dataclasses import replace
 
 from ...plates import preset_names
 from ...plates.presets import LONG_FAMILY
-from ...sim.protocol import Protocol
+from ...sim.plan.protocol import Protocol
 from ...slides import SlideSet
 from ..registry import BenchScene, TaskSpec, register
 from . import real

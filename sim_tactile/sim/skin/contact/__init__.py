@@ -6,7 +6,7 @@ pressure on each skin node.
   ``p >= 0, C p >= pen, p (C p - pen) = 0`` solved exactly by an active-set method (the
   deflection of the surface, ``u = C p``, must lift every penetrating node out of the plate;
   nodes whose deflection would lift them further carry no load). ``C`` is the dense
-  compliance of the skin (:mod:`sim_tactile.sim.skin`): the elastic coupling.
+  compliance of the skin (:mod:`sim_tactile.sim.skin.models`): the elastic coupling.
 - :class:`ActiveSet`: the same problem solved step after step, its inverse kept up to date,
   and held at a given normal force (:meth:`ActiveSet.solve_force`); its compiled kernels are
   in :mod:`.kernels`.

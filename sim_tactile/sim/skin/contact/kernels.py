@@ -1,12 +1,12 @@
 """Compiled kernels of :class:`~.active_set.ActiveSet` (numba): the same-set checks, the
 active-set loop with block updates of the inverse, and the force-holding loop. The held step
-(:mod:`sim_tactile.sim.held`) calls them from its own compiled step."""
+(:mod:`sim_tactile.sim.step.held`) calls them from its own compiled step."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..._jit import njit
+from ...._jit import njit
 
 
 @njit

@@ -40,7 +40,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import fft
 
-from ...errors import PhysicsError
+from ....errors import PhysicsError
 from . import cg_kernels
 
 try:  # scipy.fft's own pocketfft binding, without its dispatch (see Spectral.apply)

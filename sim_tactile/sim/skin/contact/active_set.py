@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...errors import PhysicsError
+from ....errors import PhysicsError
 from .kernels import NO_K, force_loop, force_same_set, kkt_same_set, solve_loop
 from .reference import MAX_ITER, TOL_REL
 

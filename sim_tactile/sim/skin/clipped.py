@@ -40,20 +40,14 @@ import math
 import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 
-from .._jit import njit
-from ..errors import ConfigError, PhysicsError
-from ..plates import Plate, features, height_at
-from ..scene.elastic import subsurface_weights
-from ..scene.nodes import SkinGrid
+from ..._jit import njit
+from ...errors import PhysicsError
+from ...plates import Plate, features, height_at
+from ...scene.elastic import subsurface_weights
+from ...scene.nodes import SkinGrid
+from ..plan.lattices import merge_lines, static_lines, wall_lines
+from .contact import MAX_ITER, TOL_REL
 
-#: Lines closer than this to one already there are not added [m]: a patch thinner than it
-#: carries nothing a taxel could tell apart.
-MERGE_M = 1e-7
-#: A patch joins the contact when the deformed skin would penetrate it by more than this,
-#: relative to the largest gap (the whole-patch solver's tolerance).
-TOL_REL = 1e-9
-#: Active-set iterations one force-holding solve may take.
-MAX_ITER = 200
 #: The patches within this of the deepest one (or of touching) enter the solve; when the
 #: pad then moves further, the reach grows and the solve runs again [m].
 REACH_M = 2e-5
@@ -61,60 +55,6 @@ REACH_M = 2e-5
 MAX_REACHES = 50
 #: Factorisations kept between steps for the same patches (the sets one step visits).
 MAX_FACTORS = 8
-
-
-def wall_lines(plate: Plate) -> tuple[np.ndarray, np.ndarray]:
-    """The plate frame's x positions of the vertical walls across the slide, and y positions
-    of those along it [m]: the faces of its boxes (ridges, bumps, grating bars)."""
-    xs, ys = set(), set()
-    for f in features(plate):  # none on a rough plate or a height map
-        if f.kind == "box":
-            xs.update((round(f.x - f.hx, 12), round(f.x + f.hx, 12)))
-            ys.update((round(f.y - f.hy, 12), round(f.y + f.hy, 12)))
-    return np.array(sorted(xs)), np.array(sorted(ys))
-
-
-def has_walls(plate: Plate) -> bool:
-    """Whether the plate has box walls that clipping would follow."""
-    xs, _ = wall_lines(plate)
-    return xs.size > 0
-
-
-def static_lines(grid: SkinGrid, layout, plate: Plate, y0_m: float):
-    """The static column and row lines [m] in the pad's frame: the lattice's own, the taxels'
-    edges, and (rows) the walls along the slide with the pad centred at ``y0_m`` on the
-    plate."""
-    px, py = grid.pitch_xy
-    xs, ys = np.unique(grid.xy[:, 0]), np.unique(grid.xy[:, 1])
-    bx = np.append(xs - px / 2, xs[-1] + px / 2)
-    by = np.append(ys - py / 2, ys[-1] + py / 2)
-    pos, size = layout.positions[:, :2], layout.sizes
-    tx = np.concatenate([pos[:, 0] - size[:, 0] / 2, pos[:, 0] + size[:, 0] / 2])
-    ty = np.concatenate([pos[:, 1] - size[:, 1] / 2, pos[:, 1] + size[:, 1] / 2])
-    _, walls_y = wall_lines(plate)
-    return _merge(bx, tx, bx[0], bx[-1]), _merge(
-        by, np.concatenate([ty, walls_y - y0_m]), by[0], by[-1]
-    )
-
-
-def static_cells(grid: SkinGrid, layout, plate: Plate, y0_m: float) -> int:
-    """How many static cells the clipped grid has (:func:`static_lines`)."""
-    sx, sy = static_lines(grid, layout, plate, y0_m)
-    return (sx.size - 1) * (sy.size - 1)
-
-
-def _merge(base: np.ndarray, extra, lo: float, hi: float) -> np.ndarray:
-    """``base`` (sorted) with the lines of ``extra`` strictly inside (lo, hi) that are not
-    within :data:`MERGE_M` of a line already there."""
-    out = list(base)
-    for e in sorted(extra):
-        if not lo + MERGE_M < e < hi - MERGE_M:
-            continue
-        i = np.searchsorted(out, e)
-        if (i < len(out) and out[i] - e < MERGE_M) or (i > 0 and e - out[i - 1] < MERGE_M):
-            continue
-        out.insert(i, e)
-    return np.array(out)
 
 
 @njit
@@ -126,7 +66,9 @@ def _F(x, y):
 
 
 @njit
-def _entry(x, y, a, b):
+def rect_entry(x, y, a, b):
+    """The deflection at offset (x, y) from the centre of a rectangle of half-sides ``a``,
+    ``b`` under unit pressure, times pi E* (Love 1929)."""
     return _F(x + a, y + b) - _F(x - a, y + b) - _F(x + a, y - b) + _F(x - a, y - b)
 
 
@@ -141,7 +83,7 @@ def assemble(cx, cy, hx, hy, cell, split, C_cells, e_star):
     for i in range(n):
         for j in range(n):
             if split[i] or split[j]:
-                C[i, j] = k * _entry(cx[i] - cx[j], cy[i] - cy[j], hx[j], hy[j])
+                C[i, j] = k * rect_entry(cx[i] - cx[j], cy[i] - cy[j], hx[j], hy[j])
             else:
                 C[i, j] = C_cells[cell[i], cell[j]]
     return C
@@ -160,7 +102,7 @@ def rect_compliance(cx, cy, hx, hy, e_star):
         for j in range(n):
             x = cx[i] - cx[j]
             y = cy[i] - cy[j]
-            C[i, j] = k * _entry(x, y, hx[j], hy[j])
+            C[i, j] = k * rect_entry(x, y, hx[j], hy[j])
     return C
 
 
@@ -267,7 +209,7 @@ class ClippedPatches:
     def columns(self, x_pad: float) -> tuple[np.ndarray, np.ndarray]:
         """The column lines with the cross walls at pad position ``x_pad`` (the pad centre's
         x on the plate) added, and each column's static column."""
-        ex = _merge(self.sx, self.walls_x - x_pad, self.lo, self.hi)
+        ex = merge_lines(self.sx, self.walls_x - x_pad, self.lo, self.hi)
         parent = np.searchsorted(self.sx, _centres(ex)) - 1
         return ex, parent
 
@@ -342,68 +284,3 @@ class ClippedPatches:
 
 def _centres(lines: np.ndarray) -> np.ndarray:
     return 0.5 * (lines[:-1] + lines[1:])
-
-
-class PlateHeldStep:
-    """The frame of a held step (``step(qpos, jz, total, taxel_out) -> (force, deepest)``, as
-    :class:`~sim_tactile.sim.held.HeldStep`) that solves on cells of the plate's own: the
-    pad's position on the plate is ``x0 + qpos[jx]``, its lowest point ``z0 + qpos[jz]``
-    above the base; ``c`` the cells' solver, ``area`` the pad lattice's node area (the
-    total it is given is a pressure summed over those nodes)."""
-
-    def __init__(self, cells, base_area_m2: float, x0: float, z0: float, jx: int):
-        self.c = cells
-        self.area = base_area_m2
-        self.x0, self.z0, self.jx = x0, z0, jx
-
-    def pose(self, qpos, jz) -> tuple[float, float]:
-        """``(x_pad, z_low)``: the pad centre's x on the plate and its lowest point's height
-        above the base [m]."""
-        return self.x0 + float(qpos[self.jx]), self.z0 + float(qpos[jz])
-
-
-class ClippedHeldStep(PlateHeldStep):
-    """The held step on clipped patches (:class:`ClippedPatches`)."""
-
-    def describe(self) -> str:
-        return (
-            f"patches clipped at the walls and taxel edges ({self.c.sy.size - 1} rows, "
-            f"{self.c.sx.size - 1} static columns)"
-        )
-
-    def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
-        x_pad, z_low = self.pose(qpos, jz)
-        (cx, cy, hx, hy, cell, _), cand, p, d = self.c.solve(x_pad, z_low, total * self.area)
-        qpos[jz] -= d
-        loads = p * (4 * hx[cand] * hy[cand])
-        self.c.taxel_loads(cell[cand], loads, out=taxel_out)
-        return float(loads.sum()), self.c.deepest
-
-
-def skin_refusals(level: str, finger=None, quasi_static: bool = True) -> list[str]:
-    """What keeps a held step on the plate's own cells (clipped patches, the anchored lattice)
-    from serving this skin: a level other than L1, a layered stack, friction coupled into the
-    normal problem, dynamic force control. Empty when it serves it; ``finger`` None skips the
-    finger's checks."""
-    why = []
-    if level != "L1":
-        why.append(f"level {level!r} (valid: 'L1')")
-    if finger is not None and finger.stack is not None:
-        why.append("a layered stack")
-    if finger is not None and finger.skin_tractions and finger.friction > 0:
-        why.append("the skin's sliding tractions (skin_tractions)")
-    if not quasi_static:
-        why.append("dynamic force control (valid: 'quasi-static')")
-    return why
-
-
-def check_clippable(level: str, finger, quasi_static: bool = True) -> None:
-    """Raise unless clipped patches serve this skin: the elastic half-space of L1, without a
-    layered stack or friction coupled into the normal problem, under quasi-static force
-    control (the held step)."""
-    why = skin_refusals(level, finger, quasi_static)
-    if why:
-        raise ConfigError(
-            "clipped patches serve the half-space skin of L1 under quasi-static force control; "
-            "got " + ", ".join(why)
-        )

@@ -4,7 +4,7 @@ The pad's own lattice (:mod:`~sim_tactile.scene.nodes`) moves with the pad, so a
 wall runs through a different patch at every step. A patch is in contact or not by its
 centre, and the pressure under a rigid flat top is singular at the wall (it grows as the
 inverse square root of the distance, as at a flat punch's edge): both errors grow with the
-pitch. Clipping the patches at the walls at each step (:mod:`~sim_tactile.sim.clipped`)
+pitch. Clipping the patches at the walls at each step (:mod:`~sim_tactile.sim.skin.clipped`)
 removes them, at the price of a new compliance and factorisation every step.
 
 Here the lattice is fixed to the plate instead, and the pad slides over it:
@@ -25,7 +25,7 @@ the cells' sizes nor their relative positions: the compliance between any two ce
 constant. Moving the window by a period maps each cell onto the cell one period further,
 whose compliance entries are the same numbers (they are computed from the same differences,
 :func:`lattice_compliance`). So the compliance is computed once for the slide, and the
-contact set's inverse (:class:`~sim_tactile.sim.contact.ActiveSet`'s block updates) carries
+contact set's inverse (:class:`~sim_tactile.sim.skin.contact.ActiveSet`'s block updates) carries
 over a window move by renumbering its cells. A step costs what a whole-patch step costs: the
 depths, the same-set check, a block update where cells join or leave.
 
@@ -47,14 +47,13 @@ import math
 
 import numpy as np
 
-from .._jit import njit
-from ..errors import PhysicsError
-from ..plates import Plate, features
-from .anchored_lines import _SHAPES, check_anchorable, period_lines, row_lines
-from .clipped import PlateHeldStep, _entry
-from .contact import REFRESH, TOL_REL
+from ..._jit import njit
+from ...errors import PhysicsError
+from ...plates import Plate, features
+from ..plan.lattices import PAD_SHAPE_CODES, check_anchorable, period_lines, row_lines
+from .clipped import rect_entry
+from .contact import MAX_ITER, REFRESH, TOL_REL
 from .contact.kernels import NO_K, force_loop, force_same_set
-from .contact.reference import MAX_ITER
 
 
 @njit
@@ -77,7 +76,7 @@ def lattice_compliance(cxb, wxb, P, n_periods, cy, wy, e_star):
                 for i in range(ny):
                     for j in range(ny):
                         blk[i, j] = (
-                            kk * _entry(dx, cy[i] - cy[j], hx, 0.5 * wy[j]) / (wxb[b] * wy[j])
+                            kk * rect_entry(dx, cy[i] - cy[j], hx, 0.5 * wy[j]) / (wxb[b] * wy[j])
                         )
                 for l_ in range(n_periods):
                     k = l_ + dk
@@ -224,7 +223,7 @@ class AnchoredLattice:
         ex, ey = finger.patch_m
         return np.array(
             [
-                _SHAPES[finger.shape],
+                PAD_SHAPE_CODES[finger.shape],
                 ex / 2,
                 ey / 2,
                 finger.size_m[0] / 2,
@@ -321,21 +320,3 @@ class AnchoredLattice:
             off, self.cxr, self.wxr, self.ny, self.taxel_x, self.taxel_hx, self.oy, self.f, out
         )
         return out
-
-
-class AnchoredHeldStep(PlateHeldStep):
-    """The held step on the anchored lattice (:class:`AnchoredLattice`)."""
-
-    def describe(self) -> str:
-        c = self.c
-        return (
-            f"lattice anchored to the plate's walls ({c.m} columns per {c.P * 1e3:.3g} mm "
-            f"period, {c.ny} rows, {c.n} cells in a {c.n_periods}-period window)"
-        )
-
-    def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
-        x_pad, z_low = self.pose(qpos, jz)
-        dz, off = self.c.solve(x_pad, z_low, total * self.area)
-        qpos[jz] -= dz
-        self.c.taxel_loads(off, taxel_out)
-        return float(self.c.f.sum()), float(self.c.pen.max())

@@ -14,7 +14,7 @@ of its nodes (m, ``-inf`` for nodes out of reach):
   between nodes, ``k = E* / thickness``;
 - :class:`CoupledSkin` (L1, L2): an elastic skin whose nodes are coupled by a dense
   compliance ``C`` (a load on one node deflects its neighbours), solved exactly as a linear
-  complementarity problem (:class:`~sim_tactile.sim.contact.ActiveSet`). ``C`` is the
+  complementarity problem (:class:`~sim_tactile.sim.skin.contact.ActiveSet`). ``C`` is the
   elastic half-space's (:func:`~sim_tactile.scene.elastic.compliance_matrix`), or, when the
   finger has a ``stack``, that of its bonded layers on their backing
   (:func:`~sim_tactile.scene.layered.layered_compliance_matrix`); any symmetric positive
@@ -22,7 +22,7 @@ of its nodes (m, ``-inf`` for nodes out of reach):
 
 - :class:`SpectralSkin` (L1, L2 on many nodes): the same skin, its compliance applied as a
   convolution by FFT and the contact solved by constrained conjugate gradients
-  (:class:`~sim_tactile.sim.contact.spectral.Spectral`): no dense matrix, cost ``N log N``
+  (:class:`~sim_tactile.sim.skin.contact.spectral.Spectral`): no dense matrix, cost ``N log N``
   per iteration. :func:`make_skin` takes it above :data:`DENSE_MAX_NODES` nodes.
 
 When the finger's skin carries its sliding friction (``Finger.skin_tractions``) and the skin
@@ -41,17 +41,17 @@ import zipfile
 
 import numpy as np
 
-from ..cache import SETUP, SETUP_MEMO_BYTES, setup_memo
-from ..errors import CacheWarning, ConfigError
-from ..hashing import blas_kernel, code_version, content_hash
-from ..scene.elastic import compliance_matrix, compliance_table
-from ..scene.layered import Stack, layered_compliance_matrix, layered_compliance_table
-from ..scene.nodes import SkinGrid
-from ..scene.tractions import shear_normal_compliance
-from ..sensors.pad import Finger
+from ...cache import SETUP, SETUP_MEMO_BYTES, setup_memo
+from ...errors import CacheWarning, ConfigError
+from ...hashing import blas_kernel, code_version, content_hash
+from ...scene.elastic import compliance_matrix, compliance_table
+from ...scene.layered import Stack, layered_compliance_matrix, layered_compliance_table
+from ...scene.nodes import SkinGrid
+from ...scene.tractions import shear_normal_compliance
+from ...sensors.pad import Finger
+from ..plan.fidelity import DENSE_MAX_NODES
 from . import contact
 from .contact.spectral import Spectral
-from .fidelity import DENSE_MAX_NODES
 
 
 class WinklerSkin:
@@ -98,7 +98,7 @@ class _SolvedSkin:
 
 class CoupledSkin(_SolvedSkin):
     """A skin of compliance ``C`` [m/Pa] (N x N) with, optionally, its inverse ``K``, which
-    makes large contact sets cheap (:class:`~sim_tactile.sim.contact.ActiveSet`). The solver
+    makes large contact sets cheap (:class:`~sim_tactile.sim.skin.contact.ActiveSet`). The solver
     keeps its contact set from one call to the next."""
 
     def __init__(
@@ -174,7 +174,7 @@ class CoupledSkin(_SolvedSkin):
 
 class SpectralSkin(_SolvedSkin):
     """A translation-invariant skin (half-space or stack of layers) on a node lattice, its
-    contact solved spectrally (:class:`~sim_tactile.sim.contact.spectral.Spectral`). Same
+    contact solved spectrally (:class:`~sim_tactile.sim.skin.contact.spectral.Spectral`). Same
     interface and answers as :class:`CoupledSkin` (tested), without its dense matrices."""
 
     symmetric = True
@@ -220,7 +220,7 @@ def _table(grid: SkinGrid, finger: Finger) -> np.ndarray:
 CACHE_MIN_NODES = 1000
 #: What the dense compliance and its inverse are computed by: their cache key holds the
 #: source of these modules (and what they import) and the libraries' versions.
-SKIN_MODULES = ("sim_tactile.sim.skin",)
+SKIN_MODULES = (__name__,)
 SKIN_LIBRARIES = ("numpy", "scipy")
 
 

@@ -7,7 +7,7 @@ surface at its centre, in one compiled loop.
   node there (26 160 for the iCub's 6231 nodes on rough-ra100), filled its contact buffer and
   stopped the slide, and it measured each sphere's distance to the nearest facet, where the
   skin model and the reference it is measured against take the height map's depth (see
-  :mod:`.collide`, which chooses the collider).
+  :mod:`~sim_tactile.sim.collide`, which chooses the collider).
 - :class:`MapCollider`: a height-map plate (:class:`~sim_tactile.plates.HeightMap`: heights
   sampled on a grid over (at least) the textured area, bilinear between them, NaN where
   there is no material), on its base. MuJoCo's height-field collider had served it: several
@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from .._jit import njit
+from ..._jit import njit
 
 
 class _SurfaceCollider:
@@ -34,7 +34,7 @@ class _SurfaceCollider:
     point, reported (else -inf) within its margin, as MuJoCo reports a contact; where the
     surface is NaN (off the plate, no material) nothing is near."""
 
-    #: the held step may run it in one compiled call (:class:`~.held.CompiledHeldStep`,
+    #: the held step may run it in one compiled call (:class:`~sim_tactile.sim.step.held.CompiledHeldStep`,
     #: through :attr:`kernel` and :attr:`arrays`)
     compiled = True
     #: the texture kind (``plate.texture.kind``) whose plates it collides
@@ -81,7 +81,7 @@ class _SurfaceCollider:
     @classmethod
     def from_scene(cls, scene):
         """The collider of a scene whose plate has the collider's texture kind, bound to the
-        finger's joints (as :meth:`~.collide.PrimitiveCollider.from_scene`), or None."""
+        finger's joints (as :meth:`~.primitive.PrimitiveCollider.from_scene`), or None."""
         if scene.plate.texture.kind != cls.texture_kind:
             return None
         m = scene.m_col
@@ -147,7 +147,7 @@ class ProfileCollider(_SurfaceCollider):
     def surface_of(plate) -> tuple:
         """``(px, pz, ax, ay, sx, sy)``: the profile, the textured area's and the plate's
         half-extents."""
-        from ..plates import roughness_profile
+        from ...plates import roughness_profile
 
         px, pz = roughness_profile(plate)
         area = (plate.area_length_m / 2, plate.area_width_m / 2)
@@ -215,7 +215,7 @@ class MapCollider(_SurfaceCollider):
         return False
 
     def heights(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        from ..plates.features import map_height
+        from ...plates.features import map_height
 
         inside = (np.abs(x) <= self.span[0]) & (np.abs(y) <= self.span[1])
         z = np.where(inside, map_height(x, y, self.z, self.pixel), 0.0)

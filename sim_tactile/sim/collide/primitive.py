@@ -1,36 +1,19 @@
-"""Colliders: the penetration-depth map of the skin's probe spheres against the plate.
+"""The compiled collider of a plate of features: boxes, spherical caps, upright cylinders
+and drafted ridges (which MuJoCo holds as convex meshes), in one numba loop.
 
-A collider answers one question, :meth:`depths_at`: with the finger's joints at ``qpos``, how
-deep is each skin node in the plate (``-inf`` where no plate geom lies within the node's
-margin), and is any node that close. :func:`make_collider` chooses one, in one place:
-
-- :class:`PrimitiveCollider`: a compiled narrow phase for plates of features: boxes,
-  spherical caps, upright cylinders and drafted ridges (which MuJoCo holds as convex meshes).
-  MuJoCo's collider (``mj_kinematics`` + ``mj_collision``) costs about 60 us a step for a
-  few hundred skin nodes, a third of a whole L1 step, although the plate never moves and
-  every node is a sphere on the one bone; this computes the same map in one numba loop (the
-  signed distance of each probe sphere to each plate geom in its frame; the deepest per
-  node). Over an upright geom's footprint, below its top surface, a node's depth is the depth
-  below that surface, as the plate's height map (and the skin model, and the reference it is
-  measured against) has it: MuJoCo measures a node inside a solid to its nearest face, so a
-  node that a slide carries into a box's side, deeper than half the box is wide, reads a
-  depth that falls as the pad sinks, and the held force then let the pad pass through the
-  box onto the base (finger7/bumps-4x4 at 0.5 mm nodes read as flat). Elsewhere tested equal
-  to MuJoCo's map at random poses on every plate kind: bit for bit on boxes and caps, within
-  1e-15 m on cylinders, and within 1e-6 m on drafted ridges, where MuJoCo's mesh penetration
-  is the approximate one (measured 4.5e-7 m off; ours equals a brute-force distance).
-- :class:`~.height_collider.ProfileCollider`: a roughness plate (a profile z(x) across the
-  textured area, on its base): each node's depth below the plate's height map at its centre,
-  in one numba loop (numpy's interpolation, bit for bit).
-- :class:`~.height_collider.MapCollider`: a height-map plate (heights sampled on a grid over
-  its textured area, bilinear between them, NaN where there is no material, on its base):
-  each node's depth below the map at its centre, in one numba loop (the bilinear height of
-  :func:`~sim_tactile.plates.height_at`, bit for bit). MuJoCo's height-field collider had
-  served it, several contacts a node and at most 50 a field.
-- :class:`MujocoCollider`: MuJoCo's own collider on the scene's collision model, for any
-  geometry: the reference the tests compare the others with, and the collider of a plate
-  none of them takes (a mesh that is not a drafted ridge of the plate's features, a rotated
-  plate). No preset plate steps it.
+MuJoCo's collider (``mj_kinematics`` + ``mj_collision``) costs about 60 us a step for a few
+hundred skin nodes, a third of a whole L1 step, although the plate never moves and every node
+is a sphere on the one bone; :func:`depths_kernel` computes the same map in one loop (the
+signed distance of each probe sphere to each plate geom in its frame; the deepest per node).
+Over an upright geom's footprint, below its top surface, a node's depth is the depth below
+that surface, as the plate's height map (and the skin model, and the reference it is
+measured against) has it: MuJoCo measures a node inside a solid to its nearest face, so a
+node that a slide carries into a box's side, deeper than half the box is wide, reads a depth
+that falls as the pad sinks, and the held force then let the pad pass through the box onto
+the base (finger7/bumps-4x4 at 0.5 mm nodes read as flat). Elsewhere tested equal to MuJoCo's
+map at random poses on every plate kind: bit for bit on boxes and caps, within 1e-15 m on
+cylinders, and within 1e-6 m on drafted ridges, where MuJoCo's mesh penetration is the
+approximate one (measured 4.5e-7 m off; ours equals a brute-force distance).
 """
 
 from __future__ import annotations
@@ -40,9 +23,9 @@ import math
 import mujoco
 import numpy as np
 
-from .._jit import njit
-from ..plates import features
-from .height_collider import MapCollider, ProfileCollider, report_depth
+from ..._jit import njit
+from ...plates import features
+from .height import report_depth
 from .shapes import cylinder_distance, ridge_distance
 
 _BOX = int(mujoco.mjtGeom.mjGEOM_BOX)
@@ -51,95 +34,6 @@ _CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
 #: a drafted ridge (MuJoCo holds it as a convex mesh): a box whose x-walls slope in from
 #: ``size[0]`` at its bottom to ``top[g]`` at its top
 _PRISM = int(mujoco.mjtGeom.mjGEOM_MESH)
-
-
-@njit
-def penetration_map(
-    geom: np.ndarray, dist: np.ndarray, node_of_geom: np.ndarray, pen: np.ndarray
-) -> None:
-    """pen[node] = max over the node's contacts of -dist (else -inf). geom: (n, 2) int32."""
-    pen[:] = -np.inf
-    for k in range(dist.shape[0]):
-        i = node_of_geom[geom[k, 0]]
-        if i < 0:
-            i = node_of_geom[geom[k, 1]]
-        if i >= 0 and -dist[k] > pen[i]:
-            pen[i] = -dist[k]
-
-
-def penetration_map_reference(geom, dist, node_of_geom, n_nodes: int) -> np.ndarray:
-    """:func:`penetration_map` in plain numpy (``np.maximum.at``)."""
-    pen = np.full(n_nodes, -np.inf)
-    node = node_of_geom[geom[:, 0]]
-    node = np.where(node >= 0, node, node_of_geom[geom[:, 1]])
-    keep = node >= 0
-    np.maximum.at(pen, node[keep], -dist[keep])
-    return pen
-
-
-class MujocoCollider:
-    """MuJoCo's collider on the scene's collision model (contacts enabled, nothing stepped):
-    each node's deepest contact distance, read by :func:`penetration_map`."""
-
-    compiled = False
-
-    def __init__(self, scene) -> None:
-        self.m = scene.m_col
-        self.d = mujoco.MjData(self.m)
-        self.node_of_geom = scene.node_of_geom
-
-    def depths_at(self, qpos: np.ndarray, pen: np.ndarray) -> bool:
-        """Fill ``pen`` with each node's depth [m] for the joints at ``qpos``; whether any
-        node is within its margin of the plate."""
-        d = self.d
-        d.qpos[:] = qpos
-        mujoco.mj_kinematics(self.m, d)
-        mujoco.mj_collision(self.m, d)
-        if d.ncon:
-            con = d.contact
-            penetration_map(con.geom, con.dist, self.node_of_geom, pen)
-            return True
-        pen[:] = -np.inf
-        return False
-
-    def warnings(self) -> list[str]:
-        """Names of the warnings MuJoCo raised while colliding (e.g. a full contact buffer)."""
-        d = self.d
-        if not d.warning.number.any():
-            return []
-        return [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
-
-
-#: Collider margin [m] of the skin nodes when the pad is held at a force: nodes this far above
-#: the plate are reported, so they can join the contact when the pad sinks; a step that would
-#: move the pad further than this is re-collided at the new height.
-QS_MARGIN_M = 0.5e-3
-#: The margin on roughness plates: the profile collider keeps the one MuJoCo's height-field
-#: collider had there (each node within it was a contact MuJoCo generated, which filled its
-#: contact buffer at 0.5 mm), so that their slides stayed unchanged but for the depths; a
-#: step that sinks further is re-collided.
-QS_MARGIN_MUJOCO_M = 0.1e-3
-
-
-def node_margin_m(plate) -> float:
-    """The skin nodes' collider margin for a held force on ``plate``: wide where the compiled
-    collider serves (every plate of features, and height maps; it costs nothing there),
-    narrow on roughness."""
-    if plate.texture.kind == "roughness":
-        return QS_MARGIN_MUJOCO_M
-    return QS_MARGIN_M
-
-
-def make_collider(scene, primitive: bool = True):
-    """The compiled collider on a plate of features, the profile collider on a roughness
-    plate, the map collider on a height map (each where ``primitive`` is set), else MuJoCo's.
-    The bone must be at its starting pose (its world position is read here)."""
-    if primitive:
-        for kind in (PrimitiveCollider, ProfileCollider, MapCollider):
-            c = kind.from_scene(scene)
-            if c is not None:
-                return c
-    return MujocoCollider(scene)
 
 
 class PrimitiveCollider:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...errors import PhysicsError
+from ....errors import PhysicsError
 
 #: Complementarity tolerance relative to the largest penetration.
 TOL_REL = 1e-9

@@ -1,9 +1,9 @@
 """One simulation step of the finger: collision query, skin solve, forces on the bone, MuJoCo.
 
 :class:`Runner` owns the moving parts of one slide: the scene's MuJoCo model stepping the bone
-(``m_dyn``), the collider (:func:`~.collide.make_collider`), the skin model
-(:func:`~.skin.make_skin`) and, under quasi-static force control, the held step
-(:mod:`.held`). Every step checks for a non-finite load, a skin pressed to the bottom and a
+(``m_dyn``), the collider (:func:`~sim_tactile.sim.collide.choose.make_collider`), the skin model
+(:func:`~sim_tactile.sim.skin.models.make_skin`) and, under quasi-static force control, the
+held step (:func:`~.choose.make_held_step`). Every step checks for a non-finite load, a skin pressed to the bottom and a
 runaway pad, and under the dynamic force loop the coupling's stability limit; any of these
 stops the run with a :class:`~sim_tactile.errors.PhysicsError` naming the cause.
 
@@ -19,14 +19,13 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from ..errors import ConfigError, PhysicsError
-from ..plates import Plate
-from ..scene.model import Scene
-from ..sensors.pad import Finger
-from .collide import make_collider
-from .fidelity import MAX_OMEGA_DT, Fidelity
-from .held import CompiledHeldStep, HeldStep
-from .skin import SkinModel, SpectralSkin
+from ...errors import PhysicsError
+from ...plates import Plate
+from ...scene.model import Scene
+from ...sensors.pad import Finger
+from ..plan.fidelity import MAX_OMEGA_DT, Fidelity
+from ..skin.models import SkinModel
+from .held import HeldStep
 
 #: Velocity of the friction regularisation [m/s]: Coulomb drag mu*N*tanh(v / V_STICK).
 V_STICK = 1e-3
@@ -66,14 +65,14 @@ class StepOptions:
     """Which implementation of each part of a step runs (all fast by default).
 
     primitive_collider: the compiled collider of the plate (its features, a roughness
-        profile or a height map; :func:`~.collide.make_collider`), else MuJoCo's collider,
+        profile or a height map; :func:`~sim_tactile.sim.collide.choose.make_collider`), else MuJoCo's collider,
         the reference;
     compiled_hold: the held step as one compiled call where the compiled collider serves
         (else the plain loop, the reference);
     reduce_skin: the compiled held step on the smallest exact problem (columns, mirror half).
     skin_solver: the coupled skin's contact solve, ``auto`` (spectral above
-        :data:`~.skin.DENSE_MAX_NODES` nodes), ``dense`` or ``spectral``
-        (:func:`~.skin.make_skin`).
+        :data:`~sim_tactile.sim.plan.fidelity.DENSE_MAX_NODES` nodes), ``dense`` or ``spectral``
+        (:func:`~sim_tactile.sim.skin.models.make_skin`).
     """
 
     primitive_collider: bool = True
@@ -94,34 +93,21 @@ class Runner:
         finger: Finger,
         dt: float,
         *,
+        collider,
         z0_m: float,
         plate: Plate,
         quasi_static: bool,
-        options: StepOptions = StepOptions(),
-        hold=None,
+        hold: HeldStep | None = None,
     ):
         self.s, self.skin, self.fid, self.finger = scene, skin, fid, finger
         self.quasi_static = quasi_static
         self.dt = dt
         self.d_dyn = mujoco.MjData(scene.m_dyn)
         self.d_dyn.qpos[:] = 0.0
-        self.collider = make_collider(scene, options.primitive_collider)
-        nodes = np.flatnonzero(scene.node_of_geom >= 0)
-        self._margin = float(scene.m_col.geom_margin[nodes[0]]) if nodes.size else 0.0
-        if quasi_static and not self._margin > 0:
-            raise ConfigError("quasi-static force control needs skin nodes with a collider margin")
+        self.collider = collider
         self._area = scene.grid.area_m2
-        self.hold = None
-        if quasi_static and hold is not None:
-            self.hold = hold  # clipped patches or the anchored lattice (sim.clipped, .anchored)
-        elif quasi_static:
-            dense = not isinstance(skin, SpectralSkin)  # the compiled step is dense
-            if self.collider.compiled and options.compiled_hold and dense:
-                self.hold = CompiledHeldStep(
-                    self.collider, skin, scene.W, self._area, self._margin, options.reduce_skin
-                )
-            else:
-                self.hold = HeldStep(self.collider, skin, scene.W, self._area, self._margin)
+        #: the held step under quasi-static force control (:func:`~.choose.make_held_step`)
+        self.hold = hold
         self._taxel_tmp = np.zeros(scene.layout.n)
         self._qpos, self._qvel = self.d_dyn.qpos, self.d_dyn.qvel
         self._qfrc, self._ctrl = self.d_dyn.qfrc_applied, self.d_dyn.ctrl

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from .._jit import njit
+from ..._jit import njit
 
 
 @njit

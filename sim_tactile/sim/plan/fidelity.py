@@ -8,7 +8,7 @@
 
 ``auto`` (default) picks L1 with the coarsest node pitch and time step that resolve the
 scene: the pitch is at most 1/2.5 of the smallest feature width or gap (a height map's read
-off its samples, :mod:`~sim_tactile.sim.map_scale`) and half the smallest taxel; the time
+off its samples, :mod:`~sim_tactile.sim.plan.map_scale`) and half the smallest taxel; the time
 step lets each feature take at least 20 steps to cross and stays within the skin-bone
 coupling's stability limit. It warns when the taxels are coarser than the texture,
 when a forced pitch or time step is too coarse, and when the plate's roughness lies below what
@@ -17,11 +17,11 @@ any node grid resolves (the micro-roughness model of the sensors handles that).
 Where that grid was measured more than 10% from the physics, auto takes, in this order, the
 first of these measured within 10%:
 
-- a lattice anchored to the plate's walls (:mod:`~sim_tactile.sim.anchored`:
+- a lattice anchored to the plate's walls (:mod:`~sim_tactile.sim.skin.anchored`:
   ``Fidelity.wall_m``; plates of boxes, taxels at the surface), the cheapest of
   :data:`ANCHORED_GRIDS`;
 - the same grid with its patches clipped at the plate's walls and the taxels' edges
-  (:mod:`~sim_tactile.sim.clipped`: ``Fidelity.clipped``) or a finer grid; the clipped grid
+  (:mod:`~sim_tactile.sim.skin.clipped`: ``Fidelity.clipped``) or a finer grid; the clipped grid
   first where it has at most L1's node cap of static cells (:func:`_far_choice`), never
   above :data:`CLIPPED_MAX_CELLS`;
 - where no measured grid under :data:`MAX_NODES_MEASURED` nodes is within 10%, the one
@@ -30,7 +30,7 @@ first of these measured within 10%:
 The skin is the finger's own: its stack of layers on their backing when it has one (the cost
 in the loop is the same), otherwise the elastic half-space. The reason names it and, where the
 scene's node grid was measured against an independent half-space solver
-(:mod:`~sim_tactile.sim.measured_errors`), the expected error of the taxel loads; a warning
+(:mod:`~sim_tactile.sim.plan.measured_errors`), the expected error of the taxel loads; a warning
 says when that is above 10% and what the measured finer grids give.
 """
 
@@ -39,12 +39,11 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field
 
-from .. import _validate as v
-from ..plates import Plate, features
-from ..plates.spec import Roughness
-from ..scene.nodes import skin_grid
-from .anchored_lines import anchor_refusals, anchored_cells
-from .clipped import has_walls, skin_refusals, static_cells
+from ... import _validate as v
+from ...plates.features import features
+from ...plates.spec import Plate, Roughness
+from ...scene.nodes import skin_grid
+from .lattices import anchor_refusals, anchored_cells, has_walls, skin_refusals, static_cells
 from .map_scale import map_scales
 from .measured_errors import (
     MAX_NODES_MEASURED,
@@ -59,7 +58,7 @@ from .measured_errors import (
 LEVELS = ("L0", "L1", "L2")
 #: What a ``fidelity`` argument may be (a :class:`Fidelity` too, in Python).
 FIDELITIES = ("auto", *LEVELS)
-#: The levels of a static press (:func:`~sim_tactile.sim.press.press`): its finest node
+#: The levels of a static press (:func:`~sim_tactile.sim.static_press.press`): its finest node
 #: pitch is its own reference, so it has no L2.
 PRESS_LEVELS = ("L0", "L1")
 #: Coarsest and finest node pitch auto may pick [m].
@@ -95,7 +94,7 @@ RIDGE_NODES_PER_FEATURE = 10
 #: cell along the slide, across it) [m]), cheapest first, where the pad's own lattice was
 #: measured more than WARN_ABOVE from the physics: on finger7's ridges and bumps, 0.5 / 2 / 2
 #: mm is 2.9-9.7% from the physics at 28-63x real time in the slide loop, 0.25 / 2 / 2 mm
-#: 0.8-8.4% at 16-36x (bench_clipped at d9cbe58) (see :mod:`~sim_tactile.sim.anchored`).
+#: 0.8-8.4% at 16-36x (bench_clipped at d9cbe58) (see :mod:`~sim_tactile.sim.skin.anchored`).
 ANCHORED_GRIDS = ((0.5e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 1e-3))
 #: Steps to cross the smallest feature, at least.
 STEPS_PER_FEATURE = 20
@@ -127,10 +126,10 @@ class Fidelity:
     #: (relative norm over pad offsets x taxels; None: not measured)
     expected_error: float | None = None
     #: whether the node patches are clipped at the plate's walls and the taxels' edges
-    #: (:mod:`~sim_tactile.sim.clipped`; the held step of the half-space skin)
+    #: (:mod:`~sim_tactile.sim.skin.clipped`; the held step of the half-space skin)
     clipped: bool = False
     #: the cells at the plate's walls [m] of a lattice anchored to the plate (its walls on
-    #: the lines, cells up to ``pitch_m`` by ``pitch_y_m``; :mod:`~sim_tactile.sim.anchored`);
+    #: the lines, cells up to ``pitch_m`` by ``pitch_y_m``; :mod:`~sim_tactile.sim.skin.anchored`);
     #: None: the pad's own node lattice
     wall_m: float | None = None
 
@@ -357,7 +356,7 @@ def _anchored_choice(plate, layout, finger, protocol, level) -> MeasuredError | 
 
 def _clippable(plate, finger, protocol, level) -> bool:
     """Whether clipped patches serve this scene: a plate with box walls, the held force, and
-    a skin they serve (:func:`~sim_tactile.sim.clipped.skin_refusals`)."""
+    a skin they serve (:func:`~.lattices.skin_refusals`)."""
     quasi_static = protocol.force_control == "quasi-static"
     return has_walls(plate) and not skin_refusals(level, finger, quasi_static)
 

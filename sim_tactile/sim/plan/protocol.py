@@ -15,8 +15,8 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from .. import _validate as v
-from ..errors import ConfigError
+from ... import _validate as v
+from ...errors import ConfigError
 
 #: Approach speed [m/s] and the clearance the pad starts at above the plate [m].
 APPROACH_SPEED = 0.01
@@ -34,7 +34,7 @@ SPEED_RAMP_S = 0.02
 #:   the plate behind tall features; the coupling limits the time step (omega * dt).
 #: - ``quasi-static``: an ideal force controller: every step the pad is moved to the height at
 #:   which the skin carries exactly the commanded force (the held step,
-#:   :mod:`sim_tactile.sim.held`), so the load is a function of the pad's position alone: no
+#:   :mod:`sim_tactile.sim.step.held`), so the load is a function of the pad's position alone: no
 #:   transients and no step limit from the coupling.
 #: - ``position``: no force control in the slide: the pad is lowered until the skin carries
 #:   ``force_n`` (the touch: the soft finger of seed 002 was "brought down ... until the

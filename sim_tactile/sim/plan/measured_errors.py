@@ -5,7 +5,7 @@ of its plates, at ``auto``'s node grid and at half its pitch, and sets the taxel
 against an independent boundary-element half-space (Tamaas on a 0.0625 mm grid). It stores
 each result in ``measured_errors.json`` beside this module, with the commit it was measured
 at. :func:`expected_error` finds the row for a scene, so that :func:`choose_fidelity
-<sim_tactile.sim.fidelity.choose_fidelity>` can say how far its choice is from the physics
+<sim_tactile.sim.plan.fidelity.choose_fidelity>` can say how far its choice is from the physics
 and what a finer grid would give.
 
 A row is found only for the scene it was measured on: its key is the content hash of the
@@ -29,8 +29,8 @@ from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
-from ..hashing import content_hash
-from ..scene.nodes import lattice_shape
+from ...hashing import content_hash
+from ...scene.nodes import lattice_shape
 
 #: The table, written by ``benchmarks/physics_per_plate.py --write-table``.
 TABLE = Path(__file__).with_name("measured_errors.json")
@@ -67,7 +67,7 @@ class MeasuredError:
     task: str
     plate: str
     clipped: bool = False
-    #: the anchored lattice's cells at the walls [m] (:mod:`~sim_tactile.sim.anchored`; its
+    #: the anchored lattice's cells at the walls [m] (:mod:`~sim_tactile.sim.skin.anchored`; its
     #: cells up to pitch_m by pitch_y_m); None: the pad's own node lattice
     wall_m: float | None = None
     #: the plate this row stands in for (:func:`stand_in`); None: measured on it
@@ -106,8 +106,8 @@ def grid_key(
 ) -> str:
     """The key of a node grid on a scene: everything the static press's error depends on but
     the force (node pitches rounded to 0.1 um), whether its patches are clipped at the walls
-    and taxel edges (:mod:`~sim_tactile.sim.clipped`), the anchored lattice's cells at the
-    walls (:mod:`~sim_tactile.sim.anchored`), and the reference."""
+    and taxel edges (:mod:`~sim_tactile.sim.skin.clipped`), the anchored lattice's cells at the
+    walls (:mod:`~sim_tactile.sim.skin.anchored`), and the reference."""
     d = {
         "plate": plate.hash,
         "layout": layout.to_json(),
@@ -183,9 +183,8 @@ def stand_in(plate):
     """The plate whose measured rows stand in for ``plate``'s: the 36 mm ``textures20`` plate
     of a ``textures20-long`` preset (the same features under the pad, on a longer strip), or
     None. Only the preset itself is matched (by its content, not its name alone)."""
-    from ..errors import UnknownNameError
-    from ..plates import get_plate
-    from ..plates.presets import LONG_FAMILY
+    from ...errors import UnknownNameError
+    from ...plates.presets import LONG_FAMILY, get_plate
 
     name = plate.name or ""
     if not name.startswith(LONG_FAMILY):
@@ -223,7 +222,7 @@ def finer_grids(plate, layout, finger, force_n: float, level: str, pitch_m: floa
 
 
 #: Most skin nodes auto may take when the measured error sends it to a finer grid (solved
-#: spectrally above :data:`~sim_tactile.sim.fidelity.DENSE_MAX_NODES`): a slide there
+#: spectrally above :data:`~sim_tactile.sim.plan.fidelity.DENSE_MAX_NODES`): a slide there
 #: costs seconds per second of contact (finger7/bumps-6x6 at 2401 nodes 0.33x real time, the
 #: BioTac's boxes at 2835 nodes 0.23x). icub60's 0.385 mm grid (6231 nodes, spectral) brings
 #: its boxes and cylinders within 10% of the physics; its hemispheres-3.0mm need 0.289 mm

@@ -2,12 +2,13 @@
 
 Under quasi-static force control a step is: the depth map at the bone's pose, the height at
 which the skin carries the force (the skin's force-holding solve, see
-:meth:`~sim_tactile.sim.contact.ActiveSet.solve_force`), a new collision query wherever the
+:meth:`~sim_tactile.sim.skin.contact.ActiveSet.solve_force`), a new collision query wherever the
 pad moved beyond the collider's margin (nodes further away could not join the contact), and
 the taxel loads there. One step, two implementations with the same interface
-(``step(qpos, total, taxel_out) -> (force, deepest node)``), tested equal:
+(:class:`HeldStep`: ``step(qpos, jz, total, taxel_out) -> (force, deepest node)`` and
+``describe()``), tested equal:
 
-- :class:`HeldStep`: the plain loop, over any collider and any skin model: the reference,
+- :class:`PlainHeldStep`: the plain loop, over any collider and any skin model: the reference,
   and the path of the spectral skin and of plates that MuJoCo must collide;
 - :class:`CompiledHeldStep`: the whole step in one numba call (:func:`_held_kernel`) with a
   compiled collider (the plate's features, the rough plates' profile, or a height map's
@@ -35,21 +36,23 @@ the taxel loads there. One step, two implementations with the same interface
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 
-from .._jit import njit
-from ..cache import array_digest, setup_memo
-from ..errors import PhysicsError
-from . import contact
-from .collide import PrimitiveCollider, depths_kernel
-from .contact.kernels import NO_K, force_loop, force_same_set
-from .height_collider import (
+from ..._jit import njit
+from ...cache import array_digest, setup_memo
+from ...errors import PhysicsError
+from ..collide.height import (
     MapCollider,
     ProfileCollider,
     map_depths_kernel,
     profile_depths_kernel,
 )
-from .skin import CoupledSkin, SkinModel, SpectralSkin
+from ..collide.primitive import PrimitiveCollider, depths_kernel
+from ..skin import contact
+from ..skin.contact.kernels import NO_K, force_loop, force_same_set
+from ..skin.models import CoupledSkin, SkinModel, SpectralSkin
 
 #: Collision queries one step may take before it gives up (the pad falling through).
 QS_COLLISIONS = 50
@@ -65,7 +68,24 @@ def _no_height(force_n: float, margin: float) -> PhysicsError:
     )
 
 
-class HeldStep:
+class HeldStep(Protocol):
+    """What every held step answers (the plain and compiled steps here, the plate's own cells
+    in :mod:`.plate_held`); :func:`~.choose.make_held_step` chooses one."""
+
+    def step(
+        self, qpos: np.ndarray, jz: int, total: float, taxel_out: np.ndarray
+    ) -> tuple[float, float]:
+        """Move the pad (``qpos[jz]``) to the height where the node pressures sum to
+        ``total`` [Pa over the pad lattice's nodes], write the taxel loads [N] into
+        ``taxel_out``; ``(force [N], deepest node [m])``."""
+        ...
+
+    def describe(self) -> str:
+        """Which skin problem the step solves, for a recording's ``skin_problem``."""
+        ...
+
+
+class PlainHeldStep:
     """The held step as a plain loop over ``collider`` (any, with :meth:`depths_at`) and
     ``skin`` (any skin model, with ``solve_force``); ``W`` maps node loads to taxel loads."""
 
@@ -203,7 +223,7 @@ class CompiledHeldStep:
         return near
 
     def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
-        """:meth:`HeldStep.step` in one call on the reduced problem; the contact set is
+        """:meth:`PlainHeldStep.step` in one call on the reduced problem; the contact set is
         updated when it changes."""
         s = self.solver
         M, S, in_set, C, rowsum = s.same_set_state()
@@ -336,9 +356,9 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
 
     - ``pose``: ``(bone0, qpos, jx, jz)``, the bone's rest position and the joints;
     - ``probe``: ``(which, primitive arrays, profile arrays, map arrays)``: which
-      collider's depth map (:data:`_PRIMITIVE`: :func:`~.collide.depths_kernel`,
-      :data:`_PROFILE`: :func:`~.height_collider.profile_depths_kernel`, :data:`_MAP`:
-      :func:`~.height_collider.map_depths_kernel`) and the arrays of each
+      collider's depth map (:data:`_PRIMITIVE`: :func:`~sim_tactile.sim.collide.primitive.depths_kernel`,
+      :data:`_PROFILE`: :func:`~sim_tactile.sim.collide.height.profile_depths_kernel`, :data:`_MAP`:
+      :func:`~sim_tactile.sim.collide.height.map_depths_kernel`) and the arrays of each
       (:func:`_probe_args`; the others' are empty placeholders);
     - ``reduced``: ``(small, group, mult)``: the probes' depths, each node's probe, the nodes
       each reduced node stands for;
@@ -432,7 +452,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
 
 @njit
 def _winkler_force(pen, mult, k, total, f):
-    """:func:`~sim_tactile.sim.contact.winkler_force` with node weights ``mult`` (the nodes each reduced node
+    """:func:`~sim_tactile.sim.skin.contact.winkler_force` with node weights ``mult`` (the nodes each reduced node
     stands for): the shift ``dz`` at which ``sum(mult * k * max(pen + dz, 0)) = total``, and
     those pair sums into ``f``; NaN if no node is finite. Equal to it bit for bit at unit
     weights (the same sequential sums, deepest first)."""

@@ -3,8 +3,8 @@
 :func:`simulate` runs one slide and returns a :class:`~sim_tactile.records.Recording` of each
 taxel's output: the sensor's transducer and seeded imperfections on the normal load, or with
 ``ideal=True`` the noise-free normal load [N]. Each sample is the load averaged over its
-period (:class:`SampleAverager`: anti-aliasing from the full simulation rate). The phases are
-named functions over one :class:`~.runner.Runner`; every step checks for NaN, runaway and a
+period (:class:`~.step.sampling.SampleAverager`: anti-aliasing from the full simulation rate). The phases are
+named functions over one :class:`~.step.runner.Runner`; every step checks for NaN, runaway and a
 skin pressed to the bottom, every sample checks MuJoCo's warnings, and any of these stops the
 run with a PhysicsError naming the cause.
 """
@@ -13,33 +13,30 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
-from .. import __version__
 from ..errors import PhysicsError
 from ..plates import Plate, get_plate, height_at
 from ..records import Recording
 from ..scene.model import build_scene
 from ..scene.nodes import SkinGrid, skin_grid
 from ..sensors import Finger, Layout, Sensor, check_pad, resolve_sensor
-from .anchored import AnchoredHeldStep, AnchoredLattice
-from .anchored_lines import check_anchorable
-from .clipped import ClippedHeldStep, ClippedPatches, check_clippable
-from .collide import node_margin_m
-from .fidelity import Fidelity, choose_fidelity, flat_stiffness
+from .collide.choose import make_collider, node_margin_m
 from .micro import micro_loads
-from .protocol import (
+from .plan.fidelity import Fidelity, choose_fidelity, flat_stiffness
+from .plan.protocol import (
     APPROACH_CLEARANCE_M,
     APPROACH_SPEED,
     SPEED_RAMP_S,
     Protocol,
     SlideWindow,
 )
-from .runner import Runner, StepOptions, drag_factor, drag_warning
-from .skin import make_skin
+from .skin.models import make_skin
+from .step.choose import make_held_step
+from .step.runner import Runner, StepOptions, drag_factor, drag_warning
+from .step.sampling import SampleAverager, SimResult, sensor_output, versions, window_meta
 
 #: A slide whose mean normal force strays further than this from the target is flagged.
 FORCE_TOLERANCE = 0.05
@@ -53,15 +50,6 @@ APPROACH_TIMEOUT_S = 2.0
 SETTLE_EXTRA_S = 2.0
 SETTLE_FORCE_TOL = 0.01
 SETTLE_SPEED_M_S = 1e-4
-
-
-@dataclass
-class SimResult:
-    recording: Recording
-    fidelity: Fidelity
-    sim_s: float
-    wall_s: float
-    warnings: list[str] = field(default_factory=list)
 
 
 def simulate(
@@ -85,7 +73,7 @@ def simulate(
     finger: replaces the sensor's pad. fidelity: ``auto``, ``L0``-``L2`` or a Fidelity;
     ``pitch_m`` / ``dt_s`` force the node pitch and time step. ideal: record the noise-free
     normal loads [N] instead of the sensor's output. options: which implementation of each
-    part of a step runs (:class:`~.runner.StepOptions`).
+    part of a step runs (:class:`~.step.runner.StepOptions`).
 
     BLAS runs single-threaded inside: the skin's systems are small, and threads only contend.
     """
@@ -207,23 +195,11 @@ def _simulate(
     micro = micro_loads(plate, layout, slide.x_pad, out > 1e-9, finger.e_star_pa, proto.rate_hz)
     if micro.any():
         out = np.maximum(out + micro, 0.0)
-    units, transducer = "N", "ideal"
-    if not ideal and sensor.transducer is not None:
-        out = sensor.transduce(out, proto.rate_hz, np.random.default_rng([seed, 1]))
-        units, transducer = sensor.units, sensor.transducer_json()
+    out, units, transducer = sensor_output(out, sensor, proto.rate_hz, seed, ideal)
     times = (np.arange(window.n_samples) + 0.5) / proto.rate_hz
     wall = time.perf_counter() - t_wall
     meta = {
-        "plate": plate.name or plate.hash,
-        "plate_hash": plate.hash,
-        "plate_params": plate.params(),
-        "layout": layout.name,
-        "sensor": sensor.name,
-        "channel_names": list(layout.names),
-        "finger": finger.to_json(),
-        "protocol": proto.to_json(),
-        "protocol_nominal": nominal.to_json(),
-        "seed": seed,
+        **window_meta(plate, sensor, finger, proto, nominal, seed),
         "fidelity": fid.to_json(),
         "skin_problem": runner.describe(),
         "rate_hz": proto.rate_hz,
@@ -235,11 +211,7 @@ def _simulate(
         "mean_drag_n": runner.drag_sum / max(runner.n_slide_steps, 1),
         "drag_factor": drag_factor(proto.speed_m_s),
         "drag_regularised": drag_warning(proto.speed_m_s) is not None,
-        "versions": {
-            "sim_tactile": __version__,
-            "mujoco": mujoco.__version__,
-            "numpy": np.__version__,
-        },
+        "versions": versions(),
         "warnings": warnings,
         "sim_s": sim_s,
         "wall_s": wall,
@@ -283,32 +255,32 @@ def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
         solver=options.skin_solver,
         cache=cache,
     )
-    hold = None
-    if fid.wall_m is not None:
-        check_anchorable(plate, layout, fid.level, finger, quasi_static)
-        lattice = AnchoredLattice(
-            finger, layout, plate, proto.offset_y_m, fid.pitch_m, fid.pitch_y_m, fid.wall_m
-        )
-        hold = AnchoredHeldStep(lattice, grid.area_m2, x0=window.x_start_m, z0=z0, jx=scene.jx)
-    elif fid.clipped:
-        check_clippable(fid.level, finger, quasi_static)
-        hold = ClippedHeldStep(
-            ClippedPatches(grid, finger, layout, plate, proto.offset_y_m),
-            grid.area_m2,
-            x0=window.x_start_m,
-            z0=z0,
-            jx=scene.jx,
-        )
+    collider = make_collider(scene, options.primitive_collider)
+    hold = make_held_step(
+        scene,
+        skin,
+        collider,
+        fid,
+        plate=plate,
+        layout=layout,
+        finger=finger,
+        quasi_static=quasi_static,
+        x0_m=window.x_start_m,
+        y0_m=proto.offset_y_m,
+        z0_m=z0,
+        compiled=options.compiled_hold,
+        reduce=options.reduce_skin,
+    )
     return Runner(
         scene,
         skin,
         fid,
         finger,
         fid.dt_s,
+        collider=collider,
         z0_m=z0,
         plate=plate,
         quasi_static=quasi_static,
-        options=options,
         hold=hold,
     )
 
@@ -357,47 +329,6 @@ def _press_and_settle(runner: Runner, proto: Protocol) -> list[str]:
             return []
         Fs = runner.step(force_cmd=F)
     return [f"press force did not settle within {SETTLE_FORCE_TOL:.0%} of {F:g} N (now {Fs:.4g} N)"]
-
-
-class SampleAverager:
-    """Each sample is the mean load over its period by the trapezoid rule on the steps: half
-    the load at the period's start, the steps inside, half the load at its end (the next
-    period's first step); so a sample is centred on its time at any step. Feed it every
-    step's taxel loads and force with :meth:`add` (step ``k`` of sample ``s``), call
-    :meth:`end_sample` after each sample's last step and :meth:`finish` with the step that
-    follows the last sample."""
-
-    def __init__(self, n_samples: int, n_taxels: int, steps_per_sample: int) -> None:
-        self.loads = np.empty((n_samples, n_taxels), dtype=np.float64)
-        self.forces = np.empty(n_samples)
-        self.n_sub = steps_per_sample
-        self._acc = np.zeros(n_taxels)
-        self._first = np.zeros(n_taxels)  # the load at the start of the current period
-        self._prev_sum = np.zeros(n_taxels)
-        self._prev_first = np.zeros(n_taxels)
-        self._fsum = self._f_first = self._f_prev_sum = self._f_prev_first = 0.0
-
-    def add(self, s: int, k: int, now: np.ndarray, f: float) -> None:
-        if k == 0:
-            if s:  # the previous sample ends where this step starts
-                self._close(s - 1, now, f)
-            self._first[:] = now
-            self._f_first = f
-        self._acc += now
-        self._fsum += f
-
-    def end_sample(self) -> None:
-        self._prev_sum[:], self._prev_first[:] = self._acc, self._first
-        self._f_prev_sum, self._f_prev_first = self._fsum, self._f_first
-        self._acc[:] = 0.0
-        self._fsum = 0.0
-
-    def finish(self, now: np.ndarray, f: float) -> None:
-        self._close(len(self.forces) - 1, now, f)
-
-    def _close(self, s: int, now: np.ndarray, f_end: float) -> None:
-        self.loads[s] = (self._prev_sum + 0.5 * (now - self._prev_first)) / self.n_sub
-        self.forces[s] = (self._f_prev_sum + 0.5 * (f_end - self._f_prev_first)) / self.n_sub
 
 
 class _Strokes:

@@ -20,8 +20,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .. import _validate as v
-from ..errors import ConfigError
+from ... import _validate as v
+from ...errors import ConfigError
 from .protocol import SPEED_RAMP_S, START_MARGIN_M
 
 #: Where the pass sits in the window (``ProbeRig.pass_at``): ``centre``: the pause before

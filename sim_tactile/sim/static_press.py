@@ -1,7 +1,7 @@
 """Static indentation: press a finger on a plate to a normal force and read the pressure.
 
 The pad is held at the force by the same held step as a slide under quasi-static force
-control (:class:`~.held.HeldStep`: the collider's depth map, the skin's force-holding solve,
+control (:class:`~.step.held.PlainHeldStep`: the collider's depth map, the skin's force-holding solve,
 a new query wherever the pad moved beyond the collider's margin), on the scene a slide would
 build, and a dense grid of taxels reads the pressure at the surface, or the vertical stress
 at a depth inside the skin. With a spherical pad on a flat plate this is Hertz's problem,
@@ -22,11 +22,11 @@ from ..scene.model import build_scene
 from ..scene.nodes import skin_grid
 from ..sensors.layouts import Layout, dense_layout
 from ..sensors.pad import Finger
-from .collide import make_collider, node_margin_m
-from .fidelity import PRESS_LEVELS
-from .held import HeldStep
-from .protocol import APPROACH_CLEARANCE_M
-from .skin import make_skin
+from .collide.choose import make_collider, node_margin_m
+from .plan.fidelity import PRESS_LEVELS
+from .plan.protocol import APPROACH_CLEARANCE_M
+from .skin.models import make_skin
+from .step.held import PlainHeldStep
 
 #: Smallest side of a spherical pad's node patch [m], and how many Hertz contact radii it
 #: spans at least (the pad's edge must lie beyond the contact).
@@ -135,7 +135,7 @@ def press(
     skin = make_skin(
         fidelity, grid, finger, winkler_k_pa_per_m=k_w, inverse=False, slide_dir=slide_dir
     )
-    hold = HeldStep(make_collider(scene), skin, scene.W, grid.area_m2, margin)
+    hold = PlainHeldStep(make_collider(scene), skin, scene.W, grid.area_m2, margin)
     qpos = np.zeros(scene.m_col.nq)
     taxel = np.zeros(layout.n)
     with one_blas_thread():
