@@ -25,7 +25,9 @@ import json
 import os
 import tempfile
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 from .errors import CacheError, CacheWarning, os_error_message
@@ -198,21 +200,9 @@ SETUP_MEMO_BYTES = 512 * 2**20
 SETUP = ArrayMemo(SETUP_MEMO_BYTES)
 
 
-def array_digest(a) -> str:
-    """The SHA-256 of an array's dtype, shape and bytes: its part of a content key."""
-    import hashlib
-
-    import numpy as np
-
-    a = np.ascontiguousarray(a)
-    h = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
-    h.update(a.tobytes())
-    return h.hexdigest()
-
-
 def setup_memo(what: str, parts: dict, compute, modules: tuple[str, ...]) -> tuple:
     """``compute()`` (a tuple of arrays and plain values), kept in this process (:data:`SETUP`)
-    under the content key of ``what``, ``parts`` (JSON data; arrays as :func:`array_digest`)
+    under the content key of ``what``, ``parts`` (JSON data; arrays as :func:`~sim_tactile.hashing.array_digest`)
     and the source of ``modules`` (and what they import) with numpy's and scipy's versions:
     the key holds everything the value depends on, so it is never stale. The value is the
     computed one, its arrays read-only (tested: slides equal bit for bit either way)."""
@@ -227,3 +217,48 @@ def setup_memo(what: str, parts: dict, compute, modules: tuple[str, ...]) -> tup
     if kept is not None:
         return kept
     return SETUP.put(key, tuple(compute()))
+
+
+# ------------------------------------------------------------------------- in-process memos
+#: How to forget each of the package's in-process memos, by name: what a module keeps in the
+#: process (:data:`SETUP`, the compiled scene models, users' plates, a height map's scales,
+#: the functions of :func:`memoized`) registers here (:func:`register_memo`), and
+#: :func:`forget_process_memos` forgets them all.
+_MEMOS: dict[str, Callable[[], None]] = {"set-up arrays": SETUP.clear}
+
+
+def register_memo(name: str, forget: Callable[[], None]) -> None:
+    """Register an in-process memo: ``forget()`` empties it. ``name`` says what it keeps."""
+    _MEMOS[name] = forget
+
+
+def memoized(name: str, maxsize: int | None = 128):
+    """``functools.lru_cache(maxsize)``, registered as the in-process memo ``name`` (the
+    decorated function's values must depend on its arguments alone)."""
+
+    def wrap(f):
+        kept = lru_cache(maxsize=maxsize)(f)
+        register_memo(name, kept.cache_clear)
+        return kept
+
+    return wrap
+
+
+def forget_process_memos() -> tuple[str, ...]:
+    """Forget everything this package keeps in the process: the registered memos (those of
+    modules not imported yet hold nothing) and the source and asset reads of
+    :mod:`~sim_tactile.hashing` and :mod:`~sim_tactile.toml_text`, which sit below this
+    module. The next call of each computes afresh. Returns the names of the memos."""
+    from . import hashing, toml_text
+
+    for f in (
+        hashing.module_file,
+        hashing._imports_of,
+        hashing.code_version,
+        hashing.blas_kernel,
+        toml_text.asset_data,
+    ):
+        f.cache_clear()
+    for forget in _MEMOS.values():
+        forget()
+    return tuple(sorted(_MEMOS))

@@ -210,6 +210,20 @@ def blas_kernel() -> str:
     return "+".join(sorted(found)) or "unknown"
 
 
+def array_digest(*arrays, header: bool = True) -> str:
+    """The SHA-256 (hex) of arrays' bytes in C order, each preceded by its dtype and shape
+    where ``header`` (an array's part of a content key: equal bytes of another dtype or shape
+    key apart); without it, the bytes alone (a height map's recorded ``sha256``, an exported
+    data set's name)."""
+    h = hashlib.sha256()
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        if header:
+            h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
 def file_digest(path: Path) -> str:
     """The sha256 of a file's bytes ("absent" when it does not exist)."""
     path = Path(path)

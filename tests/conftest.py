@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim_tactile.cache import ArtefactCache
+from sim_tactile.cache import SETUP, ArtefactCache, forget_process_memos
 
 _NAME = "biotac_slide_20_50"
 #: The console script of this environment.
@@ -77,6 +77,17 @@ def cli(cli_env):
 
     run.exe = EXE
     return run
+
+
+@pytest.fixture
+def fresh_memo():
+    """The test starts, and leaves, with nothing kept in the process: the set-up arrays, the
+    compiled scene models and every other in-process memo
+    (:func:`~sim_tactile.cache.forget_process_memos`). Gives the set-up memo
+    (:data:`~sim_tactile.cache.SETUP`)."""
+    forget_process_memos()
+    yield SETUP
+    forget_process_memos()
 
 
 @pytest.fixture(scope="session")

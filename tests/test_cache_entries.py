@@ -139,15 +139,15 @@ def test_a_slide_entry_under_another_key_is_simulated_again(tmp_path):
 
 
 def test_a_tampered_skin_is_computed_again(tmp_path):
+    from sim_tactile.cache import forget_process_memos
     from sim_tactile.scene.nodes import skin_grid
-    from sim_tactile.sim.skin import models as skin_module
     from sim_tactile.sim.skin.models import make_skin
 
     cache = ArtefactCache(tmp_path)
     finger = get_sensor("grid3x3").finger
     grid = skin_grid(finger, 0.45e-3)
     plain = make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0)
-    skin_module._MEMO.clear()
+    forget_process_memos()
     make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0, cache=cache)
     (f,) = sorted(tmp_path.rglob("*.skin.npz"))
     with np.load(f) as z:
@@ -156,7 +156,7 @@ def test_a_tampered_skin_is_computed_again(tmp_path):
     buf = io.BytesIO()
     np.savez(buf, **arrays)
     f.write_bytes(buf.getvalue())
-    skin_module._MEMO.clear()
+    forget_process_memos()
     with pytest.warns(CacheWarning, match=str(f)):
         s = make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0, cache=cache)
     assert s.C.tobytes() == plain.C.tobytes()

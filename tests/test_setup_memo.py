@@ -3,28 +3,21 @@ for bit whether their set-up was computed or kept."""
 
 from __future__ import annotations
 
-from collections import OrderedDict
-
 import numpy as np
 import pytest
 
 from sim_tactile import cache as cache_module
-from sim_tactile.cache import ArrayMemo, array_digest, setup_memo
+from sim_tactile.cache import forget_process_memos, setup_memo
+from sim_tactile.hashing import array_digest
 from sim_tactile.scene import model as model_module
 from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.sim.rig_sim import _read_lines
-from sim_tactile.sim.skin import models as skin_module
 from sim_tactile.sim.slide import simulate
 
 
 @pytest.fixture(autouse=True)
-def fresh_memo(monkeypatch):
-    """Each test starts with nothing kept in the process (set-up arrays and scene models)."""
-    memo = ArrayMemo(cache_module.SETUP_MEMO_BYTES)
-    monkeypatch.setattr(cache_module, "SETUP", memo)
-    monkeypatch.setattr(skin_module, "_MEMO", memo)
-    monkeypatch.setattr(model_module, "SCENES", OrderedDict())
-    return memo
+def _fresh(fresh_memo):
+    """Each test starts with nothing kept in the process."""
 
 
 def test_the_key_holds_every_part_and_the_value_is_kept_read_only(fresh_memo):
@@ -66,17 +59,16 @@ def test_array_digest_tells_dtype_shape_and_bytes_apart():
     ],
 )
 def test_slides_are_equal_bit_for_bit_with_their_set_up_computed_or_kept(
-    plate, sensor, kw, fresh_memo, monkeypatch
+    plate, sensor, kw, fresh_memo
 ):
     proto = Protocol(duration_s=0.25)
     first = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
     assert len(fresh_memo) >= 2  # the weights and the skin were kept
     assert len(model_module.SCENES) == 1  # and the compiled models
     again = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
-    fresh = ArrayMemo(cache_module.SETUP_MEMO_BYTES)  # and computed anew
-    monkeypatch.setattr(cache_module, "SETUP", fresh)
-    monkeypatch.setattr(skin_module, "_MEMO", fresh)
-    monkeypatch.setattr(model_module, "SCENES", OrderedDict())
+    forgotten = forget_process_memos()  # and computed anew
+    assert len(fresh_memo) == 0 and len(model_module.SCENES) == 0
+    assert {"set-up arrays", "compiled scene models"} <= set(forgotten)
     anew = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
     assert first.data.max() > 0
     for r in (again, anew):
@@ -123,6 +115,43 @@ def test_a_slide_places_a_copy_of_the_kept_models_never_them(fresh_memo, cache):
     softer = (args[0], Finger(young_pa=0.2e6), grid, args[3])
     build_scene(*softer, dt_s=1e-3, x0_m=0.0, z0_m=1e-3, **kw)
     assert len(model_module.SCENES) == 3
+
+
+def test_one_call_forgets_every_memo_of_the_process():
+    """Whatever the package keeps in the process (the set-up arrays, the compiled models,
+    the measured-errors table, roughness profiles, a height map's scales, ...) is empty after
+    :func:`forget_process_memos`."""
+    from sim_tactile.cache import _MEMOS
+    from sim_tactile.plates import get_plate, roughness_profile
+    from sim_tactile.sim.plan import measured_errors
+
+    setup_memo("x", {"v": 1}, lambda: (np.zeros(3),), ("sim_tactile.cache",))
+    measured_errors._table()
+    roughness_profile(get_plate("roughness8/ra-50"))
+    assert len(cache_module.SETUP) == 1 and measured_errors._table.cache_info().currsize == 1
+    names = forget_process_memos()
+    assert set(names) == set(_MEMOS) and "measured-errors table" in names
+    assert len(cache_module.SETUP) == 0 and measured_errors._table.cache_info().currsize == 0
+
+
+def test_the_package_keeps_no_memo_outside_the_registry():
+    """A functools cache or a module-level memo dict outside sim_tactile.cache's registry
+    would outlive forget_process_memos (hashing and toml_text sit below cache.py: it
+    forgets theirs by name)."""
+    import re
+    from pathlib import Path
+
+    import sim_tactile
+
+    root = Path(sim_tactile.__file__).parent
+    below = {"cache.py", "hashing.py", "toml_text.py"}
+    pattern = re.compile(r"^\s*@(functools\.)?(lru_cache|cache)\b", re.M)
+    found = [
+        p.relative_to(root).as_posix()
+        for p in root.rglob("*.py")
+        if p.name not in below and pattern.search(p.read_text())
+    ]
+    assert found == []
 
 
 def test_the_rig_reads_its_lines_as_numpy_interpolates_them():

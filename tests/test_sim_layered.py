@@ -600,13 +600,11 @@ def test_a_flat_ridge_pressed_into_a_layered_pad_matches_fem_at_default_and_fine
     assert abs(err[0.125e-3]) < abs(err[0.5e-3])
 
 
-def test_the_kept_stress_tables_read_as_the_exact_ones():
+def test_the_kept_stress_tables_read_as_the_exact_ones(fresh_memo):
     """Tables reaching offsets rounded up to 2 mm (kept in the process and shared by the
     rig's slides of nearby offsets) give the weights of the tables fitted to each slide's
     offsets within 1e-5 of the largest (the cubic interpolation's own error), and two
     offsets that round alike share one table."""
-    from sim_tactile import cache as cache_module
-    from sim_tactile.cache import ArrayMemo
     from sim_tactile.scene.layered import layered_subsurface_weights
     from sim_tactile.sensors import get_sensor
 
@@ -615,19 +613,14 @@ def test_the_kept_stress_tables_read_as_the_exact_ones():
     X, Y = np.meshgrid(np.arange(-40, 41) * h, np.arange(-30, 31) * h)
     nodes = np.column_stack([X.ravel(), Y.ravel()])
     lay = s.layout
-    memo = ArrayMemo(cache_module.SETUP_MEMO_BYTES)
-    old, cache_module.SETUP = cache_module.SETUP, memo
-    try:
-        for off in (0.0, 0.37e-3, -0.41e-3):
-            txy = lay.positions[:, :2] - [0.0, off]
-            args = (nodes, h, txy, lay.sizes, lay.depth_m, s.finger.stack)
-            exact = layered_subsurface_weights(*args)
-            kept = layered_subsurface_weights(*args, reach_quantum_m=2e-3)
-            err = np.abs(kept - exact).max() / np.abs(exact).max()
-            assert 0 < err < 1e-5, err
-        assert len(memo) == 2  # one table per taxel depth, for all three offsets
-    finally:
-        cache_module.SETUP = old
+    for off in (0.0, 0.37e-3, -0.41e-3):
+        txy = lay.positions[:, :2] - [0.0, off]
+        args = (nodes, h, txy, lay.sizes, lay.depth_m, s.finger.stack)
+        exact = layered_subsurface_weights(*args)
+        kept = layered_subsurface_weights(*args, reach_quantum_m=2e-3)
+        err = np.abs(kept - exact).max() / np.abs(exact).max()
+        assert 0 < err < 1e-5, err
+    assert len(fresh_memo) == 2  # one table per taxel depth, for all three offsets
 
 
 def test_the_spline_on_a_grid_is_scipys_map_coordinates():

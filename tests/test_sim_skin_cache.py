@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim_tactile.cache import ArrayMemo, ArtefactCache
+from sim_tactile.cache import ArrayMemo, ArtefactCache, forget_process_memos
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim.plan.protocol import Protocol
@@ -15,9 +15,8 @@ from sim_tactile.sim.slide import simulate
 
 
 @pytest.fixture(autouse=True)
-def fresh_memo(monkeypatch):
+def _fresh(fresh_memo):
     """Each test starts with nothing kept in the process (the memo outlives a test)."""
-    monkeypatch.setattr(skin_module, "_MEMO", ArrayMemo(skin_module.MEMO_BYTES))
 
 
 def _files(cache: ArtefactCache) -> list:
@@ -97,7 +96,7 @@ def test_arrays_cached_on_another_blas_kernel_are_not_served(tmp_path, monkeypat
     grid = skin_grid(finger, 0.45e-3)
     assert blas_kernel() != ""
     make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0, cache=cache)
-    monkeypatch.setattr(skin_module, "_MEMO", ArrayMemo(skin_module.MEMO_BYTES))
+    forget_process_memos()
     monkeypatch.setattr(skin_module, "blas_kernel", lambda: "AnotherCore")
     make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0, cache=cache)
     assert len(_files(cache)) == 2

@@ -4,13 +4,13 @@
 
 from __future__ import annotations
 
-import hashlib
 import json
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import StoreError
+from ..hashing import array_digest
 from ..records import TactileDataset
 from .reader import SlideStore, open_store, parts_of
 from .store import PARAM_NAMES, SlideWriter, StoreSpec, create_store, slide_digest, zarr_module
@@ -46,9 +46,7 @@ def spec_from_tactile(ds: TactileDataset, name: str, config: dict | None = None)
 
 
 def _dataset_digest(ds: TactileDataset) -> str:
-    h = hashlib.sha256(np.ascontiguousarray(ds.data).tobytes())
-    h.update(ds.labels.tobytes())
-    return h.hexdigest()[:16]
+    return array_digest(ds.data, ds.labels, header=False)[:16]
 
 
 def from_tactile(ds: TactileDataset, path: str | Path, *, name: str = "dataset") -> SlideStore:

@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from .._validate import finite, non_negative, one_of, positive
+from ..cache import memoized
 from ..errors import ConfigError, UnknownNameError
 
 
@@ -115,7 +115,7 @@ CROSSING_TOL = 1e-10
 MAX_SPIKES_PER_STEP = 16
 
 
-@lru_cache(maxsize=256)
+@memoized("stable current limits", maxsize=256)
 def stable_current_limit(p: IzhikevichParams, dt_ms: float, scheme: str) -> float:
     """Most negative constant input for which the rest state is stable under the scheme.
 

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from functools import lru_cache
 
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .._validate import finite, one_of, positive
+from ..cache import memoized
 from ..errors import ConfigError
 from ..records import SpikeTrains
 from ._common import check_current
@@ -81,7 +81,7 @@ def _window_trains(times: list[np.ndarray], n_samples: int, n_ch: int, t_end: fl
     return out
 
 
-@lru_cache(maxsize=128)
+@memoized("calibrated currents", maxsize=128)
 def calibrate_current(
     params: IzhikevichParams,
     target_rate_hz: float,

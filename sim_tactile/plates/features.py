@@ -7,10 +7,9 @@ tests check that each of them agrees with :func:`height_at`.
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 
+from ..cache import memoized
 from ..errors import ConfigError
 from .geometry import Feature
 from .spec import Plate
@@ -23,7 +22,7 @@ def features(plate: Plate) -> list[Feature]:
     return plate.texture.features(plate.area_length_m, plate.area_width_m)
 
 
-@lru_cache(maxsize=32)
+@memoized("roughness profiles", maxsize=32)
 def _profile_cached(
     ra: float, lc: float, seed: int, dx: float, length: float
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -42,6 +42,7 @@ from urllib.parse import unquote
 
 import numpy as np
 
+from ..cache import register_memo
 from ..errors import ConfigError
 from .mesh_map import DEFAULT_PIXEL_M, PLATE_SIDE_RANGE_M, Placement, closed_mesh, sample_part
 from .spec import HeightMap, Plate
@@ -61,6 +62,7 @@ DEFAULT_THICKNESS_M = 0.005
 #: presets' (36 mm for a 36 mm texture on a 108 mm plate), where a pad lands and leaves.
 RUN_IN_M = 0.036
 _MEMO: dict[tuple, Plate] = {}
+register_memo("users' plates", _MEMO.clear)
 _MEMO_MAX = 16
 
 

@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from ..cache import array_digest, setup_memo
+from ..cache import register_memo, setup_memo
+from ..hashing import array_digest
 from ..plates import Plate
 from ..plates import build as build_plate
 from ..sensors.layouts import Layout
@@ -109,6 +110,7 @@ def _taxel_weights(grid, layout, finger, slide_dir) -> np.ndarray:
 #: slide. Least recently used dropped past this many.
 SCENES_KEPT = 8
 SCENES: OrderedDict[str, tuple] = OrderedDict()
+register_memo("compiled scene models", SCENES.clear)
 
 
 def _models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:

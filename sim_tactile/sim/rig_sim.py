@@ -25,7 +25,6 @@ sensor's transducer and seeded imperfections follow, as in :func:`~.slide.simula
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 
@@ -33,6 +32,7 @@ import mujoco
 import numpy as np
 
 from .._jit import njit
+from ..cache import memoized
 from ..errors import ConfigError, PhysicsError
 from ..plates import Plate, get_plate, height_at
 from ..records import Recording
@@ -85,7 +85,7 @@ def probe_contact(plate: Plate, finger: Finger, grid: SkinGrid, force_n: float):
     return p, float(dz), skin.describe()
 
 
-@functools.lru_cache(maxsize=4)
+@memoized("probe-face skins", maxsize=4)
 def _skin(lattice: tuple[int, int], pitch_m: float, finger: Finger) -> SpectralSkin:
     """The skin on the probe face's lattice, kept per process: its compliance table takes a
     second, and every slide of a plate family has the same face."""

@@ -17,8 +17,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...cache import register_memo
+
 #: The scales of the maps seen in this process, by their samples' SHA-256 and pixel.
 _SEEN: dict[tuple[str, float], tuple[float | None, float | None]] = {}
+register_memo("height-map scales", _SEEN.clear)
 
 
 def _crossings(above: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

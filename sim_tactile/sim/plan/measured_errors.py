@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, replace
-from functools import lru_cache
 from pathlib import Path
 
+from ...cache import memoized
 from ...hashing import content_hash
 from ...scene.nodes import lattice_shape
 
@@ -124,7 +124,7 @@ def grid_key(
     return content_hash(d)
 
 
-@lru_cache(maxsize=1)
+@memoized("measured-errors table", maxsize=1)
 def _table() -> dict[str, list[dict]]:
     if not TABLE.is_file():
         return {}

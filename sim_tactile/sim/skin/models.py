@@ -34,16 +34,15 @@ block updates then take their general formulas (``symmetric=False``).
 
 from __future__ import annotations
 
-import hashlib
 import io
 import warnings
 import zipfile
 
 import numpy as np
 
-from ...cache import SETUP, SETUP_MEMO_BYTES, setup_memo
+from ...cache import SETUP, setup_memo
 from ...errors import CacheWarning, ConfigError
-from ...hashing import blas_kernel, code_version, content_hash
+from ...hashing import array_digest, blas_kernel, code_version, content_hash
 from ...scene.elastic import compliance_matrix, compliance_table
 from ...scene.layered import Stack, layered_compliance_matrix, layered_compliance_table
 from ...scene.nodes import SkinGrid
@@ -233,7 +232,7 @@ def _dense_key(grid: SkinGrid, finger: Finger, slide_dir, inverse: bool) -> str:
     return content_hash(
         {
             "what": "dense skin compliance",
-            "xy": hashlib.sha256(np.ascontiguousarray(grid.xy, dtype=np.float64)).hexdigest(),
+            "xy": array_digest(np.asarray(grid.xy, dtype=np.float64)),
             "pitch_m": grid.pitch_m,
             "pitch_y_m": grid.pitch_y_m,
             "finger": finger.to_json(),
@@ -245,24 +244,16 @@ def _dense_key(grid: SkinGrid, finger: Finger, slide_dir, inverse: bool) -> str:
     )
 
 
-#: The dense skins kept in a worker process between slides (the set-up memo,
-#: :data:`~sim_tactile.cache.SETUP`, by the disk cache's content key): the BioTac's 2835 nodes
-#: make two 64 MB matrices, which a slide had read from disk anew, 46% of its time in a data
-#: set; a small skin's arrays (roughness8's 330 nodes) took half of a 0.2 s slide's time to
-#: compute.
-MEMO_BYTES = SETUP_MEMO_BYTES
-_MEMO = SETUP
-
-
 def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
     """:class:`CoupledSkin` of the finger on ``grid``, its arrays kept in this process
-    (:data:`_MEMO`) or read from ``cache`` (an :class:`~sim_tactile.cache.ArtefactCache`)
-    when they were computed before, else computed and stored there: the compliance of a
+    (the set-up memo, :data:`~sim_tactile.cache.SETUP`: the BioTac's 2835 nodes make two
+    64 MB matrices, which a slide had read from disk anew) or read from ``cache`` (an
+    :class:`~sim_tactile.cache.ArtefactCache`) when they were computed before, else computed and stored there: the compliance of a
     large pad and its inverse take seconds (2835 nodes: 4 s and 3 s), reading them a tenth
     of that. The arrays are the computed ones bit for bit, so a slide does not depend on
     where they came from (tested)."""
     key = _dense_key(grid, finger, slide_dir, inverse)
-    kept = _MEMO.get(key)
+    kept = SETUP.get(key)
     if kept is not None:
         return _keyed(key, *kept)
     hit = cache.get(key, "skin.npz")
@@ -271,7 +262,7 @@ def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
             with np.load(hit, allow_pickle=False) as z:
                 C, K = z["C"], (z["K"] if inverse else None)
                 what, symmetric = str(z["what"]), bool(z["symmetric"])
-            _MEMO.put(key, (C, K, what, symmetric))
+            SETUP.put(key, (C, K, what, symmetric))
             return _keyed(key, C, K, what, symmetric)
         except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
             warnings.warn(
@@ -283,7 +274,7 @@ def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
             cache.discard(key, "skin.npz")
     skin = _dense(grid, finger, slide_dir, inverse)
     _store(cache, key, skin.C, skin.K, skin.what, skin.symmetric)
-    _MEMO.put(key, (skin.C, skin.K, skin.what, skin.symmetric))
+    SETUP.put(key, (skin.C, skin.K, skin.what, skin.symmetric))
     skin.key = key
     return skin
 
@@ -299,13 +290,14 @@ def _store(cache, key, C, K, what, symmetric) -> None:
 
 def _memo_dense(grid, finger, slide_dir, inverse) -> CoupledSkin:
     """:class:`CoupledSkin` of the finger on ``grid``, its arrays kept in this process
-    (:data:`_MEMO`, by the disk cache's key) and not on disk: a small skin's (below
+    (:data:`~sim_tactile.cache.SETUP`, by the disk cache's key) and not on disk: a small
+    skin's (below
     :data:`CACHE_MIN_NODES`, whose arrays are as quick to compute as to read)."""
     key = _dense_key(grid, finger, slide_dir, inverse)
-    kept = _MEMO.get(key)
+    kept = SETUP.get(key)
     if kept is None:
         skin = _dense(grid, finger, slide_dir, inverse)
-        kept = _MEMO.put(key, (skin.C, skin.K, skin.what, skin.symmetric))
+        kept = SETUP.put(key, (skin.C, skin.K, skin.what, skin.symmetric))
     return _keyed(key, *kept)
 
 

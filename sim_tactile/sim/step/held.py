@@ -41,8 +41,9 @@ from typing import Protocol
 import numpy as np
 
 from ..._jit import njit
-from ...cache import array_digest, setup_memo
+from ...cache import setup_memo
 from ...errors import PhysicsError
+from ...hashing import array_digest
 from ..collide.height import (
     MapCollider,
     ProfileCollider,
