@@ -38,22 +38,22 @@ check: lint $(STAMP_TEST)
 
 # style, and the one-way flow of the imports (import-linter's contracts in pyproject.toml)
 lint: $(STAMP_TEST)
-	$(BIN)/ruff check sim_tactile tests benchmarks docs examples
-	$(BIN)/ruff format --check sim_tactile tests benchmarks docs examples
+	$(BIN)/ruff check sim_tactile tests perf tools docs examples
+	$(BIN)/ruff format --check sim_tactile tests perf tools docs examples
 	$(BIN)/lint-imports
 
 format: $(STAMP_TEST)
-	$(BIN)/ruff format sim_tactile tests benchmarks docs examples
-	$(BIN)/ruff check --fix sim_tactile tests benchmarks docs examples
+	$(BIN)/ruff format sim_tactile tests perf tools docs examples
+	$(BIN)/ruff check --fix sim_tactile tests perf tools docs examples
 
 bench: $(STAMP_TEST)
-	$(BIN)/python benchmarks/bench_plates.py
-	$(BIN)/python benchmarks/plate_views.py
-	$(BIN)/python benchmarks/bench_spikes.py
-	$(BIN)/python benchmarks/bench_finger.py
-	$(BIN)/python benchmarks/bench_sensors.py
-	$(BIN)/python benchmarks/bench_learn.py
-	$(BIN)/python benchmarks/bench_generate.py
+	$(BIN)/python perf/bench_plates.py
+	$(BIN)/python perf/plate_views.py
+	$(BIN)/python perf/bench_spikes.py
+	$(BIN)/python perf/bench_finger.py
+	$(BIN)/python perf/bench_sensors.py
+	$(BIN)/python perf/bench_learn.py
+	$(BIN)/python perf/bench_generate.py
 	$(BIN)/sim-tactile bench speed-error --out build/bench/speed-error
 	$(BIN)/sim-tactile bench stability
 

@@ -181,7 +181,9 @@ def test_pulse_period_of_a_known_pulse_train():
         np.zeros((1, 3)),
         meta={"rate_hz": rate, "x_pad_m": x_pad.tolist()},
     )
-    m = pulse_period(rec, 0, plate, spacing, 0.06, 16e-3)  # commanded 60 mm/s, runs at 58
+    m = pulse_period(
+        rec, 0, plate.area_length_m, spacing, 0.06, 16e-3
+    )  # commanded 60 mm/s, runs at 58
     assert m["pad_speed_m_s"] == pytest.approx(v, rel=1e-9)
     assert m["period_s"] == pytest.approx(spacing / v, rel=2e-3)
     assert m["periods"] > 2

@@ -4,7 +4,7 @@
 kind (each collider, skin reduction, fidelity level and force control), the recorded data,
 the per-sample normal force and the pad's path. A refactor that keeps the arithmetic must
 reproduce them exactly; a change that alters them on purpose regenerates the file with
-``python benchmarks/golden_slides.py`` (which defines the cases) and says why in its commit.
+``python tools/golden_slides.py`` (which defines the cases) and says why in its commit.
 Bit for bit on the BLAS kernel the file was written with; on another CPU's kernel, to the
 script's ``OTHER_KERNEL_RTOL`` (see its docstring for the measured difference).
 """
@@ -27,7 +27,7 @@ with np.load(GOLDEN, allow_pickle=False) as _z:
 
 def _script():
     """The regenerating script, the one definition of how a case becomes a slide."""
-    path = HERE.parent / "benchmarks" / "golden_slides.py"
+    path = HERE.parent / "tools" / "golden_slides.py"
     spec = importlib.util.spec_from_file_location("golden_slides", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -11,7 +11,9 @@ import textwrap
 import numpy as np
 import pytest
 
+from sim_tactile.bench.closed_forms import pulse_period
 from sim_tactile.records import Recording
+from sim_tactile.sensors import Finger
 
 cq = pytest.importorskip("cadquery")
 pytestmark = pytest.mark.slow
@@ -28,14 +30,6 @@ def _grating(period=PERIOD_MM, n=16, height=0.5):
     return w
 
 
-def _dominant_hz(x: np.ndarray, rate: float) -> float:
-    n = len(x)
-    core = x[n // 4 : 3 * n // 4] - x[n // 4 : 3 * n // 4].mean()
-    spec = np.abs(np.fft.rfft(core * np.hanning(len(core)), n=1 << 16))
-    f = np.fft.rfftfreq(1 << 16, 1 / rate)
-    return float(f[np.argmax(spec[f > 2]) + np.count_nonzero(f <= 2)])
-
-
 def test_an_stl_grating_drawn_y_up_through_simulate_and_plates_build(cli, tmp_path):
     stl = tmp_path / "grating-yup.stl"
     solid = _grating().rotate((0, 0, 0), (1, 0, 0), -90)  # its texture faces +y
@@ -47,8 +41,9 @@ def test_an_stl_grating_drawn_y_up_through_simulate_and_plates_build(cli, tmp_pa
     )
     rec = Recording.load(out)
     assert rec.meta["plate_params"]["texture"]["kind"] == "heightmap"
-    peak = _dominant_hz(rec.data[:, 4], rec.rate_hz)
-    assert peak == pytest.approx(0.04 / (PERIOD_MM * 1e-3), rel=0.02)  # the grating law
+    area, pad = rec.meta["plate_params"]["area_length_m"], Finger().patch_m[0]
+    m = pulse_period(rec, 4, area, PERIOD_MM * 1e-3, 0.04, pad)  # the middle taxel
+    assert m["period_s"] == pytest.approx(PERIOD_MM * 1e-3 / 0.04, rel=0.02)  # the grating law
     assert json.loads(res.stdout)["n_taxels"] == 9
     built = cli(
         ["plates", "build", stl, "--plate-frame", "up=+y", "--out", tmp_path / "b", "--json"]

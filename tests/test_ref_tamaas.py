@@ -1,6 +1,6 @@
 """The half-space skin against an independent boundary-element solver (Tamaas, a test extra).
 
-``benchmarks/ref_halfspace_tamaas.py`` measures the node grid's error over several pad
+``perf/ref_halfspace_tamaas.py`` measures the node grid's error over several pad
 offsets on two task scenes (the README's table); these tests pin the reference itself and
 the agreement where the grid resolves the contact."""
 
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 pytest.importorskip("tamaas")
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "perf"))
 import ref_halfspace_tamaas as ref  # noqa: E402
 
 from sim_tactile.bench import physics  # noqa: E402

@@ -14,7 +14,13 @@ from sim_tactile.scene.layered import layered_subsurface_weights
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim.plan.protocol import SPEED_RAMP_S, Protocol
 from sim_tactile.sim.plan.rig import ProbePass, ProbeRig
-from sim_tactile.sim.rig_sim import probe_contact, probe_grid, reading_lines, simulate_rig
+from sim_tactile.sim.rig_sim import (
+    _read_lines,
+    probe_contact,
+    probe_grid,
+    reading_lines,
+    simulate_rig,
+)
 from sim_tactile.slides import SlideSet
 from sim_tactile.tasks import get_task
 
@@ -204,3 +210,23 @@ def test_rig_slides_are_deterministic_and_go_both_ways():
     assert "rig" in job.describe() and job.key() != replace(job, rig=ProbeRig(margin_m=0)).key()
     finger_job = get_task("multilayer3-v1").get_data.jobs(seed=0, quick=True)[0]
     assert "rig" not in finger_job.describe()
+
+
+def test_the_rig_reads_its_lines_as_numpy_interpolates_them():
+    rng = np.random.default_rng(3)
+    u = np.cumsum(rng.uniform(0.5e-4, 1.5e-4, 400)) - 0.02
+    R = rng.normal(size=(18, u.size))
+    xt = rng.uniform(-0.01, 0.01, 18)
+    out = np.empty(18)
+    xs = np.concatenate(
+        [
+            rng.uniform(-0.04, 0.04, 300),
+            xt[:1] - u[[0, 5, -1]],  # exactly on a knot, the first, the last
+            xt[:1] - u[0] + 1e-12,  # just beyond the first knot
+            [np.nan],
+        ]
+    )
+    for x in xs:
+        _read_lines(xt, float(x), u, R, out)
+        ref = np.array([np.interp(xt[i] - x, u, R[i], left=0.0, right=0.0) for i in range(18)])
+        assert out.tobytes() == ref.tobytes(), x

@@ -11,7 +11,6 @@ from sim_tactile.cache import forget_process_memos, setup_memo
 from sim_tactile.hashing import array_digest
 from sim_tactile.scene import model as model_module
 from sim_tactile.sim.plan.protocol import Protocol
-from sim_tactile.sim.rig_sim import _read_lines
 from sim_tactile.sim.slide import simulate
 
 
@@ -152,23 +151,3 @@ def test_the_package_keeps_no_memo_outside_the_registry():
         if p.name not in below and pattern.search(p.read_text())
     ]
     assert found == []
-
-
-def test_the_rig_reads_its_lines_as_numpy_interpolates_them():
-    rng = np.random.default_rng(3)
-    u = np.cumsum(rng.uniform(0.5e-4, 1.5e-4, 400)) - 0.02
-    R = rng.normal(size=(18, u.size))
-    xt = rng.uniform(-0.01, 0.01, 18)
-    out = np.empty(18)
-    xs = np.concatenate(
-        [
-            rng.uniform(-0.04, 0.04, 300),
-            xt[:1] - u[[0, 5, -1]],  # exactly on a knot, the first, the last
-            xt[:1] - u[0] + 1e-12,  # just beyond the first knot
-            [np.nan],
-        ]
-    )
-    for x in xs:
-        _read_lines(xt, float(x), u, R, out)
-        ref = np.array([np.interp(xt[i] - x, u, R[i], left=0.0, right=0.0) for i in range(18)])
-        assert out.tobytes() == ref.tobytes(), x

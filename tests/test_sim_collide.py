@@ -7,11 +7,12 @@ from dataclasses import replace
 import mujoco
 import numpy as np
 import pytest
+from _scenes import scene_of
 
 from sim_tactile.plates import get_plate, height_at
 from sim_tactile.scene.model import build_scene
 from sim_tactile.scene.nodes import skin_grid
-from sim_tactile.sensors import Finger, get_layout, get_sensor
+from sim_tactile.sensors import get_layout, get_sensor
 from sim_tactile.sim.collide.choose import make_collider
 from sim_tactile.sim.collide.height import ProfileCollider, interp_at
 from sim_tactile.sim.collide.primitive import PrimitiveCollider
@@ -21,23 +22,6 @@ from sim_tactile.sim.plan.fidelity import choose_fidelity
 from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.sim.slide import simulate
 from sim_tactile.sim.step.runner import StepOptions
-
-
-def _scene(plate: str, margin: float, cache):
-    f = Finger()
-    grid = skin_grid(f, 1e-3)
-    return build_scene(
-        get_plate(plate),
-        f,
-        grid,
-        get_layout("grid3x3"),
-        dt_s=1e-3,
-        x0_m=-0.02,
-        z0_m=1e-3,
-        z_damping=1.0,
-        node_margin_m=margin,
-        cache=cache,
-    )
 
 
 @pytest.mark.parametrize("margin", [0.0, 0.5e-3])
@@ -51,7 +35,7 @@ def _scene(plate: str, margin: float, cache):
     ],
 )
 def test_depth_map_equals_mujocos(plate, margin, cache):
-    sc = _scene(plate, margin, cache)
+    sc = scene_of(plate, margin, cache)
     bone = sc.m_col.body("bone").id
     col = PrimitiveCollider.from_model(sc.m_col, sc.node_of_geom, bone)
     assert col is not None
@@ -107,7 +91,7 @@ def _under_a_box_top(col, bone):
 
 def test_the_colliders_answer_alike_from_the_joints(cache):
     """depths_at(qpos) of both colliders, bound to the scene's joints, against each other."""
-    sc = _scene("finger7/ridges-4", 0.5e-3, cache)
+    sc = scene_of("finger7/ridges-4", 0.5e-3, cache)
     prim, ref = make_collider(sc), make_collider(sc, primitive=False)
     assert isinstance(prim, PrimitiveCollider) and isinstance(ref, MujocoCollider)
     qpos = np.zeros(sc.m_col.nq)
@@ -126,14 +110,14 @@ def test_every_preset_kind_takes_a_compiled_collider(cache):
     map; MuJoCo's stays the reference, and the collider of a mesh that is not one of the
     plate's drafted ridges."""
     for plate in ("multilayer3/grating-9", "textures20/cylinders-3.0mm"):
-        sc = _scene(plate, 0.0, cache)
+        sc = scene_of(plate, 0.0, cache)
         assert isinstance(make_collider(sc), PrimitiveCollider)
         assert isinstance(make_collider(sc, primitive=False), MujocoCollider)
-    sc = _scene("multilayer3/grating-9", 0.0, cache)
+    sc = scene_of("multilayer3/grating-9", 0.0, cache)
     bone = sc.m_col.body("bone").id
     # without the plate's features a mesh is any mesh: MuJoCo's collider serves
     assert PrimitiveCollider.from_model(sc.m_col, sc.node_of_geom, bone) is None
-    sc = _scene("roughness8/ra-50", 0.0, cache)
+    sc = scene_of("roughness8/ra-50", 0.0, cache)
     assert isinstance(make_collider(sc), ProfileCollider)
     assert isinstance(make_collider(sc, primitive=False), MujocoCollider)  # the reference
 
@@ -154,7 +138,7 @@ def test_ridges_and_cylinders_against_mujoco_and_the_height_map(plate, margin, c
     depth (within :data:`EXACT_ATOL_M`); one whose centre lies below it reads the depth below
     the height map at its centre, or MuJoCo's where a neighbouring geom reaches deeper (never
     less than MuJoCo's nearest face); the same nodes are reported."""
-    sc = _scene(plate, margin, cache)
+    sc = scene_of(plate, margin, cache)
     atol = EXACT_ATOL_M.get(plate, 1e-6)
     bone = sc.m_col.body("bone").id
     col = PrimitiveCollider.from_model(sc.m_col, sc.node_of_geom, bone, sc.plate)
@@ -229,7 +213,7 @@ def test_the_profile_collider_reads_the_height_map_at_each_node(plate, cache):
     point, reported within its margin; over the flat base MuJoCo's collider reads the same
     (on the profile MuJoCo's convex-prism contacts read another depth: the height map is what
     the skin model and its reference take)."""
-    sc = _scene(plate, 0.1e-3, cache)
+    sc = scene_of(plate, 0.1e-3, cache)
     col, ref = make_collider(sc), MujocoCollider(sc)
     rng = np.random.default_rng(1)
     qpos = np.zeros(sc.m_col.nq)
@@ -367,7 +351,7 @@ def test_the_stepped_model_drops_the_node_spheres_and_nothing_else(cache):
     """MuJoCo steps a model without the skin's probe spheres (massless, out of contact): the
     bone's mass, inertia and frame are the collision model's, bit for bit, and the sample
     loop's stepping is unchanged (the golden slides hold it bit for bit too)."""
-    sc = _scene("finger7/bumps-4x4", 0.5e-3, cache)
+    sc = scene_of("finger7/bumps-4x4", 0.5e-3, cache)
     col, dyn = sc.m_col, sc.m_dyn
     assert col.ngeom - dyn.ngeom == sc.n_nodes
     assert not any(

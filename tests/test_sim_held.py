@@ -5,11 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _scenes import scene_of
 
-from sim_tactile.plates import get_plate
-from sim_tactile.scene.model import build_scene
-from sim_tactile.scene.nodes import skin_grid
-from sim_tactile.sensors import Finger, get_layout
+from sim_tactile.sensors import Finger
 from sim_tactile.sim.collide.primitive import PrimitiveCollider
 from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.sim.skin import contact
@@ -28,23 +26,10 @@ SLIDE_ATOL_N = 1e-7
 
 
 def _setup(plate: str, cache, pitch=(0.5e-3, 2e-3)):
-    f = Finger()
-    grid = skin_grid(f, *pitch)
-    sc = build_scene(
-        get_plate(plate),
-        f,
-        grid,
-        get_layout("grid3x3"),
-        dt_s=2e-3,
-        x0_m=-0.02,
-        z0_m=1e-3,
-        z_damping=1.0,
-        node_margin_m=MARGIN,
-        cache=cache,
-    )
+    sc = scene_of(plate, MARGIN, cache, pitch=pitch, dt_s=2e-3)
     col = PrimitiveCollider.from_scene(sc)
     assert col is not None
-    sc.skin = CoupledSkin.half_space(grid, f)
+    sc.skin = CoupledSkin.half_space(sc.grid, Finger())
     return sc, col, col.bone0.copy()
 
 

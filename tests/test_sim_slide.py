@@ -279,7 +279,12 @@ def test_the_pad_holds_its_commanded_speed_and_the_period_is_pitch_over_speed(fo
     rec = simulate("finger7/ridges-4", "grid3x3", protocol=proto, ideal=True, cache=cache).recording
     plate, sensor = get_plate("finger7/ridges-4"), get_sensor("grid3x3")
     m = pulse_period(
-        rec, probe_taxel(sensor.layout), plate, RIDGE_PITCH_M, v, sensor.finger.patch_m[0]
+        rec,
+        probe_taxel(sensor.layout),
+        plate.area_length_m,
+        RIDGE_PITCH_M,
+        v,
+        sensor.finger.patch_m[0],
     )
     assert m["pad_speed_m_s"] == pytest.approx(v, rel=SPEED_RTOL)
     assert m["period_s"] == pytest.approx(RIDGE_PITCH_M / v, rel=2e-3)

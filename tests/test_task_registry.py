@@ -22,7 +22,7 @@ DETERMINISM_WINDOW_S = 0.3
 def test_every_released_task_keeps_its_description():
     """Each task's whole definition (data, protocol, settings, runs, paper cells) as it was
     released; a difference is a new task version, not an edit (``python
-    benchmarks/task_descriptions.py`` only when a task is added)."""
+    tools/task_descriptions.py`` only when a task is added)."""
     released = json.loads(DESCRIPTIONS.read_text())
     now = {t: get_task(t).describe() for t in task_ids()}
     assert sorted(now) == sorted(released), "a task was added or removed"

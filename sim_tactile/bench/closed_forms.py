@@ -32,12 +32,20 @@ def feature_spacing_m(plate: Plate) -> float | None:
 def pulse_period(
     rec: Recording,
     taxel: int,
-    plate: Plate,
+    area_length_m: float,
     spacing_m: float,
     speed_m_s: float,
     pad_length_m: float,
+    *,
+    x_m: np.ndarray | None = None,
 ) -> dict:
-    """Measure the period of ``taxel``'s signal while the whole pad is over the texture.
+    """Measure the period of ``taxel``'s signal while the whole pad is over the texture: the
+    one estimator of a texture's temporal period (the grating law's check in the benchmarks
+    and the tests).
+
+    ``area_length_m``: the textured area's length along the slide; ``x_m`` (T,): where the
+    pad's centre is over the plate at each sample [m] (default: the recording's
+    ``x_pad_m``; the probe rig's ``x_probe_m``, where the texture moves over the sensor).
 
     The closed form holds in the steady state: while the pad (``pad_length_m`` along the
     slide) is entering or leaving the textured area its contact patch changes, and so does
@@ -58,9 +66,9 @@ def pulse_period(
 
     rate = float(rec.meta["rate_hz"])
     t = np.asarray(rec.times, float)
-    x_pad = np.asarray(rec.meta["x_pad_m"], float)
+    x_pad = np.asarray(rec.meta["x_pad_m"] if x_m is None else x_m, float)
     y = np.asarray(rec.data[:, taxel], float)
-    steady = np.abs(x_pad) <= plate.area_length_m / 2 - pad_length_m / 2
+    steady = np.abs(x_pad) <= area_length_m / 2 - pad_length_m / 2
     out: dict = {"period_s": None, "periods": 0.0, "ripple": None, "pad_speed_m_s": None}
     if steady.sum() >= 2:
         out["pad_speed_m_s"] = float(np.polyfit(t[steady], x_pad[steady], 1)[0])

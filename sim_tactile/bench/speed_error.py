@@ -322,7 +322,7 @@ def _analytic(
 ) -> dict:
     if spacing is None:
         return {"what": "no closed form for this texture", "error": None}
-    m = pulse_period(rec, taxel, plate, spacing, speed, finger.patch_m[0])
+    m = pulse_period(rec, taxel, plate.area_length_m, spacing, speed, finger.patch_m[0])
     out = {
         "what": "period of the probe taxel, whole pad on the texture, vs spacing / pad speed",
         "probe_taxel": taxel,

@@ -68,7 +68,7 @@ PITCH_MIN_M = 0.25e-3
 MAX_NODES = {"L0": 2500, "L1": 700, "L2": 2800}
 #: Most nodes the dense solve takes; above it the skin is solved spectrally. Whole slides,
 #: dense against spectral, the dense arrays read from the slide cache as when a data set is
-#: made (benchmarks/bench_spectral.py at a5d399a, medians of 3, slide loop + set-up):
+#: made (perf/bench_spectral.py at a5d399a, medians of 3, slide loop + set-up):
 #: textures20/boxes-3.0mm on the BioTac at 2835 nodes 2.3 s against 10.7 s (few contact
 #: changes a step: the dense step is one product); finger7/bumps-6x6 at 2401 nodes 9.6 s
 #: against 6.5 s (edges everywhere: the dense set updates cost |S|^2 each), at 1089 nodes
@@ -244,7 +244,7 @@ def choose_fidelity(
         + (
             measured.describe()
             if measured
-            else "not measured for this scene and grid (benchmarks/physics_per_plate.py)"
+            else "not measured for this scene and grid (perf/physics_per_plate.py)"
         )
     )
     if measured and measured.error > WARN_ABOVE:
@@ -322,7 +322,7 @@ def _far_choice(plate, layout, finger, protocol, level, pitch, py_key, measured)
     The clipped grid first where its static cells are within L1's node cap: its step
     assembles and factors the patches along every moving wall, which pays on a small pad
     (finger7's bumps, 437 cells: 1 mm clipped 4.0-6.3x real time in the slide loop, 0.333 mm
-    whole 0.2-0.4x, benchmarks/bench_clipped.py at aa8c226) and not over a large contact,
+    whole 0.2-0.4x, perf/bench_clipped.py at aa8c226) and not over a large contact,
     where a finer whole grid comes first (finger7/ridges-4 at 0.25 x 2 mm, 923 cells: 1.3x,
     against 0.125 x 1 mm whole 5.8x; the BioTac's boxes, 2009 cells: 0.55x against 0.355 mm
     whole 3.7x), and a clipped grid of more than :data:`CLIPPED_MAX_CELLS` cells is never

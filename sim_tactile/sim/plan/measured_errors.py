@@ -1,6 +1,6 @@
 """The measured error against physics of a node grid on a task scene: what ``auto`` expects.
 
-``benchmarks/physics_per_plate.py --write-table`` presses each simulated task's sensor on each
+``perf/physics_per_plate.py --write-table`` presses each simulated task's sensor on each
 of its plates, at ``auto``'s node grid and at half its pitch, and sets the taxel loads
 against an independent boundary-element half-space (Tamaas on a 0.0625 mm grid). It stores
 each result in ``measured_errors.json`` beside this module, with the commit it was measured
@@ -32,7 +32,7 @@ from ...cache import memoized
 from ...hashing import content_hash
 from ...scene.nodes import lattice_shape
 
-#: The table, written by ``benchmarks/physics_per_plate.py --write-table``.
+#: The table, written by ``perf/physics_per_plate.py --write-table``.
 TABLE = Path(__file__).with_name("measured_errors.json")
 #: Largest relative difference between a scene's force and the measured force for a row to
 #: apply. It spans a data set's drawn forces (the protocols clip a drawn force to 0.2-2
@@ -197,7 +197,7 @@ def stand_in(plate):
         return None
 
 
-#: The refinements ``benchmarks/physics_per_plate.py --refine`` measures: the grids at 1/f of
+#: The refinements ``perf/physics_per_plate.py --refine`` measures: the grids at 1/f of
 #: auto's pitch in both directions.
 REFINEMENTS = (2, 3, 4, 5, 6, 8)
 

@@ -125,7 +125,7 @@ BIOTAC_TASK = register(
             "to t on the encoding of the whole slide (standardised over the whole window, as "
             "the encoding is computed before the network runs).",
             "Time per epoch (one CPU core, batch 32): see 'epoch_s_median' of each result in "
-            "report.json and benchmarks/bench_learn.py.",
+            "report.json and perf/bench_learn.py.",
         ),
         reference=REFERENCE,
     )

@@ -10,12 +10,12 @@ import math
 
 import numpy as np
 import pytest
+from _scenes import scene_of
 
+from sim_tactile.bench.closed_forms import pulse_period
 from sim_tactile.plates import HeightMap, Plate, height_at
 from sim_tactile.plates.features import map_height
-from sim_tactile.scene.model import build_scene
-from sim_tactile.scene.nodes import skin_grid
-from sim_tactile.sensors import Finger, get_layout, get_sensor
+from sim_tactile.sensors import Finger, get_sensor
 from sim_tactile.sim.collide.choose import QS_MARGIN_M, make_collider, node_margin_m
 from sim_tactile.sim.collide.height import (
     MapCollider,
@@ -200,27 +200,10 @@ def test_the_compiled_loop_is_its_numpy_reference_and_height_at(make):
     assert not c.y_invariant(0.0) and c.warnings() == []
 
 
-def _scene(plate: Plate, margin: float, cache):
-    f = Finger()
-    grid = skin_grid(f, 1e-3)
-    return build_scene(
-        plate,
-        f,
-        grid,
-        get_layout("grid3x3"),
-        dt_s=1e-3,
-        x0_m=-0.01,
-        z0_m=1e-3,
-        z_damping=1.0,
-        node_margin_m=margin,
-        cache=cache,
-    )
-
-
 def test_a_height_map_takes_the_map_collider_and_the_wide_margin(cache):
     plate = _grating()
     assert node_margin_m(plate) == QS_MARGIN_M
-    sc = _scene(plate, QS_MARGIN_M, cache)
+    sc = scene_of(plate, QS_MARGIN_M, cache, x0_m=-0.01)
     c = make_collider(sc)
     assert isinstance(c, MapCollider) and c.compiled
     assert isinstance(make_collider(sc, primitive=False), MujocoCollider)  # the reference
@@ -236,7 +219,7 @@ def test_the_map_collider_agrees_with_mujocos_on_a_smooth_map(cache):
     pair (at 0.5 mm and 0.1 mm pixels the nearest was often left out)."""
     plate = _smooth()
     margin = 0.1 * MM
-    sc = _scene(plate, margin, cache)
+    sc = scene_of(plate, margin, cache, x0_m=-0.01)
     col, ref = make_collider(sc), MujocoCollider(sc)
     assert isinstance(col, MapCollider)
     cos = math.cos(math.atan(SMOOTH_A_M * 2 * math.pi / SMOOTH_WAVE_M))
@@ -272,7 +255,7 @@ def grating():
 def test_the_compiled_held_step_reads_the_maps_depths(grating, cache):
     """The compiled held step's depth map (its one call's map kernel) is the collider's, bit
     for bit, on the full problem (a map never reduces)."""
-    sc = _scene(grating, QS_MARGIN_M, cache)
+    sc = scene_of(grating, QS_MARGIN_M, cache, x0_m=-0.01)
     col = make_collider(sc)
     f = Finger()
     h = CompiledHeldStep(
@@ -311,14 +294,6 @@ def test_the_compiled_held_step_on_a_height_map_equals_the_plain_loop(grating, c
     np.testing.assert_allclose(fast.meta["normal_force_n"], slow.meta["normal_force_n"], rtol=1e-6)
 
 
-def _dominant_hz(sig: np.ndarray, rate: float) -> float:
-    """The strongest frequency of ``sig`` (mean removed, Hann window, zero-padded)."""
-    s = (sig - sig.mean()) * np.hanning(len(sig))
-    spec = np.abs(np.fft.rfft(s, n=1 << 16))
-    f = np.fft.rfftfreq(1 << 16, 1 / rate)
-    return float(f[np.argmax(spec[1:]) + 1])
-
-
 def test_a_slide_over_a_height_map_grating_obeys_the_grating_law(grating, cache):
     """The middle taxel's dominant period is the spacing over the speed (4 mm at 40 mm/s:
     100 ms), within 2%, with auto's grid (the map's 2 mm ridges and gaps set its pitch): one
@@ -328,13 +303,13 @@ def test_a_slide_over_a_height_map_grating_obeys_the_grating_law(grating, cache)
     assert "smallest feature 2 mm" in res.fidelity.reason
     middle = int(np.flatnonzero(np.all(rec.taxels[:, :2] == 0, axis=1))[0])
     # the pad's face wholly over the grating, 1 mm in from its ends (past the climb onto it)
-    reach = get_sensor("grid3x3").finger.patch_m[0] / 2 + 1 * MM
-    over = np.abs(np.asarray(rec.meta["x_pad_m"])) < grating.area_length_m / 2 - reach
-    assert over.sum() > 70  # eight periods
+    pad = get_sensor("grid3x3").finger.patch_m[0] + 2 * MM
+    over = np.abs(np.asarray(rec.meta["x_pad_m"])) < grating.area_length_m / 2 - pad / 2
     core = rec.data[over, middle].astype(float)
     assert core.min() >= 0 and np.ptp(core) > 0.5 * core.max() > 0.005  # pulses
-    period = 1 / _dominant_hz(core, rec.meta["rate_hz"])
-    assert period == pytest.approx(PERIOD_M / 0.04, rel=PERIOD_RTOL)
+    m = pulse_period(rec, middle, grating.area_length_m, PERIOD_M, 0.04, pad)
+    assert m["periods"] > 7 and m["ripple"] > 0.3
+    assert m["period_s"] == pytest.approx(PERIOD_M / 0.04, rel=PERIOD_RTOL)
 
 
 def test_the_probe_rig_slides_a_height_map_grating(grating):
@@ -353,10 +328,10 @@ def test_the_probe_rig_slides_a_height_map_grating(grating):
     ).recording
     x = np.asarray(rec.meta["x_probe_m"])
     centre = int(np.flatnonzero(np.all(sensor.layout.positions[:, :2] == 0, axis=1))[0])
-    inside = np.abs(x) < grating.area_length_m / 2 - 1.5e-3 - 2.5e-3  # wholly under the face
-    assert inside.sum() > 50
-    f = _dominant_hz(rec.data[inside, centre].astype(float), rec.meta["rate_hz"])
-    assert 1 / f == pytest.approx(PERIOD_M / speed, rel=PERIOD_RTOL)
+    reach = 2 * (1.5e-3 + 2.5e-3)  # the element wholly under the face
+    m = pulse_period(rec, centre, grating.area_length_m, PERIOD_M, speed, reach, x_m=x)
+    assert m["periods"] > 5 and m["ripple"] > 0.1
+    assert m["period_s"] == pytest.approx(PERIOD_M / speed, rel=PERIOD_RTOL)
 
 
 def test_the_probe_face_of_a_map_with_holes_carries_the_force_on_its_material():

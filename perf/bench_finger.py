@@ -1,6 +1,6 @@
 """Speed against error of the soft-finger levels, the Hertz check, and the loop's overhead.
 
-    python benchmarks/bench_finger.py [--json] [--quick]
+    python perf/bench_finger.py [--json] [--quick]
 
 Scene: finger7/ridges-4, grid3x3, 60 mm/s, 1 N (the soft-finger paper's setup). L0 and L1 run
 at their auto time step and at 2x and 0.5x of it; the reference is L2 (half the node pitch, a

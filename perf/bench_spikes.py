@@ -13,7 +13,7 @@ repeated runs (after one warm-up call, so numba compilation is not counted):
 
 Usage::
 
-    python benchmarks/bench_spikes.py [--quick] [--repeats N] [--json [PATH]]
+    python perf/bench_spikes.py [--quick] [--repeats N] [--json [PATH]]
 
 ``--json`` alone prints one JSON document on stdout instead of the table; ``--json PATH``
 writes it to PATH as well as printing the table. ``--quick`` skips the slow Elephant VP run.

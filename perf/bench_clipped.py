@@ -1,13 +1,13 @@
 """Whole patches, patches clipped at the walls and lattices anchored to them, on finger7's box
 plates: speed and error.
 
-    python benchmarks/bench_clipped.py [--plates finger7/bumps-4x4,...] [--rounds 3] [--json]
+    python perf/bench_clipped.py [--plates finger7/bumps-4x4,...] [--rounds 3] [--json]
 
 For each plate, a 2 s slide of the task's sensor (grid3x3, 1 N, 60 mm/s, ideal loads) at
 each node grid, the grids taken in turn round after round (A B C A B C ...); medians of the
 slide loop's real-time factor (simulated seconds per wall second of the loop) and of the
 whole slide's (set-up included, nothing cached). The error against physics is the measured
-row of ``sim_tactile/sim/measured_errors.json`` for that grid (``benchmarks/
+row of ``sim_tactile/sim/plan/measured_errors.json`` for that grid (``perf/
 physics_per_plate.py``), or ``-`` where it was not measured.
 """
 

@@ -1,6 +1,6 @@
 """Time building every preset plate cold (empty cache) and from the cache, in one run.
 
-    python benchmarks/bench_plates.py [--json] [--repeats N]
+    python perf/bench_plates.py [--json] [--repeats N]
 
 Cold: a fresh temporary cache, so every STL, STEP, MJCF and PNG is made (CadQuery import
 included once, as a user pays it). Cached: the same builds again, repeated; medians.

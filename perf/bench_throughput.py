@@ -1,7 +1,7 @@
 """Throughput of every task scene as a data set is made: the whole-slide real-time factor per
 core, and where a slide's time goes.
 
-    python benchmarks/bench_throughput.py [--scenes finger7-v1,...] [--slides 4] [--rounds 3]
+    python perf/bench_throughput.py [--scenes finger7-v1,...] [--slides 4] [--rounds 3]
         [--against PATH] [--json]
 
 A scene is a simulated task (every ``-v1`` and ``-v2``, each sensor of ``textures20``). For

@@ -1,6 +1,6 @@
 """The default fidelity's error against physics on every plate of every simulated task.
 
-    python benchmarks/physics_per_plate.py [--tasks finger7-v1,...] [--plates P,...]
+    python perf/physics_per_plate.py [--tasks finger7-v1,...] [--plates P,...]
         [--offsets 4] [--refine 1,2,4] [--json] [--ref-cache DIR]
 
 ``bench speed-error`` measures one plate per task (its bench scene) at every level; this
@@ -223,7 +223,7 @@ def write_table(rows: list[dict], path: Path, at: str | None = None) -> None:
     )
     doc = {
         "about": "error of the taxel loads against Tamaas (0.0625 mm, cell faces on the grid), static presses at "
-        "4 pad offsets; written by benchmarks/physics_per_plate.py --write-table",
+        "4 pad offsets; written by perf/physics_per_plate.py --write-table",
         "rows": merged,
     }
     path.write_text(json.dumps(doc, indent=1) + "\n")

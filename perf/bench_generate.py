@@ -13,7 +13,7 @@ this shared machine. Memory: a fresh
 process per size writes short slides (0.2 s) with 2 workers; the parent's resident set at
 the end and its peak.
 
-    python benchmarks/bench_generate.py [--repeats 5] [--slides 6] [--out build/bench/generate]
+    python perf/bench_generate.py [--repeats 5] [--slides 6] [--out build/bench/generate]
 """
 
 from __future__ import annotations

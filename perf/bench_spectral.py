@@ -1,6 +1,6 @@
 """The dense contact solve against the spectral one, on whole slides, by node count.
 
-    python benchmarks/bench_spectral.py [--plate finger7/bumps-3x3] [--sensor grid3x3]
+    python perf/bench_spectral.py [--plate finger7/bumps-3x3] [--sensor grid3x3]
         [--pitches 1.0,0.8,0.6,0.5,0.4,0.3,0.25] [--repeats 3] [--dense-max 2500] [--json]
 
 For each node pitch [mm] the same slide runs with each solver (``StepOptions.skin_solver``),

@@ -1,6 +1,6 @@
 """Write every registered task's whole definition to ``tests/data/task_descriptions.json``.
 
-    python benchmarks/task_descriptions.py [--check]
+    python tools/task_descriptions.py [--check]
 
 A released task id never changes meaning: ``tests/test_task_registry.py`` compares each
 task's :meth:`~sim_tactile.tasks.registry.TaskSpec.describe` with this file. Run the script

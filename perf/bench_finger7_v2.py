@@ -5,7 +5,7 @@ layered curved finger under position control, so this is convergence against our
 grid. Prints a markdown table (``docs/finger7_v2.md`` quotes it); ``--figure PATH`` also draws
 an outer taxel's stream on bumps-4x4 at each pitch (``docs/img/finger7_v2_pitch.png``).
 
-    python benchmarks/bench_finger7_v2.py [--figure PATH]
+    python perf/bench_finger7_v2.py [--figure PATH]
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ probe's centre is set against the constrained-modulus stress of the thin bonded 
 closed form). Then whole slides at the default pitch are timed (median of 3, each after a
 warm-up slide in the process). Prints a markdown table (``docs/probe_rig.md`` quotes it).
 
-    python benchmarks/bench_rig.py
+    python perf/bench_rig.py
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 task's sensor and plate kind: each collider path, the reduced and full skin, L0 to L2, the
 force controls, the probe rig).
 
-    python benchmarks/golden_slides.py [--check]
+    python tools/golden_slides.py [--check]
 
 ``tests/test_golden_slides.py`` demands these arrays bit for bit, so a refactor that keeps the
 arithmetic keeps them. Regenerate only for a change that alters recordings on purpose, and

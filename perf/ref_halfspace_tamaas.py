@@ -1,6 +1,6 @@
 """The half-space skin's discretisation error against an independent solver (Tamaas).
 
-    python benchmarks/ref_halfspace_tamaas.py [--quick] [--json]
+    python perf/ref_halfspace_tamaas.py [--quick] [--json]
 
 A flat pad (grid3x3's: 12 mm with 2 mm edge fillets, E = 0.3 MPa, nu = 0.5) is pressed with
 1 N on a plate at several offsets along the slide. The project's half-space contact solve on

@@ -13,7 +13,7 @@ gives the median epoch time, after the first epoch (numba compilation, allocatio
 
 Usage::
 
-    python benchmarks/bench_learn.py [--epochs N] [--threads N] [--json [PATH]]
+    python perf/bench_learn.py [--epochs N] [--threads N] [--json [PATH]]
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Real-time factor of each sensor on the same plate (the cost grows with the taxel count),
 and the statistics of simulated BioTac and iCub streams against the real data.
 
-    python benchmarks/bench_sensors.py [--json] [--data PATH] [--repeats N]
+    python perf/bench_sensors.py [--json] [--data PATH] [--repeats N]
 """
 
 from __future__ import annotations

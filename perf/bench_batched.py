@@ -1,7 +1,7 @@
 """Would batched slides pay? The spectral skin's product ``C p`` for K slides of one scene in
 one call (a stack of K lattices through each FFT) against K calls, per product.
 
-    python benchmarks/bench_batched.py [--lattices 68x95,30x40] [--batches 1,4,16] [--reps 200]
+    python perf/bench_batched.py [--lattices 68x95,30x40] [--batches 1,4,16] [--reps 200]
 
 A slide's spectral contact solve is a sequence of these products (about 30 a step on the
 iCub's fine grids), so their cost per product bounds what stepping K slides together could

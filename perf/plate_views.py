@@ -1,6 +1,6 @@
 """Print the agreement between the three views of every preset (analytic, STL, collider).
 
-python benchmarks/plate_views.py [--json]
+python perf/plate_views.py [--json]
 """
 
 from __future__ import annotations
