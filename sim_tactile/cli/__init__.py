@@ -16,16 +16,42 @@ from ..errors import SimTactileError
 from . import bench, data, plates, sim, tasks
 from ._common import log
 
+DESCRIPTION = (
+    "The sim-tactile command line of a physics-simulated benchmark for tactile texture perception. Build "
+    "textured plates, simulate a finger sliding over them, and run the benchmark tasks of "
+    "four papers with your own methods beside the built-in ones."
+)
+EPILOG = (
+    "Every command takes --json, and then prints one JSON document on stdout; progress and "
+    "logs go to stderr. Run 'sim-tactile COMMAND --help' for a command's options, and "
+    "'sim-tactile tasks' for the tasks."
+)
 EXIT_ERROR = 2
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="sim-tactile", description=__doc__.splitlines()[0])
-    p.add_argument("--version", action="version", version=f"sim-tactile {__version__}")
-    sub = p.add_subparsers(dest="command", required=True)
-    for group in (plates, sim, tasks, data, bench):
+    p = argparse.ArgumentParser(prog="sim-tactile", description=DESCRIPTION, epilog=EPILOG)
+    p.add_argument(
+        "--version",
+        action="version",
+        version=f"sim-tactile {__version__}",
+        help="Print the version and exit.",
+    )
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for group in (tasks, plates, sim, data, bench):
         group.add_parsers(sub)
+    _sentence_help(p)
     return p
+
+
+def _sentence_help(parser: argparse.ArgumentParser) -> None:
+    """argparse's own ``-h`` says "show this help message and exit": a sentence, like ours."""
+    for action in parser._actions:
+        if isinstance(action, argparse._HelpAction):
+            action.help = "Show this help and exit."
+        if isinstance(action, argparse._SubParsersAction):
+            for sp in action.choices.values():
+                _sentence_help(sp)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
