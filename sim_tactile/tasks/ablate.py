@@ -314,19 +314,23 @@ def _markdown(path: Path, report: dict) -> None:
 
 def plot_ablation(rows: list[dict], sets: Mapping[str, Sequence], title: str, out: Path) -> None:
     """One panel per swept parameter: accuracy against its values, the other parameters at
-    their first value, one line per run of the task."""
+    their first value, one line per run of the task (up to 20, each in its own colour and
+    marker), the legend beside the panels."""
+    import matplotlib
     from matplotlib.figure import Figure
 
     keys = list(sets)
-    fig = Figure(figsize=(5.0 * len(keys), 3.8), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(1, len(keys), squeeze=False)).ravel()
-    labels = list(dict.fromkeys(r["run"] for r in rows))
+    labels = list(dict.fromkeys(r["run"] for r in rows))[:20]
+    colours = matplotlib.colormaps["tab10" if len(labels) <= 10 else "tab20"]
+    markers = "osD^v<>pXh"
+    fig = Figure(figsize=(4.6 * len(keys) + 2.6, 3.9), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(keys), squeeze=False, sharey=True)).ravel()
     for ax, key in zip(axes, keys, strict=True):
         others = {k: sets[k][0] for k in keys if k != key}
         values = list(sets[key])
         numeric = all(isinstance(v, int | float) for v in values)
         xs = values if numeric else list(range(len(values)))
-        for lab in labels[:12]:
+        for n, lab in enumerate(labels):
             sel = [
                 r
                 for r in rows
@@ -335,18 +339,38 @@ def plot_ablation(rows: list[dict], sets: Mapping[str, Sequence], title: str, ou
             by = {str(r["params"][key]): r for r in sel}
             m = [by[str(v)]["accuracy_mean"] if str(v) in by else np.nan for v in values]
             s = [by[str(v)]["accuracy_std"] if str(v) in by else np.nan for v in values]
-            ax.errorbar(xs, m, yerr=s, marker="o", capsize=2, label=lab)
-        if not numeric:
-            ax.set_xticks(xs, [str(v) for v in values])
-        elif len(values) > 2 and min(values) > 0 and max(values) / min(values) >= 20:
+            ax.errorbar(
+                xs,
+                m,
+                yerr=s,
+                marker=markers[n % len(markers)],
+                ms=4,
+                lw=1.2,
+                capsize=2,
+                color=colours(n),
+                label=lab,
+            )
+        if numeric and len(values) > 2 and min(values) > 0 and max(values) / min(values) >= 20:
             ax.set_xscale("log")
-        ax.set_xlabel(key)
-        ax.set_ylabel("accuracy")
+        ax.set_xticks(xs, [f"{v:g}" if numeric else str(v) for v in values])
+        ax.minorticks_off()
+        if len(values) > 6:
+            ax.tick_params(axis="x", labelrotation=45)
+        ax.set_xlabel(key, fontsize=9)
         ax.set_ylim(0, 1.02)
         ax.grid(alpha=0.3)
-        if others:
-            ax.set_title(", ".join(f"{k} = {v}" for k, v in others.items()), fontsize=8)
-    axes[0].legend(fontsize=6, loc="lower left")
+        ax.set_title(
+            ", ".join(f"{k} = {v}" for k, v in others.items()) if others else "",
+            fontsize=8,
+        )
+    axes[0].set_ylabel("accuracy (mean and SD over the repeats)", fontsize=9)
+    fig.legend(
+        *axes[0].get_legend_handles_labels(),
+        loc="outside right upper",
+        fontsize=7,
+        title="run",
+        title_fontsize=7,
+    )
     fig.suptitle(f"ablation of {title}", fontsize=10)
     fig.savefig(out, dpi=110)
 

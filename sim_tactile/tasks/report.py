@@ -265,24 +265,50 @@ def _figure(**kw):
     return Figure(**kw)
 
 
+#: Up to this many classes, each cell of a confusion matrix carries its count.
+COUNTS_UP_TO = 25
+
+
 def plot_confusions(results: dict[str, EvalResult], class_names: Sequence[str], out: Path):
+    """One confusion matrix per run: each cell coloured by the share of its true class
+    (one colour bar for all), and, up to :data:`COUNTS_UP_TO` classes, labelled with its
+    count of test samples summed over the repeats."""
     names = list(results)
-    cols = min(4, len(names))
+    cols = min(3, len(names))
     rows = int(np.ceil(len(names) / cols))
-    fig = _figure(figsize=(4.2 * cols, 4.0 * rows), layout="constrained")
+    n = len(class_names)
+    side = 3.2 + 0.22 * n
+    fig = _figure(figsize=(side * cols + 1.0, side * rows + 0.5), layout="constrained")
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    im = None
     for ax, name in zip(axes, names, strict=False):
-        cm = results[name].confusion.astype(float)
-        cm = cm / np.maximum(cm.sum(axis=1, keepdims=True), 1)
-        ax.imshow(cm, vmin=0, vmax=1, cmap="Blues")
-        ax.set_title(f"{name}: {results[name].mean:.3f}")
-        ax.set_xlabel("predicted")
-        ax.set_ylabel("true")
-        ticks = np.arange(len(class_names))
-        ax.set_xticks(ticks, [str(c) for c in class_names], rotation=90, fontsize=6)
-        ax.set_yticks(ticks, [str(c) for c in class_names], fontsize=6)
+        counts = np.asarray(results[name].confusion, dtype=float)
+        share = counts / np.maximum(counts.sum(axis=1, keepdims=True), 1)
+        im = ax.imshow(share, vmin=0, vmax=1, cmap="Blues")
+        if n <= COUNTS_UP_TO:
+            for i, j in np.ndindex(counts.shape):
+                if counts[i, j]:
+                    ax.text(
+                        j,
+                        i,
+                        f"{counts[i, j]:.0f}",
+                        ha="center",
+                        va="center",
+                        fontsize=max(4.0, 9.0 - 0.2 * n),
+                        color="white" if share[i, j] > 0.5 else "black",
+                    )
+        ax.set_title(f"{name}\naccuracy {results[name].mean:.3f}", fontsize=9)
+        ax.set_xlabel("predicted class")
+        ax.set_ylabel("true class")
+        ticks = np.arange(n)
+        ax.set_xticks(ticks, [str(c) for c in class_names], rotation=90, fontsize=7)
+        ax.set_yticks(ticks, [str(c) for c in class_names], fontsize=7)
     for ax in axes[len(names) :]:
         ax.set_axis_off()
+    if im is not None:
+        fig.colorbar(
+            im, ax=axes[: len(names)].tolist(), shrink=0.8, label="share of the true class"
+        )
     fig.savefig(out, dpi=110)
 
 
@@ -367,22 +393,70 @@ def plot_streams(ds: TactileDataset, out: Path):
     n_cls = len(ds.class_names)
     cols = min(5, n_cls)
     rows = int(np.ceil(n_cls / cols))
-    fig = _figure(figsize=(3.2 * cols, 2.4 * rows), layout="constrained")
+    fig = _figure(figsize=(3.2 * cols + 1.6, 2.4 * rows), layout="constrained")
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False, sharex=True, sharey=True)).ravel()
     t = np.arange(ds.n_time) / ds.rate_hz
+    colours = taxel_colours(ds.n_channels)
     for k, ax in enumerate(axes):
         if k >= n_cls:
             ax.set_axis_off()
             continue
         idx = int(np.flatnonzero(ds.labels == k)[0])
-        ax.plot(t, ds.data[idx], lw=0.6)
+        for c in range(ds.n_channels):
+            ax.plot(t, ds.data[idx, :, c], lw=0.7, color=colours[c], label=taxel_label(ds, c))
         ax.set_title(f"{ds.class_names[k]} (sample {idx})", fontsize=8)
         ax.tick_params(labelsize=6)
         if k % cols == 0:
-            ax.set_ylabel(ds.units or "output", fontsize=7)
+            ax.set_ylabel(f"output [{ds.units}]" if ds.units else "output", fontsize=7)
         if k >= (rows - 1) * cols:
             ax.set_xlabel("time [s]", fontsize=7)
+    taxel_key(fig, axes[0], ds.n_channels, ds.channel_names)
     fig.savefig(out, dpi=100)
+
+
+#: Up to this many taxels, each has a line in the legend; beyond, a colour bar of the index.
+LEGEND_UP_TO = 20
+
+
+def taxel_colours(n: int) -> list:
+    """One colour per taxel, all different: tab10 / tab20 up to 20, then a continuous map."""
+    import matplotlib
+
+    if n <= 10:
+        return [matplotlib.colormaps["tab10"](i) for i in range(n)]
+    if n <= 20:
+        return [matplotlib.colormaps["tab20"](i) for i in range(n)]
+    return [matplotlib.colormaps["viridis"](i / (n - 1)) for i in range(n)]
+
+
+def taxel_label(ds: TactileDataset, c: int) -> str:
+    """A taxel's name with its position on the pad [mm] where the data set knows it."""
+    name = str(ds.channel_names[c])
+    if ds.taxel_positions is None:
+        return name
+    x, y = np.asarray(ds.taxel_positions)[c, :2] * 1e3
+    return f"{name} ({x:+.1f}, {y:+.1f}) mm"
+
+
+def taxel_key(fig, ax, n: int, names: Sequence[str]) -> None:
+    """The taxels' legend beside the panels (a colour bar of the index past
+    :data:`LEGEND_UP_TO` taxels)."""
+    import matplotlib
+
+    if n <= LEGEND_UP_TO:
+        fig.legend(
+            *ax.get_legend_handles_labels(),
+            loc="outside right upper",
+            fontsize=6,
+            title="taxel (x, y on the pad)",
+            title_fontsize=6,
+        )
+        return
+    sm = matplotlib.cm.ScalarMappable(
+        norm=matplotlib.colors.Normalize(0, n - 1), cmap=matplotlib.colormaps["viridis"]
+    )
+    bar = fig.colorbar(sm, ax=fig.axes, shrink=0.8)
+    bar.set_label(f"taxel index ({names[0]} .. {names[-1]})", fontsize=7)
 
 
 def plot_plates(plates: Sequence[Plate], class_names: Sequence[str], out: Path):
@@ -403,11 +477,20 @@ def plot_plates(plates: Sequence[Plate], class_names: Sequence[str], out: Path):
         x = np.linspace(-hx, hx, 360)
         y = np.linspace(-hy, hy, 240)
         z = height_at(p, x[None, :], y[:, None]) * 1e3
+        low = float(np.nanmin(z)) if np.isfinite(z).any() else 0.0
+        span = float(np.nanmax(z)) - low if np.isfinite(z).any() else 0.0  # NaN: off the plate
         im = ax.imshow(
-            z, extent=(-hx * 1e3, hx * 1e3, -hy * 1e3, hy * 1e3), origin="lower", cmap="viridis"
+            z,
+            extent=(-hx * 1e3, hx * 1e3, -hy * 1e3, hy * 1e3),
+            origin="lower",
+            cmap="viridis",
+            vmin=low,
+            vmax=low + max(span, 1e-9),
         )
-        fig.colorbar(im, ax=ax, shrink=0.8).ax.tick_params(labelsize=5)
-        ax.set_title(str(class_names[k]), fontsize=8)
+        if span > 0:  # a flat plate has nothing for a colour bar to say
+            fig.colorbar(im, ax=ax, shrink=0.8).ax.tick_params(labelsize=5)
+        title = str(class_names[k]) + ("" if span > 0 else " (flat: height 0)")
+        ax.set_title(title, fontsize=8)
         ax.tick_params(labelsize=5)
     fig.suptitle("plate height [mm] over x (slide) and y [mm]", fontsize=8)
     fig.savefig(out, dpi=100)
