@@ -66,7 +66,10 @@ def _summary(obj: object) -> str:
     doc = inspect.getdoc(obj) or ""
     first = doc.split("\n\n")[0].replace("\n", " ").strip()
     first = re.sub(r":[a-z]+:`~?\.?([^`<]*?)(?: <[^>]*>)?`", lambda m: f"``{m[1]}``", first)
-    return first.replace("|", "\\|")
+    parts = first.split("``")  # escape reST's markup outside the literals
+    for k in range(0, len(parts), 2):
+        parts[k] = parts[k].replace("*", "\\*").replace("|", "\\|").replace("_ ", "\\_ ")
+    return "``".join(parts)
 
 
 def _title(text: str, char: str = "=") -> list[str]:
@@ -170,3 +173,67 @@ def _write(path: Path, text: str) -> None:
     """Write only when the text changed (Sphinx then rebuilds only what moved)."""
     if not path.exists() or path.read_text() != text:
         path.write_text(text)
+
+
+def task_page(task_id: str) -> str:
+    """A task's page: its summary, remarks, paper cells, the ablate parameters it uses and
+    its whole pinned definition, from the registry."""
+    import json
+
+    from sim_tactile.cli.tasks import task_summary
+    from sim_tactile.tasks import get_task
+    from sim_tactile.tasks.ablate import PARAM_HELP, used_params
+
+    spec, s = get_task(task_id), task_summary(task_id)
+    lines = [f"# `{task_id}`", "", spec.title, ""]
+    lines += [
+        f"- paper: {spec.reference}",
+        f"- sensor: `{s['sensor']}`; classes: {s['classes']}; slides: {s['slides']} "
+        f"(quick: {s['quick_slides']})",
+        f"- classifiers: {', '.join(f'`{c}`' for c in spec.classifiers) or '(its parts)'}; "
+        f"split {spec.split}",
+        f"- run it: `sim-tactile run {task_id} --out out/{task_id}`"
+        + (" --data PATH" if spec.needs_data_path else ""),
+    ]
+    if spec.parts:
+        lines.append(f"- parts: {', '.join(f'`{p}`' for p in spec.parts)}")
+    if s["aliases"]:
+        lines.append(f"- also known as: {', '.join(f'`{a}`' for a in s['aliases'])}")
+    if spec.remarks:
+        lines += ["", "## Remarks", ""] + [f"- {r}" for r in spec.remarks]
+    if spec.paper:
+        lines += ["", "## The paper's numbers", ""]
+        lines += [
+            f"- `{k}`: {c.mean}" + (f" ({c.std})" if c.std is not None else "") + f", {c.source}"
+            for k, c in spec.paper.items()
+        ]
+    used = [p for p in PARAM_HELP if p in used_params(spec)]
+    lines += ["", "## Ablation parameters", ""]
+    lines += (
+        [f"- `{p}`: {PARAM_HELP[p]}" for p in used] if used else ["None: ablate one of its parts."]
+    )
+    lines += ["", "## The whole definition", "", "```json"]
+    lines += json.dumps(spec.describe(), indent=2, default=str).splitlines() + ["```", ""]
+    return "\n".join(lines)
+
+
+def write_tasks(out_dir: Path) -> list[str]:
+    """Write ``out_dir/<task>.md`` for every registered task and an index."""
+    from sim_tactile.cli.tasks import task_summary
+    from sim_tactile.tasks import task_ids
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    ids = list(task_ids())
+    for t in ids:
+        _write(out_dir / f"{t}.md", task_page(t))
+    rows = [task_summary(t) for t in ids]
+    index = ["# The tasks", "", "Generated from the task registry (`sim-tactile tasks`).", ""]
+    index += ["| task | paper | sensor | classes | slides |", "|---|---|---|---|---|"]
+    index += [
+        f"| [`{r['id']}`]({r['id']}.md) | {r['paper']} | `{r['sensor']}` | {r['classes']} "
+        f"| {r['slides']} |"
+        for r in rows
+    ]
+    index += ["", "```{toctree}", ":hidden:", "", *ids, "```", ""]
+    _write(out_dir / "index.md", "\n".join(index))
+    return ids

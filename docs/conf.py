@@ -28,7 +28,7 @@ extensions = [
     "_resolve",
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**/README.md"]
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**/README.md", "tutorials/*.py"]
 myst_enable_extensions = ["colon_fence", "deflist", "dollarmath"]
 myst_heading_anchors = 3
 
@@ -64,6 +64,7 @@ nitpick_ignore_regex = [
 
 def _generate(app) -> None:
     _gen.write_api(HERE / "reference" / "api")
+    _gen.write_tasks(HERE / "reference" / "tasks")
 
 
 def _skip(app, what, name, obj, skip, options):

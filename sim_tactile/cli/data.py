@@ -116,7 +116,7 @@ def add_parsers(sub) -> None:
     )
     gn.add_argument(
         "task",
-        help="A task id (a suite such as textures20-v1 gets one group per part; a *-real task "
+        help="A task id (a suite such as textures20-v1 gets one group per part; a real-data task "
         "copies its recordings, with --data) or a configuration file (.toml or .json: plates, "
         "sensor, protocol, randomise, finger, slides_per_plate, seed).",
     )
@@ -152,7 +152,9 @@ def add_parsers(sub) -> None:
         help="The data set's seed (default 0, or the configuration file's own).",
     )
     gn.add_argument(
-        "--data", default=None, help="The folder of the real data set (the *-real tasks need it)."
+        "--data",
+        default=None,
+        help="The folder of the real data set (the real-data tasks need it).",
     )
     ex = add_command(
         sub, "export", cmd_export, "Write a data set as plain numpy files (.npy and JSON)."

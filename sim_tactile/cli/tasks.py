@@ -161,7 +161,9 @@ def cmd_ablate(args: argparse.Namespace) -> int:
 def _add_task_options(p: argparse.ArgumentParser, quick_help: str) -> None:
     p.add_argument("--quick", action="store_true", help=quick_help)
     p.add_argument(
-        "--data", default=None, help="The folder of the real data set (the *-real tasks need it)."
+        "--data",
+        default=None,
+        help="The folder of the real data set (the real-data tasks need it).",
     )
     p.add_argument(
         "--classifiers",
