@@ -14,9 +14,15 @@ The steps, each of which refuses bad input with an error that names the file:
    space under the top surface is filled and the filling reported.
 5. **Sampled**: the top surface is z-buffered every ``pixel_m`` on a grid centred on the
    textured area (the samples more than 1 um above the lowest point of the top surface; the
-   whole part if none is); that lowest point becomes z = 0. Samples beyond the part are NaN
-   (no material).
-6. **Resolved**: every raised feature (above half the relief) must be at least three samples
+   whole part if none is); that lowest point becomes z = 0.
+6. **Outlined**: the part has material wherever its footprint does. Samples that no triangle
+   covers and that reach the grid's border (beyond the part's outline: the grid, centred on
+   the texture, extends past an off-centre part on one side, and a sample on the part's edge
+   may fall just outside it) are the plate's flat base, z = 0, as the plate's base around
+   the map is; the plate's notes say so where the grid reaches more than a sample beyond the
+   part. Samples without material enclosed by the part (a through-hole) are refused, or with
+   ``holes`` kept as holes (NaN: no material) and reported.
+7. **Resolved**: every raised feature (above half the relief) must be at least three samples
    across, so that the collider, which interpolates the samples bilinearly, holds it (the
    slivers the part's outline cuts from features are not held to it).
 """
@@ -135,7 +141,13 @@ def _grid(centre: float, lo: float, hi: float, pixel: float) -> np.ndarray:
 
 
 def sample_part(
-    mesh, placement: Placement, pixel_m: float, where: str, *, fill_overhangs: bool = False
+    mesh,
+    placement: Placement,
+    pixel_m: float,
+    where: str,
+    *,
+    fill_overhangs: bool = False,
+    holes: bool = False,
 ) -> SampledPart:
     """The top surface of a closed mesh (:func:`closed_mesh`) as a centred height map; see
     the module for the checks."""
@@ -184,9 +196,77 @@ def sample_part(
     _check_overhangs(v, up, xs, ys, pixel_m, where, fill_overhangs, notes)
     z = top - float(np.nanmin(top))  # this grid's lowest point (the first's, to round-off)
     _check_resolved(z, pixel_m, where)
+    z = _outline(z, pixel_m, where, holes, notes)
+    beyond = {
+        "-x": lo[0] - xs[0],
+        "+x": xs[-1] - hi[0],
+        "-y": lo[1] - ys[0],
+        "+y": ys[-1] - hi[1],
+    }
+    side = max(beyond, key=beyond.get)
+    if beyond[side] > pixel_m:
+        notes.append(
+            f"the map, centred on the texture, reaches {beyond[side] * 1e3:.4g} mm beyond the "
+            f"part on its {side} side: the plate's flat base (z = 0) is the surface there"
+        )
     span = ((z.shape[1] - 1) * pixel_m, (z.shape[0] - 1) * pixel_m)
     area = (min(area[0], span[0]), min(area[1], span[1]))
     return SampledPart(z, pixel_m, base - float(lo[2]), area, notes)
+
+
+def nan_regions(z: np.ndarray, pixel: float) -> tuple[int, int, float, float]:
+    """Where a map ``z`` (ny, nx) sampled every ``pixel`` [m] has no material (NaN): the
+    number of such samples, the largest 4-connected region's, and its centre (x, y) [m] in the
+    plate frame (the map centred on the origin)."""
+    from scipy import ndimage
+
+    nan = np.isnan(z)
+    labels, n = ndimage.label(nan)
+    if n == 0:
+        return 0, 0, 0.0, 0.0
+    sizes = np.bincount(labels.ravel())[1:]
+    k = int(np.argmax(sizes)) + 1
+    iy, ix = ndimage.center_of_mass(nan, labels, k)
+    ny, nx = z.shape
+    return (
+        int(nan.sum()),
+        int(sizes[k - 1]),
+        (ix - (nx - 1) / 2) * pixel,
+        (iy - (ny - 1) / 2) * pixel,
+    )
+
+
+def describe_nan(z: np.ndarray, pixel: float) -> str:
+    """What :func:`nan_regions` finds, in words (mm)."""
+    n, big, x, y = nan_regions(z, pixel)
+    return (
+        f"{n} samples without material (NaN); the largest region, {big} samples, around "
+        f"x = {x * 1e3:.4g} mm, y = {y * 1e3:.4g} mm"
+    )
+
+
+def _outline(z: np.ndarray, pixel: float, where: str, holes: bool, notes: list) -> np.ndarray:
+    """``z`` with its samples beyond the part's outline (those without material that reach
+    the grid's border) on the base, z = 0; samples without material inside the outline (a
+    through-hole) refused, or with ``holes`` kept (NaN) and reported."""
+    from scipy import ndimage
+
+    nan = np.isnan(z)
+    if not nan.any():
+        return z
+    labels, _ = ndimage.label(nan)
+    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    z = np.where(np.isin(labels, border[border > 0]), 0.0, z)
+    if not np.isnan(z).any():
+        return z
+    what = f"the part has holes through it: {describe_nan(z, pixel)}"
+    if not holes:
+        raise ConfigError(
+            f"{where}: {what}; valid: material at every sample inside the part's outline, or "
+            "pass holes=true if the holes are intended (no material: the pad meets nothing there)"
+        )
+    notes.append(f"{what}; kept as holes (holes=true)")
+    return z
 
 
 def _check_overhangs(v, up, xs, ys, pixel, where, fill, notes) -> None:
