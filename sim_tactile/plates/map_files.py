@@ -3,8 +3,8 @@ checked before their contents are read.
 
 * Every file: at most :data:`MAX_FILE_BYTES`, hashed in blocks (:func:`file_sha256`).
 * ``.npy``: its header alone is read first (``numpy.lib.format``); the array must be 2-D,
-  of numbers (no object dtype: no pickle), within :data:`~.spec.MAX_HEIGHTMAP_SAMPLES`, and
-  the file exactly as long as the header says, before the samples are read.
+  of numbers (no object dtype: no pickle) and within :data:`~.spec.MAX_HEIGHTMAP_SAMPLES`,
+  and the file exactly as long as the header says, before the samples are read.
 * ``.png``: its size is read from the header (Pillow decodes nothing until asked), and must
   be within the same number of samples, before the pixels are decoded; a file Pillow takes
   for a decompression bomb is refused as such.
@@ -59,9 +59,9 @@ def _samples_ok(shape: tuple[int, ...], where: str) -> None:
         )
 
 
-def npy_header(path: Path, where: str) -> tuple[tuple[int, ...], np.dtype]:
-    """``(shape, dtype)`` of a ``.npy`` file, from its header alone, checked: 2-D, numbers,
-    within the samples' cap, the file as long as the header says."""
+def npy_header(path: Path, where: str) -> tuple[tuple[int, ...], np.dtype, int]:
+    """``(shape, dtype, the file's length [bytes])`` of a ``.npy`` file, from its header
+    alone, checked: 2-D, numbers, within the samples' cap."""
     from numpy.lib import format as npf
 
     try:
@@ -84,19 +84,19 @@ def npy_header(path: Path, where: str) -> tuple[tuple[int, ...], np.dtype]:
     if len(shape) != 2:
         raise ConfigError(f"{where}: the array has shape {shape}; valid: a 2-D height map")
     _samples_ok(shape, where)
-    want = offset + math.prod(shape) * dtype.itemsize
+    return shape, dtype, offset + math.prod(shape) * dtype.itemsize
+
+
+def read_npy(path: Path, where: str) -> np.ndarray:
+    """The samples of a ``.npy`` height map, its header checked first (:func:`npy_header`)
+    and the file as long as the header says."""
+    shape, dtype, want = npy_header(path, where)
     size = path.stat().st_size
     if size != want:
         raise ConfigError(
             f"{where}: the file is {size} bytes, its header describes {want} ({shape}, "
             f"{dtype!s}); valid: a whole .npy file"
         )
-    return shape, dtype
-
-
-def read_npy(path: Path, where: str) -> np.ndarray:
-    """The samples of a ``.npy`` height map, its header checked first (:func:`npy_header`)."""
-    npy_header(path, where)
     try:
         return np.load(path, allow_pickle=False)
     except Exception as exc:  # noqa: BLE001  (any parse failure of the user's bytes)

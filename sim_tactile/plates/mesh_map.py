@@ -15,8 +15,9 @@ The steps, each of which refuses bad input with an error that names the file:
 5. **Sampled**: the top surface is z-buffered every ``pixel_m`` on a grid centred on the
    textured area (the samples more than 1 um above the lowest point of the top surface; the
    whole part if none is); that lowest point becomes z = 0.
-6. **Outlined**: the part has material wherever its footprint does. Samples that no triangle
-   covers and that reach the grid's border (beyond the part's outline: the grid, centred on
+6. **Outlined**: the part has material wherever its footprint does. A sample on the part's
+   outline that round-off puts outside it takes the height of the nearest triangle's plane
+   (:data:`OUTLINE_EPS`). Samples that no triangle covers and that reach the grid's border (beyond the part's outline: the grid, centred on
    the texture, extends past an off-centre part on one side, and a sample on the part's edge
    may fall just outside it) are the plate's flat base, z = 0, as the plate's base around
    the map is; the plate's notes say so where the grid reaches more than a sample beyond the
@@ -48,6 +49,11 @@ TEXTURE_TOL_M = 1e-6
 OVERHANG_TOL_M = 1e-6
 #: Samples a raised feature must span to be resolved.
 RESOLVE_SAMPLES = 3
+#: Barycentric slack within which a sample that no triangle covers takes the plane of the
+#: nearest, and how far beyond a triangle's bounding box it is looked for [samples]: a
+#: sample on the part's outline may fall outside it by the STL's float32 round-off (6e-8 of
+#: a coordinate: 3 nm at 50 mm), 3e-5 of a 0.1 mm triangle and 6e-5 of a 50 um sample.
+OUTLINE_EPS = 1e-3
 UNITS_M = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "in": 0.0254}
 UPS = ("+z", "-z", "+x", "-x", "+y", "-y")
 
@@ -163,11 +169,17 @@ def sample_part(
         )
     a, b, c = (v[mesh.faces[:, k]] for k in range(3))
     normal_z = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    up = mesh.faces[normal_z > 0]
+    is_up = normal_z > 0
+    up = mesh.faces[is_up]
+    # the top's rim: upward faces beside others (walls), the only ones a sample on the
+    # outline can be near
+    pairs = mesh.face_adjacency
+    beside = pairs[is_up[pairs[:, 0]] != is_up[pairs[:, 1]]].ravel()
+    rim = mesh.faces[beside[is_up[beside]]]
     # first pass: where the texture lies
     xs = lo[0] + np.arange(math.ceil((hi[0] - lo[0]) / pixel_m) + 1) * pixel_m
     ys = lo[1] + np.arange(math.ceil((hi[1] - lo[1]) / pixel_m) + 1) * pixel_m
-    top = zbuffer(v, up, xs, ys)
+    top = _top(v, up, rim, xs, ys)
     base = float(np.nanmin(top))
     relief = float(np.nanmax(top)) - base
     if relief > MAX_FEATURE_HEIGHT_M:
@@ -192,7 +204,7 @@ def sample_part(
     cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
     # second pass: a grid centred on the texture
     xs, ys = _grid(cx, lo[0], hi[0], pixel_m), _grid(cy, lo[1], hi[1], pixel_m)
-    top = zbuffer(v, up, xs, ys)
+    top = _top(v, up, rim, xs, ys)
     _check_overhangs(v, up, xs, ys, pixel_m, where, fill_overhangs, notes)
     z = top - float(np.nanmin(top))  # this grid's lowest point (the first's, to round-off)
     _check_resolved(z, pixel_m, where)
@@ -212,6 +224,17 @@ def sample_part(
     span = ((z.shape[1] - 1) * pixel_m, (z.shape[0] - 1) * pixel_m)
     area = (min(area[0], span[0]), min(area[1], span[1]))
     return SampledPart(z, pixel_m, base - float(lo[2]), area, notes)
+
+
+def _top(v, up, rim, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """The top surface's heights on the grid (:func:`.zbuffer.zbuffer` of the upward faces
+    ``up``); a sample on the part's outline that round-off puts outside it takes the plane of
+    the nearest face of the top's ``rim``."""
+    top = zbuffer(v, up, xs, ys)
+    if np.isnan(top).any() and len(rim):
+        near = zbuffer(v, rim, xs, ys, edge_eps=OUTLINE_EPS, reach=OUTLINE_EPS)
+        top = np.where(np.isnan(top), near, top)
+    return top
 
 
 def nan_regions(z: np.ndarray, pixel: float) -> tuple[int, int, float, float]:
@@ -241,7 +264,7 @@ def describe_nan(z: np.ndarray, pixel: float) -> str:
     n, big, x, y = nan_regions(z, pixel)
     return (
         f"{n} samples without material (NaN); the largest region, {big} samples, around "
-        f"x = {x * 1e3:.4g} mm, y = {y * 1e3:.4g} mm"
+        f"x = {round(x * 1e3, 3) + 0.0:.3f} mm, y = {round(y * 1e3, 3) + 0.0:.3f} mm"
     )
 
 

@@ -294,7 +294,7 @@ def _raster(src: Source, path: Path, where: str) -> tuple[np.ndarray, float, lis
         unit = {None: 1.0, "m": 1.0, "mm": 1e-3, "um": 1e-6}.get(src.units)
         if unit is None:
             raise ConfigError(f"{where}: units = {src.units!r} is not valid; valid: m, mm, um")
-        shape, _ = map_files.npy_header(path, where)
+        shape, _, _ = map_files.npy_header(path, where)
         _check_sides(shape[::-1] if round(turns) % 2 else shape, pixel, where)
         z = map_files.read_npy(path, where) * unit
     else:
