@@ -458,14 +458,14 @@ class Plate:
         """Build a plate from :meth:`params`-style data (e.g. a TOML or JSON file). A height
         map's parameters name its samples by SHA-256: ``maps`` holds them by that hash (a
         data set's store does, :func:`~sim_tactile.datasets.store.plate_maps`)."""
-        if not isinstance(params, dict) or "texture" not in params:
+        if not isinstance(params, dict) or not isinstance(params.get("texture"), dict):
             raise ConfigError("plate parameters must be a table with a 'texture' table")
         p = dict(params)
         tex = dict(p.pop("texture"))
         kind = tex.pop("kind", None)
         if kind == "heightmap":
             return cls._from_map_params(p, tex, name, maps or {})
-        if kind not in _TEXTURES:
+        if not isinstance(kind, str) or kind not in _TEXTURES:
             raise ConfigError(
                 f"texture.kind = {kind!r} is not valid; valid: {', '.join(_TEXTURES)}"
             )
@@ -480,7 +480,7 @@ class Plate:
     @classmethod
     def _from_map_params(cls, p: dict, tex: dict, name, maps: dict) -> Plate:
         sha = tex.get("sha256")
-        if sha not in maps:
+        if not isinstance(sha, str) or sha not in maps:
             raise ConfigError(
                 f"plate {name or ''!s}: its height map (sha256 {sha}) is not given; a height-map "
                 "plate is re-created from its samples (a data set's store holds them)"
