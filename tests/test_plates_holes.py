@@ -82,6 +82,7 @@ def test_an_off_centre_part_exported_and_imported_again_has_material_everywhere(
     assert np.isfinite(height_at(back, px, py)).all()
 
 
+@pytest.mark.slow
 def test_the_exported_stl_of_a_map_plate_comes_back_as_the_same_surface(tmp_path):
     x = np.arange(151) * PIXEL_M
     z = 2e-4 * (1 + np.sin(2 * np.pi * x / 2e-3))[None, :] * np.ones((51, 1))

@@ -97,9 +97,17 @@ def become_subreaper() -> None:
         pass
 
 
-def _exited(pid: int, timeout_s: float) -> bool:
-    """Whether ``pid`` (a child) exited within ``timeout_s``; it is not reaped, so that its
-    pid, process group and session stay its own until :func:`kill_session` has run."""
+def _exited(proc: subprocess.Popen, timeout_s: float) -> bool:
+    """Whether the child ``proc`` exited within ``timeout_s``; it is not reaped (where
+    ``os.waitid`` can wait without reaping), so that its pid, process group and session stay
+    its own until :func:`kill_session` has run."""
+    if not hasattr(os, "waitid") or not hasattr(os, "WNOWAIT"):
+        try:
+            proc.wait(timeout_s)
+            return True
+        except subprocess.TimeoutExpired:
+            return False
+    pid = proc.pid
     deadline = time.monotonic() + timeout_s
     delay = 0.002
     while True:
@@ -127,7 +135,7 @@ def run_limited(cmd: list[str], *, cwd: str, env: dict, timeout_s: float, log: P
             env=env,
         )
     try:
-        finished = _exited(proc.pid, timeout_s)
+        finished = _exited(proc, timeout_s)
     finally:
         kill_session(proc.pid)
         proc.wait()
