@@ -121,7 +121,9 @@ PLATE_FRAME_HELP = (
     "The options of a part or height map, as comma-separated key=value: units (mm, m, um, "
     "in), up (+z, -z, +x, -x, +y, -y: the part's axis that points up), rotate_deg (about z), "
     "scale, pixel_m (the height map's sample spacing), z_scale_m (a PNG's metres per count), "
-    "thickness_m, fill_overhangs (true or false), timeout_s (a script's time limit) and name."
+    "thickness_m, fill_overhangs (true or false), holes (true or false: keep a map's NaN "
+    "samples or a hole through a part as intended holes), timeout_s (a script's time limit) "
+    "and name."
 )
 
 
