@@ -132,12 +132,7 @@ def export(
     names = parts if suite else [part]
     stores = {name: open_store(path, name) for name in names}
     for st in stores.values():
-        missing = st.missing()
-        if missing:
-            raise StoreError(
-                f"{str(st.path)!r} is incomplete ({missing} of {len(st)} slides missing); "
-                "finish it with 'sim-tactile generate ... --resume' before exporting"
-            )
+        st.require_complete(" before exporting")
     docs = {}
     with building(out) as tmp:
         for name, st in stores.items():

@@ -68,21 +68,21 @@ def take(tmp: Path, out: Path) -> None:
         raise
 
 
-def _missing_parents(path: Path) -> list[Path]:
-    out = []
-    for p in path.parents:
-        if p.exists():
-            break
-        out.append(p)
-    return out
-
-
-def _remove_empty(folders: list[Path]) -> None:
-    for p in folders:  # innermost first
-        try:
-            p.rmdir()
-        except OSError:
-            return
+@contextmanager
+def no_empty_folders_left(path: Path) -> Iterator[None]:
+    """On any failure inside the block, remove ``path`` and its parents that the block made,
+    where they are empty (innermost first): a failed command leaves no empty folder it
+    created. Folders holding files are kept."""
+    made = [p for p in (path, *path.parents) if not p.exists()]
+    try:
+        yield
+    except BaseException:
+        for p in made:
+            try:
+                p.rmdir()
+            except OSError:
+                break
+        raise
 
 
 @contextmanager
@@ -91,18 +91,17 @@ def building(out: Path) -> Iterator[Path]:
     ends without an error (``out`` may exist only as an empty folder). On any failure the
     temporary folder, and every parent folder this call made, is removed: nothing is left
     behind. OS faults become one-line :class:`StoreError` naming ``out``."""
-    made = _missing_parents(out)
     tmp = temp_name(out, "partial")
-    try:
-        with fs_errors(out):
-            out.parent.mkdir(parents=True, exist_ok=True)
-            tmp.mkdir()
-            yield tmp
-            take(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        _remove_empty(made)
-        raise
+    with no_empty_folders_left(out.parent):
+        try:
+            with fs_errors(out):
+                out.parent.mkdir(parents=True, exist_ok=True)
+                tmp.mkdir()
+                yield tmp
+                take(tmp, out)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
 
 
 def lock_path(store: Path) -> Path:

@@ -217,6 +217,19 @@ class SlideStore:
         """The number of slides not written (or whose checksum chunk is unreadable)."""
         return int((self.checksums() == 0).sum())
 
+    def require_complete(self, what: str = "") -> None:
+        """Raise unless every slide is written (naming a slide whose checksum chunk is
+        unreadable, else how many are missing)."""
+        sums, bad = read_checksums(self._checksum, self._where)
+        for i, why in bad.items():
+            raise self._damaged(i, why)
+        missing = int((sums == 0).sum())
+        if missing:
+            raise StoreError(
+                f"{self._where} is incomplete: {missing} of {len(self)} slides are not "
+                f"written; finish it with 'sim-tactile generate ... --resume'{what}"
+            )
+
     def to_tactile(self) -> TactileDataset:
         """The whole data set in memory, as the classifiers and protocols take it."""
         if len(set(self.lengths.tolist())) != 1:
@@ -224,12 +237,7 @@ class SlideStore:
                 f"{self._where}: slides of several lengths ({sorted(set(self.lengths))}); "
                 "a TactileDataset needs one length: crop them first"
             )
-        missing = self.missing()
-        if missing:
-            raise StoreError(
-                f"{self._where} is incomplete: {missing} of {len(self)} slides are not "
-                "written; finish it with 'sim-tactile generate ... --resume'"
-            )
+        self.require_complete()
         x = np.concatenate([b for b, _ in self.batches()]) if len(self) else None
         meta = dict(self.meta.get("dataset_meta") or {})
         meta.update(

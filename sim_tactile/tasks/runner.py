@@ -20,6 +20,7 @@ from sklearn.pipeline import Pipeline
 
 from .. import __version__
 from .._validate import integer
+from ..datasets.fs import no_empty_folders_left
 from ..datasets.reader import open_store, parts_of
 from ..errors import ConfigError, StoreError, require
 from ..hashing import derive_seed
@@ -210,6 +211,25 @@ def run_task(
         methods: the user's methods, name -> estimator or (encoder, estimator)
             (:mod:`.methods`), scored beside the built-in rows.
     """
+    with no_empty_folders_left(Path(out_dir)):  # a failed run leaves no empty --out behind
+        return _run_task(
+            task_id,
+            out_dir,
+            quick,
+            data,
+            classifiers,
+            repeats,
+            seed,
+            log,
+            store,
+            sensor_config,
+            methods,
+        )
+
+
+def _run_task(
+    task_id, out_dir, quick, data, classifiers, repeats, seed, log, store, sensor_config, methods
+) -> dict:
     t_start = time.perf_counter()
     log = log or stderr_log
     if is_config_path(task_id):
