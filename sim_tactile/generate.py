@@ -30,7 +30,13 @@ from . import _validate as v
 from .cache import default_root
 from .datasets.export import spec_from_tactile
 from .datasets.fs import StoreLock, fs_errors
-from .datasets.integrity import compare_index, damaged_index, reading, values_digest
+from .datasets.integrity import (
+    chunk_files,
+    compare_index,
+    damaged_index,
+    reading,
+    values_digest,
+)
 from .datasets.store import (
     DataGroup,
     SlideWriter,
@@ -160,13 +166,21 @@ def _repair_index(dg: DataGroup, plan: Plan, where: str, out: Path, log) -> list
     for name, why in dg.damage.items():
         if values_digest(expected[name]) != recorded[name]:
             raise damaged_index(where, {name: f"{why}, and the configuration gives other values"})
+    if not dg.damage:
+        return []
+    files = dict(dg.attrs["integrity"]["files"])
+    folder = out / plan.group if plan.group else out
     for name, why in dg.damage.items():
         with fs_errors(out):
             dg.arrays[name][...] = expected[name]
         dg.index[name] = expected[name]
+        files = {k: d for k, d in files.items() if not k.startswith(f"{name}/c/")}
+        files.update(chunk_files(folder, name))  # the bytes as written now
         log(
             f"{where}: the array {name!r} was damaged ({why}); written again from the configuration"
         )
+    dg.attrs["integrity"] = {**dg.attrs["integrity"], "files": files}
+    set_attrs(dg.group, {"integrity": dg.attrs["integrity"]}, out)
     return list(dg.damage)
 
 

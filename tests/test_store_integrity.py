@@ -30,7 +30,7 @@ from _stores import (
 
 from sim_tactile import datasets
 from sim_tactile.cli import main
-from sim_tactile.datasets.integrity import INDEX_DTYPES, sealed, values_digest
+from sim_tactile.datasets.integrity import INDEX_DTYPES, chunk_files, sealed, values_digest
 from sim_tactile.errors import ConfigError, StoreError
 
 INDEX = tuple(INDEX_DTYPES)
@@ -432,9 +432,10 @@ def test_a_store_whose_index_disagrees_with_its_configuration_is_refused(store, 
     labels = g["labels"][...]
     labels[[0, 5]] = labels[[5, 0]]
     g["labels"][...] = labels
-    attrs = _attrs_doc(store)["attributes"]
-    attrs["integrity"]["values"]["labels"] = values_digest(labels)
-    _craft(store, integrity=attrs["integrity"])
+    integ = _attrs_doc(store)["attributes"]["integrity"]
+    integ["values"]["labels"] = values_digest(labels)
+    integ["files"].update(chunk_files(store, "labels"))
+    _craft(store, integrity=integ)
     assert datasets.open(store).labels.tolist() == [1, 0, 0, 1, 1, 0]  # reads: self-consistent
     from sim_tactile.tasks.config_task import config_task
     from sim_tactile.tasks.registry import DataRequest

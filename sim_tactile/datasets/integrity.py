@@ -5,8 +5,10 @@ every index array's values against digests written when the store was made.
   all its other attributes (updated with them, in the same atomic write of ``zarr.json``),
   and are checked for type and range, so a crafted or damaged ``zarr.json`` is refused
   before any of it is used (no huge allocation, no path out of the store).
-- ``integrity.files``: the SHA-256 of each array's (and sub-group's) ``zarr.json``, written
-  once when the store is made: a changed shape, chunk grid, codec or fill value is found.
+- ``integrity.files``: the SHA-256 of each array's (and sub-group's) ``zarr.json`` and of
+  each index array's chunk files, written once when the store is made: a changed shape,
+  chunk grid, codec or fill value is found, and any flipped bit of an index chunk (even one
+  that decodes to the same values).
 - ``integrity.values``: the SHA-256 of each index array (``lengths``, ``labels``, ``slide``,
   ``seed``, ``params``) and of each stored height map: a flipped bit in their chunks is
   found even where it still decodes.
@@ -245,18 +247,39 @@ def check_data_attrs(attrs: dict, where: str) -> dict:
     return attrs
 
 
-def check_files(folder: Path, attrs: dict, where: str) -> None:
-    """Every metadata file the group's ``integrity.files`` names, against its digest."""
+def chunk_files(folder: Path, name: str) -> dict[str, str]:
+    """``{relative path: digest}`` of the chunk files of the array ``name`` in ``folder``
+    (an index array's chunks are written once, with the store: their bytes are recorded)."""
+    base = folder / name / "c"
+    files = sorted(p for p in base.rglob("*") if p.is_file()) if base.is_dir() else []
+    return {p.relative_to(folder).as_posix(): file_digest(p) for p in files}
+
+
+def check_files(folder: Path, attrs: dict, where: str) -> dict[str, str]:
+    """Every file the group's ``integrity.files`` names, against its digest: a metadata
+    file that fails raises; an index array's chunk file that fails (or is missing) is
+    returned as that array's damage (``{array: damage}``: ``--resume`` writes it again)."""
+    damage = {}
     for rel, want in attrs["integrity"]["files"].items():
-        if not all(plain_name(p) for p in rel.split("/")):
+        parts = rel.split("/")
+        if not all(plain_name(p) for p in parts):
             raise _bad(where, "integrity.files", rel, "relative names inside the store")
-        path = folder / rel
-        with reading(where, rel):
-            got = file_digest(path)
-        if got != want:
+        chunk = parts[0] in INDEX_DTYPES and len(parts) > 2 and parts[1] == "c"
+        try:
+            with reading(where, rel):
+                ok = file_digest(folder / rel) == want
+        except StoreError:
+            if not chunk:
+                raise
+            ok = False
+        if ok:
+            continue
+        if not chunk:
             raise StoreError(
                 f"{where}: {rel} does not match its digest (altered or damaged); {REMAKE_HINT}"
             )
+        damage.setdefault(parts[0], f"its chunk file {rel} is altered, truncated or missing")
+    return damage
 
 
 def array_layout(attrs: dict) -> dict[str, tuple[tuple, tuple | None, str]]:

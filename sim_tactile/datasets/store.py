@@ -59,6 +59,7 @@ from .integrity import (
     check_data_attrs,
     check_files,
     check_root_attrs,
+    chunk_files,
     config_hash,
     file_digest,
     index_values,
@@ -204,10 +205,10 @@ def _create_group(root, folder: Path, path: str, spec: StoreSpec) -> None:
             values[f"plate_maps/{sha}"] = z
             names.append(f"plate_maps/{sha}")
     here = folder / path if path else folder
-    integrity = {
-        "files": {f"{k}/zarr.json": file_digest(here / k / "zarr.json") for k in names},
-        "values": {k: values_digest(x) for k, x in values.items()},
-    }
+    files = {f"{k}/zarr.json": file_digest(here / k / "zarr.json") for k in names}
+    for k in INDEX_DTYPES:
+        files.update(chunk_files(here, k))
+    integrity = {"files": files, "values": {k: values_digest(x) for k, x in values.items()}}
     g.attrs.put(sealed({**spec.attrs(), "integrity": integrity}))
 
 
@@ -377,10 +378,10 @@ def open_data(group, folder: Path, where: str) -> DataGroup:
     if attrs.get("format") != FORMAT:
         raise StoreError(f"{where} holds no sim_tactile data set")
     check_data_attrs(attrs, where)
-    check_files(folder, attrs, where)
+    damage = check_files(folder, attrs, where)
     arrays = check_arrays(group, attrs, where)
-    index, damage = index_values(arrays, attrs, where)
-    return DataGroup(group, attrs, arrays, index, damage)
+    index, bad_values = index_values(arrays, attrs, where)
+    return DataGroup(group, attrs, arrays, index, {**damage, **bad_values})
 
 
 def plate_maps(group, attrs: dict | None = None, where: str = "the store") -> dict[str, np.ndarray]:
