@@ -168,8 +168,8 @@ def _fill(p: Path) -> None:
         (lambda p: (p / "zarr.json").write_text("{"), "zarr.json cannot be read"),
         (_fill, "data/zarr.json does not match its digest"),
         (lambda p: _truncate(p / "labels" / "zarr.json"), "labels/zarr.json does not match"),
-        (lambda p: (p / "checksum" / "zarr.json").unlink(), "checksum/zarr.json cannot be read"),
-        (lambda p: shutil.rmtree(p / "slide"), "slide/zarr.json cannot be read"),
+        (lambda p: (p / "checksum" / "zarr.json").unlink(), "checksum/zarr.json is missing"),
+        (lambda p: shutil.rmtree(p / "slide"), "slide/zarr.json is missing"),
     ],
 )
 def test_damaged_metadata_is_refused_by_readers_and_resume(store, damage, message):
@@ -422,6 +422,8 @@ def test_run_and_export_on_a_damaged_store_say_one_line_and_leave_no_folder(
         assert main(argv) == 2
         err = capsys.readouterr().err.strip()
         assert "\n" not in err and err.startswith("sim-tactile: error: ") and "labels" in err
+    assert main(["export", str(store), "--out", str(tmp_path / "x"), "--format", "hdf5"]) == 2
+    assert "--format 'hdf5' is not valid; valid: numpy" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr", "tiny.json"]
 
 

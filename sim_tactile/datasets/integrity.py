@@ -32,8 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cache import array_digest
 from ..errors import StoreError
-from ..hashing import content_hash
+from ..hashing import content_hash, file_digest
 
 FORMAT = "sim_tactile.slides"
 #: 2: digests of the attributes, metadata files and index arrays; slide checksums keyed by
@@ -81,16 +82,9 @@ def slide_digest(x: np.ndarray, index: int, key: str) -> int:
 
 
 def values_digest(x: np.ndarray) -> str:
-    """SHA-256 of an array's type, shape and values."""
-    x = np.ascontiguousarray(x)
-    x = x.astype(x.dtype.newbyteorder("<"), copy=False)
-    h = hashlib.sha256(f"{x.dtype.str}{x.shape}".encode())
-    h.update(x.tobytes())
-    return h.hexdigest()
-
-
-def file_digest(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+    """SHA-256 of an array's type, shape and values (little-endian, whatever the machine)."""
+    x = np.asarray(x)
+    return array_digest(x.astype(x.dtype.newbyteorder("<"), copy=False))
 
 
 def _plain_default(obj):
@@ -105,9 +99,8 @@ def plain(obj: object) -> object:
 
 
 def attrs_digest(attrs: dict) -> str:
-    body = {k: v for k, v in attrs.items() if k != DIGEST_ATTR}
-    text = json.dumps(body, sort_keys=True, separators=(",", ":"), allow_nan=True)
-    return hashlib.sha256(text.encode()).hexdigest()
+    """SHA-256 of the canonical JSON of a group's attributes, its own digest left out."""
+    return content_hash({k: v for k, v in attrs.items() if k != DIGEST_ATTR})
 
 
 def sealed(attrs: dict) -> dict:
@@ -265,20 +258,15 @@ def check_files(folder: Path, attrs: dict, where: str) -> dict[str, str]:
         if not all(plain_name(p) for p in parts):
             raise _bad(where, "integrity.files", rel, "relative names inside the store")
         chunk = parts[0] in INDEX_DTYPES and len(parts) > 2 and parts[1] == "c"
-        try:
-            with reading(where, rel):
-                ok = file_digest(folder / rel) == want
-        except StoreError:
-            if not chunk:
-                raise
-            ok = False
-        if ok:
+        with reading(where, rel):
+            got = file_digest(folder / rel)
+        if got == want:
             continue
-        if not chunk:
-            raise StoreError(
-                f"{where}: {rel} does not match its digest (altered or damaged); {REMAKE_HINT}"
-            )
-        damage.setdefault(parts[0], f"its chunk file {rel} is altered, truncated or missing")
+        if chunk:
+            damage.setdefault(parts[0], f"its chunk file {rel} is altered, truncated or missing")
+            continue
+        what = "is missing" if got == "absent" else "does not match its digest (altered or damaged)"
+        raise StoreError(f"{where}: {rel} {what}; {REMAKE_HINT}")
     return damage
 
 
