@@ -29,7 +29,7 @@ import numpy as np
 from . import _validate as v
 from .cache import default_root
 from .datasets.export import spec_from_tactile
-from .datasets.fs import StoreLock, fs_errors
+from .datasets.fs import StoreLock, fs_errors, no_empty_folders_left
 from .datasets.integrity import (
     chunk_files,
     compare_index,
@@ -44,6 +44,7 @@ from .datasets.store import (
     create_store,
     open_data,
     open_root,
+    read_checksums,
     set_attrs,
     versions,
 )
@@ -122,7 +123,7 @@ def _describe_existing(out: Path) -> str:
         root = open_root(out)
         groups = [root[p] for p in root.attrs.get("parts") or []] or [root]
         n = sum(int(g.attrs["n_slides"]) for g in groups)
-        done = sum(int((g["checksum"][:] != 0).sum()) for g in groups)
+        done = sum(int((read_checksums(g["checksum"], str(out))[0] != 0).sum()) for g in groups)
     except StoreError as exc:
         return str(exc)
     except Exception:  # a damaged store: saying so is enough here
@@ -354,7 +355,7 @@ def generate(
         else make_backend(fn, workers=1)
     )
     try:
-        with StoreLock(out):
+        with no_empty_folders_left(out), StoreLock(out):
             resumed = out.exists()
             root, groups, repaired = _open_or_create(out, plans, root_attrs, resume, log)
             run = _Run(plans, repaired=repaired)

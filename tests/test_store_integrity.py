@@ -397,17 +397,23 @@ def test_writing_a_store_on_a_full_disk_keeps_what_was_written(
     assert res["reused"] == 3 and res["written"] == 3
     assert_same(read_back(out), ref_back)
     # a full disk while the store is made: nothing is left
+
+    def full(*a):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
     with monkeypatch.context() as mp:
-        mp.setattr(
-            zarr.Array,
-            "__setitem__",
-            lambda *a: (_ for _ in ()).throw(OSError(errno.ENOSPC, "full")),
-        )
+        mp.setattr(zarr.Array, "__setitem__", full)
         with pytest.raises(
             StoreError, match=f"no space left on device writing {tmp_path / 'new.zarr'}"
         ):
             quiet_generate(tmp_path / "tiny.json", tmp_path / "new.zarr")
     assert not (tmp_path / "new.zarr").exists() and ".creating" not in str(_leftovers(tmp_path))
+    deep = tmp_path / "a" / "b" / "new.zarr"  # and no folder it made for it
+    with monkeypatch.context() as mp:
+        mp.setattr(zarr.Array, "__setitem__", full)
+        with pytest.raises(StoreError, match=f"no space left on device writing {deep}"):
+            quiet_generate(tmp_path / "tiny.json", deep)
+    assert not (tmp_path / "a").exists() and _leftovers(tmp_path) == []
 
 
 def test_run_and_export_on_a_damaged_store_say_one_line_and_leave_no_folder(

@@ -80,7 +80,9 @@ def no_empty_folders_left(path: Path) -> Iterator[None]:
         for p in made:
             try:
                 p.rmdir()
-            except OSError:
+            except FileNotFoundError:
+                continue
+            except OSError:  # not empty: it, and every folder above it, is kept
                 break
         raise
 
