@@ -123,10 +123,9 @@ def test_a_damaged_checksum_chunk_is_found_and_written_again(store, ref_back):
     (store / "checksum" / "c" / "2").write_bytes(b"\x01\x02\x03")  # truncated
     flip_bit(store / "checksum" / "c" / "5", 3)
     st = datasets.open(store)
-    assert st.verify() == [
-        (2, "its checksum chunk cannot be read (ValueError)"),
-        (5, "checksum mismatch (the chunk was altered, truncated or moved)"),
-    ] or [i for i, _ in st.verify()] == [2, 5]
+    (two, why2), (five, why5) = st.verify()
+    assert (two, five) == (2, 5) and why2.startswith("its checksum chunk cannot be read (")
+    assert why5 == "checksum mismatch (the chunk was altered, truncated or moved)"
     with pytest.raises(StoreError, match="slide 2 of .*checksum"):
         st[2]
     with pytest.raises(StoreError, match="slide 2"):
@@ -252,6 +251,7 @@ def test_a_suite_whose_parts_leave_the_store_is_refused(store, tmp_path, bad):
 
 def test_a_plain_suite_exports_each_part(store, tmp_path, ref_back):
     suite = _suite(tmp_path, store, ["p1"])
+    (tmp_path / "npy").mkdir()  # an empty folder is taken
     doc = datasets.export(suite, tmp_path / "npy")
     assert doc["parts"]["p1"]["out"] == str(tmp_path / "npy" / "p1") and doc["slides"] == 6
     np.testing.assert_array_equal(np.load(tmp_path / "npy" / "p1" / "data.npy"), ref_back["data"])
