@@ -189,6 +189,7 @@ def test_damaged_metadata_is_refused_by_readers_and_resume(store, damage, messag
         ({"n_slides": 10**12}, r"n_slides = 1000000000000 is not valid \(an integer in"),
         ({"n_slides": 7}, r"'data' is \(6, 20, 9\) float32, the attributes say \(7, 20, 9\)"),
         ({"n_time": 10**12}, "n_time = .* is not valid"),
+        ({"n_time": 2 * 10**7}, r"n_time = 20000000 is not valid \(n_time x channels <="),
         ({"class_names": None}, "class_names = None is not valid"),
         ({"class_names": "flat"}, "class_names = 'flat' is not valid"),
         ({"channel_names": ["a"]}, "taxel_positions|'data' is"),
@@ -455,3 +456,37 @@ def test_a_store_whose_index_disagrees_with_its_configuration_is_refused(store, 
     with pytest.raises(StoreError, match=r"labels of slide 0 is 1, its configuration gives 0"):
         _resume(store)
     assert TINY["slides_per_plate"] == 3
+
+
+@pytest.mark.parametrize(
+    ("code", "message"), [(errno.ENOSPC, "no space left on device writing"), (errno.EROFS, "")]
+)
+def test_run_on_a_full_or_read_only_disk_is_one_line_and_leaves_no_folder(
+    store, tmp_path, monkeypatch, code, message
+):
+    from sim_tactile.tasks import runner
+
+    out = tmp_path / "run" / "out"
+
+    def refuse(spec, ds, folder, **kw):
+        folder.mkdir(parents=True)
+        raise OSError(code, os.strerror(code), str(folder / "report.json"))
+
+    monkeypatch.setattr(runner, "evaluate_task", refuse)
+    with pytest.raises(StoreError) as e:
+        runner.run_task(
+            str(tmp_path / "tiny.json"), out, store=store, seed=None, log=lambda m: None
+        )
+    want = f"no space left on device writing {out}" if message else f"{out} is read-only"
+    assert _one_line(e).startswith(want)
+    assert not (tmp_path / "run").exists()
+    # an input that cannot be read is not the output's fault: it passes unchanged
+    monkeypatch.setattr(
+        runner,
+        "evaluate_task",
+        lambda *a, **k: (_ for _ in ()).throw(PermissionError(13, "no", "/x")),
+    )
+    with pytest.raises(PermissionError):
+        runner.run_task(
+            str(tmp_path / "tiny.json"), out, store=store, seed=None, log=lambda m: None
+        )

@@ -49,6 +49,20 @@ def fs_errors(path: str | Path, hint: str = "") -> Iterator[None]:
         raise io_error(exc, path, hint) from None
 
 
+@contextmanager
+def write_faults(folder: Path) -> Iterator[None]:
+    """A full disk or a read-only file system met writing under ``folder`` as one
+    :class:`StoreError` naming ``folder``; every other error passes unchanged."""
+    try:
+        yield
+    except OSError as exc:
+        name = exc.filename
+        inside = name is None or Path(os.path.abspath(name)).is_relative_to(folder.absolute())
+        if exc.errno in _NO_SPACE + _READ_ONLY and inside:
+            raise io_error(exc, folder) from None
+        raise
+
+
 def temp_name(path: Path, what: str) -> Path:
     """A fresh hidden name beside ``path`` (same folder, so a rename is atomic)."""
     return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.{what}")

@@ -56,6 +56,7 @@ DIGEST_ATTR = "attrs_sha256"
 MAX_SLIDES = 10**8
 MAX_TIME = 10**8
 MAX_CHANNELS = 10**6
+MAX_SLIDE_VALUES = 10**8  # samples x channels of one slide (400 MB)
 #: names a store's metadata may use as a folder: a part of a suite, an array
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,199}")
 
@@ -216,6 +217,8 @@ def check_data_attrs(attrs: dict, where: str) -> dict:
     _int_in(attrs, "n_time", 1, MAX_TIME, where)
     _names(attrs, "class_names", MAX_SLIDES, where)
     channels = _names(attrs, "channel_names", MAX_CHANNELS, where)
+    if attrs["n_time"] * len(channels) > MAX_SLIDE_VALUES:
+        raise _bad(where, "n_time", attrs["n_time"], f"n_time x channels <= {MAX_SLIDE_VALUES}")
     rate = attrs.get("rate_hz")
     if isinstance(rate, bool) or not isinstance(rate, int | float) or not 0 < rate < math.inf:
         raise _bad(where, "rate_hz", rate, "a positive number")

@@ -20,7 +20,7 @@ from sklearn.pipeline import Pipeline
 
 from .. import __version__
 from .._validate import integer
-from ..datasets.fs import no_empty_folders_left
+from ..datasets.fs import no_empty_folders_left, write_faults
 from ..datasets.reader import open_store, parts_of
 from ..errors import ConfigError, StoreError, require
 from ..hashing import derive_seed
@@ -211,7 +211,8 @@ def run_task(
         methods: the user's methods, name -> estimator or (encoder, estimator)
             (:mod:`.methods`), scored beside the built-in rows.
     """
-    with no_empty_folders_left(Path(out_dir)):  # a failed run leaves no empty --out behind
+    # a failed run leaves no empty --out behind; a full or read-only disk is one line
+    with no_empty_folders_left(Path(out_dir)), write_faults(Path(out_dir)):
         return _run_task(
             task_id,
             out_dir,
