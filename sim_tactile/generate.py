@@ -158,17 +158,25 @@ def _check_same(attrs: dict, plan: Plan, where: str) -> None:
         )
 
 
-def _repair_index(dg: DataGroup, plan: Plan, where: str, out: Path, log) -> list[str]:
-    """Write again the index arrays that are damaged, from the configuration: only where
-    the values it gives are the ones the store recorded (their digest). Returns their
-    names."""
+def _check_index(dg: DataGroup, plan: Plan, where: str) -> None:
+    """The index arrays against the ones the configuration gives: the intact ones by value,
+    the damaged ones by the digest the store recorded (they can be written again only if
+    the configuration gives those values)."""
     expected = plan.spec.index()
     recorded = dg.attrs["integrity"]["values"]
     for name, why in dg.damage.items():
         if values_digest(expected[name]) != recorded[name]:
             raise damaged_index(where, {name: f"{why}, and the configuration gives other values"})
+    intact = [k for k in expected if k not in dg.damage]
+    compare_index({k: dg.index[k] for k in intact}, {k: expected[k] for k in intact}, where)
+
+
+def _repair_index(dg: DataGroup, plan: Plan, where: str, out: Path, log) -> list[str]:
+    """Write again the damaged index arrays (checked by :func:`_check_index`) from the
+    configuration, and record their chunk files' new digests. Returns their names."""
     if not dg.damage:
         return []
+    expected = plan.spec.index()
     files = dict(dg.attrs["integrity"]["files"])
     folder = out / plan.group if plan.group else out
     for name, why in dg.damage.items():
@@ -182,7 +190,7 @@ def _repair_index(dg: DataGroup, plan: Plan, where: str, out: Path, log) -> list
         )
     dg.attrs["integrity"] = {**dg.attrs["integrity"], "files": files}
     set_attrs(dg.group, {"integrity": dg.attrs["integrity"]}, out)
-    return list(dg.damage)
+    return [f"{plan.group}/{k}" if plan.group else k for k in dg.damage]
 
 
 def _open_or_create(out: Path, plans: list[Plan], root_attrs: dict, resume: bool, log):
@@ -213,16 +221,19 @@ def _open_or_create(out: Path, plans: list[Plan], root_attrs: dict, resume: bool
         create_store(out, {p.group: p.spec for p in plans}, root_attrs)
         with reading(str(out), "the store just made"):
             root = zarr.open_group(str(out), mode="r+")
-    groups, repaired = [], []
-    for plan in plans:
+    groups, wheres = [], []
+    for plan in plans:  # every check first...
         where = f"{out}" + (f"/{plan.group}" if plan.group else "")
         with reading(where, "its zarr.json"):
             group = root[plan.group] if plan.group else root
         dg = open_data(group, out / plan.group if plan.group else out, where)
         _check_same(dg.attrs, plan, where)
-        repaired += _repair_index(dg, plan, where, out, log)
-        compare_index(dg.index, plan.spec.index(), where)
+        _check_index(dg, plan, where)
         groups.append(dg)
+        wheres.append(where)
+    repaired = []  # ...then the repairs
+    for plan, dg, where in zip(plans, groups, wheres, strict=True):
+        repaired += _repair_index(dg, plan, where, out, log)
     return root, groups, repaired
 
 

@@ -503,6 +503,17 @@ def test_a_suite_gets_one_group_per_part(tmp_path):
         _quiet("textures20-v1", out, quick=True, _worker=_fake_slide)
     res = _quiet("textures20-v1", out, quick=True, resume=True, _worker=_fake_slide)
     assert res["reused"] == 24 and res["written"] == 0
+    # a part's damaged index array and slide: refused by readers, written again by --resume
+    icub = out / "textures20-icub60-v1"
+    labels = icub.joinpath("labels", "c", "0")
+    labels.write_bytes(labels.read_bytes()[:-1])
+    with pytest.raises(StoreError, match="textures20-icub60-v1'.*'labels'"):
+        datasets.open(out, part="textures20-icub60-v1")
+    (icub / "data" / "c" / "2" / "0" / "0").unlink()
+    res = _quiet("textures20-v1", out, quick=True, resume=True, _worker=_fake_slide)
+    assert res["repaired"] == ["textures20-icub60-v1/labels"] and res["written"] == 1
+    assert [c["slide"] for c in res["corrupt"]] == [2]
+    assert datasets.open(out, part="textures20-icub60-v1").verify() == []
 
 
 def test_a_configuration_on_the_probe_rig_writes_its_slides(tmp_path):
