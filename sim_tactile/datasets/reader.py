@@ -145,12 +145,9 @@ class SlideStore:
             for k in range(a, b):
                 self._rows(k, k + 1)  # raises naming the slide
             raise
-        for k in range(a, b):
-            bad = rows_damage(
-                x[k - a : k - a + 1], self.lengths[k : k + 1], sums[k - a], k, self._key
-            )
-            if bad:
-                raise self._damaged(k, bad)
+        bad = rows_damage(x, self.lengths[a:b], sums, a, self._key)
+        if bad:
+            raise self._damaged(*bad)
         return x
 
     def __getitem__(self, i: int) -> np.ndarray:

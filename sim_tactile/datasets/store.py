@@ -326,18 +326,21 @@ def check_slide(data, lengths, i: int, expected: int, key: str) -> str | None:
         row = np.asarray(data[i])
     except Exception as exc:  # a truncated or garbled chunk fails to decode
         return f"chunk unreadable ({type(exc).__name__}: {' '.join(str(exc).split())[:120]})"
-    return rows_damage(row[None], lengths[i : i + 1], expected, i, key)
+    bad = rows_damage(row[None], lengths[i : i + 1], [expected], i, key)
+    return None if bad is None else bad[1]
 
 
-def rows_damage(rows: np.ndarray, lengths, expected, start: int, key: str) -> str | None:
-    """None if every row of ``rows`` (slides ``start...``) matches its checksum, else why
-    the first that does not."""
+def rows_damage(
+    rows: np.ndarray, lengths, expected, start: int, key: str
+) -> tuple[int, str] | None:
+    """None if every row of ``rows`` (slides ``start...``) matches its checksum in
+    ``expected``, else ``(slide, why not)`` of the first that does not."""
     for k in range(rows.shape[0]):
-        want = int(np.atleast_1d(expected)[k])
+        want = int(expected[k])
         if want == 0:
-            return "not written"
+            return start + k, "not written"
         if slide_digest(rows[k, : int(lengths[k])], start + k, key) != want:
-            return "checksum mismatch (the chunk was altered, truncated or moved)"
+            return start + k, "checksum mismatch (the chunk was altered, truncated or moved)"
     return None
 
 
