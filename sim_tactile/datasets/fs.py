@@ -1,6 +1,7 @@
 """The file system under a store: one writer at a time (:class:`StoreLock`), folders built
-under a temporary name and renamed when whole (:func:`building`), and the operating system's
-faults as one line each (:func:`io_error`, :func:`fs_errors`).
+under a temporary name and renamed when whole (:func:`building`, :func:`take`), no empty
+folder left by a failed command (:func:`no_empty_folders_left`), and the operating system's
+faults as one line each (:func:`io_error`, :func:`fs_errors`, :func:`write_faults`).
 
 The lock is an advisory ``flock`` on a file beside the store (``.NAME.lock`` in the store's
 parent folder, holding the writer's pid, host and start time): it exists before the store
