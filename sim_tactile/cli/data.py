@@ -31,7 +31,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
         res,
         lambda: (
             f"{res['out']}: {res['trials']} slides ({res['written']} simulated now, "
-            f"{res['reused']} kept, {res['regenerated']} corrupt ones redone) in "
+            f"{res['reused']} kept, {res['regenerated']} corrupt ones redone"
+            + (f", {', '.join(res['repaired'])} written again" if res["repaired"] else "")
+            + ") in "
             f"{res['wall_s']:.1f} s; store overhead "
             + (f"{100 * res['store_overhead']:.2f}%" if res["store_overhead"] else "-")
         ),
@@ -40,10 +42,11 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    """Write a data set's arrays as plain .npy files and its metadata as JSON."""
+    """Write a data set's arrays as plain files (``--format``; numpy: .npy files and its
+    metadata as JSON), built beside ``--out`` and renamed when whole."""
     from ..datasets import export
 
-    res = export(args.store, args.out, part=args.part)
+    res = export(args.store, args.out, part=args.part, format=args.format)
     emit(args, res, lambda: f"{res['slides']} slides -> {res['out']}/")
     return 0
 
@@ -163,4 +166,10 @@ def add_parsers(sub) -> None:
     ex.add_argument("--out", required=True, help="The folder to write (new or empty).")
     ex.add_argument(
         "--part", default=None, help="One part of a suite's store (default: all of them)."
+    )
+    ex.add_argument(
+        "--format",
+        default="numpy",
+        help="The files to write: numpy (the default: .npy arrays and meta.json); an unknown "
+        "format writes nothing.",
     )
