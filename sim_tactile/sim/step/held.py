@@ -87,7 +87,8 @@ class HeldStep(Protocol):
 
 
 class PlainHeldStep:
-    """The held step as a plain loop over ``collider`` (any, with :meth:`depths_at`) and
+    """The held step as a plain loop over ``collider`` (any, with ``depths_at``:
+    :meth:`~sim_tactile.sim.collide.primitive.PrimitiveCollider.depths_at`) and
     ``skin`` (any skin model, with ``solve_force``); ``W`` maps node loads to taxel loads."""
 
     def __init__(self, collider, skin: SkinModel, W: np.ndarray, area_m2: float, margin: float):
