@@ -140,6 +140,9 @@ def write_api(out_dir: Path) -> list[str]:
     """Write ``out_dir/<module>.rst`` for every module and an index; returns the modules."""
     out_dir.mkdir(parents=True, exist_ok=True)
     names = modules()
+    for old in out_dir.glob("*.rst"):  # a module moved or gone leaves no stale page
+        if old.stem not in names and old.stem != "index":
+            old.unlink()
     for name in names:
         _write(out_dir / f"{name}.rst", module_page(name))
     public = public_packages()

@@ -10,11 +10,12 @@ import pytest
 from _scenes import scene_of
 
 from sim_tactile.plates import get_plate, height_at
+from sim_tactile.plates.surface import ProfileArrays
 from sim_tactile.scene.model import build_scene
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import get_layout, get_sensor
-from sim_tactile.sim.collide.choose import make_collider
-from sim_tactile.sim.collide.height import ProfileCollider, interp_at
+from sim_tactile.sim.collide.choose import make_collider, probe_depths
+from sim_tactile.sim.collide.height import SurfaceCollider, interp_at
 from sim_tactile.sim.collide.primitive import PrimitiveCollider
 from sim_tactile.sim.collide.reference import MujocoCollider, penetration_map
 from sim_tactile.sim.collide.shapes import cylinder_distance, ridge_distance
@@ -118,7 +119,8 @@ def test_every_preset_kind_takes_a_compiled_collider(cache):
     # without the plate's features a mesh is any mesh: MuJoCo's collider serves
     assert PrimitiveCollider.from_model(sc.m_col, sc.node_of_geom, bone) is None
     sc = scene_of("roughness8/ra-50", 0.0, cache)
-    assert isinstance(make_collider(sc), ProfileCollider)
+    c = make_collider(sc)
+    assert isinstance(c, SurfaceCollider) and isinstance(c.probe.surface, ProfileArrays)
     assert isinstance(make_collider(sc, primitive=False), MujocoCollider)  # the reference
 
 
@@ -225,6 +227,9 @@ def test_the_profile_collider_reads_the_height_map_at_each_node(plate, cache):
         near = col.depths_at(qpos, got)
         plain = np.empty(sc.n_nodes)  # the compiled loop against its numpy reference
         assert col.depths_numpy(qpos, plain) == near
+        assert got.tobytes() == plain.tobytes()
+        bone = col.bone0 + [qpos[sc.jx], 0.0, qpos[sc.jz]]  # the held step's kernel too
+        assert probe_depths(bone, col.probe, plain) == near
         assert got.tobytes() == plain.tobytes()
         x = col.bone0[0] + qpos[sc.jx] + col.local[:, 0]
         y = col.bone0[1] + col.local[:, 1]

@@ -1,4 +1,4 @@
-"""The height-map plates' collider (:class:`~sim_tactile.sim.collide.height.MapCollider`):
+"""The height-map plates' collider (:class:`~sim_tactile.sim.collide.height.SurfaceCollider`):
 its bilinear height against ``height_at`` bit for bit, its compiled loop against its numpy
 reference, against MuJoCo's height-field collider on a smooth map, in the compiled held step,
 and slides over a height-map grating (the finger and the probe rig) that obey the grating
@@ -15,16 +15,15 @@ from _scenes import scene_of
 from sim_tactile.bench.closed_forms import pulse_period
 from sim_tactile.plates import HeightMap, Plate, height_at
 from sim_tactile.plates.features import map_height
+from sim_tactile.plates.surface import QS_MARGIN_M, MapArrays, surface
 from sim_tactile.sensors import Finger, get_sensor
-from sim_tactile.sim.collide.choose import QS_MARGIN_M, make_collider, node_margin_m
+from sim_tactile.sim.collide.choose import make_collider, probe_depths
 from sim_tactile.sim.collide.height import (
-    MapCollider,
-    map_depths_kernel,
+    SurfaceCollider,
     map_height_at,
     map_surface_at,
 )
 from sim_tactile.sim.collide.reference import MujocoCollider
-from sim_tactile.sim.plan.fidelity import feature_scale_m, texture_period
 from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.sim.plan.rig import ProbeRig
 from sim_tactile.sim.rig_sim import probe_contact, probe_grid, simulate_rig
@@ -138,7 +137,7 @@ def _same_bits(a: np.ndarray, b: np.ndarray) -> None:
 def test_the_compiled_height_is_height_at_bit_for_bit(make):
     plate = make()
     t = plate.texture
-    s = MapCollider.surface_of(plate)
+    s = surface(plate).arrays
     rng = np.random.default_rng(7)
     x, y = _points(plate, rng)
     want = height_at(plate, x, y)
@@ -153,15 +152,15 @@ def test_the_compiled_height_is_height_at_bit_for_bit(make):
     assert np.isnan(got[~inside]).sum() > 1000
 
 
-def _bound(plate: Plate, n=400, seed=0) -> MapCollider:
+def _bound(plate: Plate, n=400, seed=0) -> SurfaceCollider:
     """A collider on ``n`` random probes bound to the joints ``qpos = (x, z)``."""
     rng = np.random.default_rng(seed)
     local = np.column_stack(
         [rng.uniform(-5 * MM, 5 * MM, n), rng.uniform(-4 * MM, 4 * MM, n), rng.uniform(0, 1e-4, n)]
     )
-    c = MapCollider(local, rng.uniform(0.05, 0.2, n) * MM, rng.uniform(0.0, 0.5, n) * MM, plate)
-    c.bone0 = np.array([0.0, rng.uniform(-1 * MM, 1 * MM), 0.0])
-    c.jx, c.jz = 0, 1
+    r, m = rng.uniform(0.05, 0.2, n) * MM, rng.uniform(0.0, 0.5, n) * MM
+    c = SurfaceCollider(local, r, m, surface(plate))
+    c.bind([0.0, rng.uniform(-1 * MM, 1 * MM), 0.0], 0, 1)
     return c
 
 
@@ -184,7 +183,7 @@ def test_the_compiled_loop_is_its_numpy_reference_and_height_at(make):
         assert c.depths_numpy(q, b) == near
         assert a.tobytes() == b.tobytes()
         bone = c.bone0 + [q[0], 0.0, q[1]]
-        assert map_depths_kernel(bone, *c.arrays, k) == near
+        assert probe_depths(bone, c.probe, k) == near
         assert k.tobytes() == a.tobytes()
         part.depths_at(q, s)
         assert s.tobytes() == a[sub].tobytes()
@@ -202,13 +201,14 @@ def test_the_compiled_loop_is_its_numpy_reference_and_height_at(make):
 
 def test_a_height_map_takes_the_map_collider_and_the_wide_margin(cache):
     plate = _grating()
-    assert node_margin_m(plate) == QS_MARGIN_M
+    assert surface(plate).margin_m == QS_MARGIN_M
     sc = scene_of(plate, QS_MARGIN_M, cache, x0_m=-0.01)
     c = make_collider(sc)
-    assert isinstance(c, MapCollider) and c.compiled
+    assert isinstance(c, SurfaceCollider) and isinstance(c.probe.surface, MapArrays)
+    assert c.compiled
     assert isinstance(make_collider(sc, primitive=False), MujocoCollider)  # the reference
-    assert feature_scale_m(plate) == pytest.approx(PERIOD_M / 2)
-    assert texture_period(plate) == pytest.approx(PERIOD_M)
+    assert surface(plate).feature_scale_m == pytest.approx(PERIOD_M / 2)
+    assert surface(plate).period_m == pytest.approx(PERIOD_M)
 
 
 def test_the_map_collider_agrees_with_mujocos_on_a_smooth_map(cache):
@@ -221,7 +221,7 @@ def test_the_map_collider_agrees_with_mujocos_on_a_smooth_map(cache):
     margin = 0.1 * MM
     sc = scene_of(plate, margin, cache, x0_m=-0.01)
     col, ref = make_collider(sc), MujocoCollider(sc)
-    assert isinstance(col, MapCollider)
+    assert isinstance(col, SurfaceCollider)
     cos = math.cos(math.atan(SMOOTH_A_M * 2 * math.pi / SMOOTH_WAVE_M))
     rng = np.random.default_rng(0)
     q = np.zeros(sc.m_col.nq)
@@ -266,7 +266,7 @@ def test_the_compiled_held_step_reads_the_maps_depths(grating, cache):
     near_any = 0
     for x in np.linspace(0.0, 0.03, 30):
         bone = col.bone0 + [x, 0.0, -0.3 * MM]
-        near = map_depths_kernel(bone, *col.arrays, full)
+        near = probe_depths(bone, col.probe, full)
         assert h.depths(bone) == near
         assert h.pen.tobytes() == full.tobytes()
         near_any += near

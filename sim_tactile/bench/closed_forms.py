@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from ..plates import Plate, features
+from ..plates import Plate
 from ..records import Recording
 from ..sensors import Finger, Layout
 from ..sim.plan.protocol import SPEED_RAMP_S, START_MARGIN_M
@@ -18,15 +18,6 @@ def probe_taxel(layout: Layout) -> int:
     cand = np.flatnonzero(np.isclose(depth, depth.min()))
     r = np.hypot(layout.positions[cand, 0], layout.positions[cand, 1])
     return int(cand[np.argmin(r)])
-
-
-def feature_spacing_m(plate: Plate) -> float | None:
-    """Centre-to-centre spacing of the plate's features along the slide [m] (median), or
-    None if it has fewer than two feature columns (flat, random roughness)."""
-    xs = np.unique(np.round([f.x for f in features(plate)], 9))
-    if xs.size < 2:
-        return None
-    return float(np.median(np.diff(xs)))
 
 
 def pulse_period(

@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SimTactileError
-from ..plates import Plate, get_plate
+from ..plates import Plate, get_plate, surface
 from ..records import Recording
 from ..scene.nodes import skin_grid
 from ..sensors import Finger, get_sensor
@@ -58,7 +58,7 @@ from ..sim.plan.protocol import Protocol
 from ..sim.slide import simulate
 from ..sim.static_press import hertz, press
 from . import physics
-from .closed_forms import feature_spacing_m, probe_taxel, pulse_period, quick_duration
+from .closed_forms import probe_taxel, pulse_period, quick_duration
 from .pareto import markdown, pct, plot_pareto
 from .scenes import PressScene, SlideScene, scenes
 from .sweep import FULL, LEFT_OUT, Sweep
@@ -169,7 +169,7 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
     sensor = get_sensor(scene.sensor)
     layout, finger = sensor.layout, sensor.finger
     taxel = probe_taxel(layout)
-    spacing = feature_spacing_m(plate)
+    spacing = surface(plate).period_m  # the texture's one period
     duration = sweep.duration_s
     if duration is None and sweep.periods:
         duration = quick_duration(plate, finger, scene.speed_m_s, spacing, sweep.periods)

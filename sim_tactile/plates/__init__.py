@@ -10,6 +10,7 @@ from .features import features, height_at, roughness_profile
 from .geometry import Feature
 from .presets import get_plate, is_plate_file, preset_names
 from .spec import Bumps, Flat, Grating, HeightMap, Plate, Ridges, Roughness
+from .surface import Surface, surface
 from .user import load_user_plate
 
 __all__ = [
@@ -32,4 +33,6 @@ __all__ = [
     "load_heightmap",
     "preset_names",
     "roughness_profile",
+    "Surface",
+    "surface",
 ]

@@ -25,8 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plates import Plate, roughness_profile
-from ..plates.spec import Roughness
+from ..plates import Plate, roughness_profile, surface
 
 
 def micro_pressure_profile(
@@ -60,7 +59,7 @@ def micro_loads(
     """
     T, N = in_contact.shape
     out = np.zeros((T, N))
-    if not isinstance(plate.texture, Roughness) or T < 2:
+    if surface(plate).profile is None or T < 2:
         return out
     travel = float(np.median(np.abs(np.diff(x_pad))))
     for i in range(N):

@@ -17,12 +17,12 @@ import numpy as np
 
 from .. import _validate as v
 from ..errors import ConfigError, PhysicsError
-from ..plates import Plate, get_plate, height_at
+from ..plates import Plate, get_plate, height_at, surface
 from ..scene.model import build_scene
 from ..scene.nodes import skin_grid
 from ..sensors.layouts import Layout, dense_layout
 from ..sensors.pad import Finger
-from .collide.choose import make_collider, node_margin_m
+from .collide.choose import make_collider
 from .plan.fidelity import PRESS_LEVELS
 from .plan.protocol import APPROACH_CLEARANCE_M
 from .skin.models import make_skin
@@ -117,7 +117,7 @@ def press(
     layout = dense_layout(readout_pitch_m, (px / 2 - half, py / 2 - half), depth_m=depth_m)
     heights = height_at(plate, grid.xy[:, 0], grid.xy[:, 1]) - grid.z
     z0 = APPROACH_CLEARANCE_M + max(0.0, float(np.nanmax(heights)))
-    margin = node_margin_m(plate)
+    margin = surface(plate).margin_m
     scene = build_scene(
         plate,
         finger,

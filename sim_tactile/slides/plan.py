@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..datasets.store import PARAM_NAMES, StoreSpec, config_hash
+from ..plates.surface import surface
 from ..records import TactileDataset
 from .jobs import SlideJob, slide_code_version
 from .slide_set import SlideSet, class_name
@@ -75,11 +76,7 @@ def slide_plan(
         taxel_positions=np.asarray(sensor.layout.positions),
         dataset_meta=meta,
         code_version=slide_code_version(),
-        plate_maps={
-            j.plate.texture.sha256: j.plate.texture.z
-            for j in jobs
-            if j.plate.texture.kind == "heightmap"
-        },
+        plate_maps={k: z for j in jobs for k, z in surface(j.plate).map_samples().items()},
     )
     return Plan("", spec, jobs=jobs)
 

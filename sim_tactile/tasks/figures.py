@@ -292,10 +292,11 @@ def recorded_plates(setup: dict) -> list[Plate | None]:
     or this process's loaded plate is taken) and kept only if it gives the recorded plate;
     else None (a store holds the samples: ``SlideStore.plates``)."""
     from ..plates import get_plate
+    from ..plates.surface import samples_apart
 
     out: list[Plate | None] = []
     for ref, params in zip(setup.get("plates", []), setup.get("plate_params", []), strict=False):
-        if params.get("texture", {}).get("kind") != "heightmap":
+        if not samples_apart(params):
             out.append(Plate.from_params(params))
             continue
         try:

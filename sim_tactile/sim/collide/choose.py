@@ -1,38 +1,72 @@
-"""The one place where a scene's collider, and the skin nodes' collider margin, are chosen."""
+"""The one place where a scene's collider is chosen (:func:`make_collider`), and the one
+dispatch of the compiled depth kernels on a collider's ``probe`` (:func:`probe_depths`):
+its class (:class:`~.primitive.PrimitiveProbe`, :class:`~.height.SurfaceProbe`) picks the
+kernel, in compiled code, so a compiled caller (the held step) is compiled once per kind of
+collider."""
 
 from __future__ import annotations
 
-from .height import MapCollider, ProfileCollider
-from .primitive import PrimitiveCollider
+from numba.extending import overload
+
+from ..._jit import njit
+from .height import SurfaceCollider, SurfaceProbe, surface_depths
+from .primitive import PrimitiveCollider, PrimitiveProbe, depths_kernel
 from .reference import MujocoCollider
-
-#: Collider margin [m] of the skin nodes when the pad is held at a force: nodes this far above
-#: the plate are reported, so they can join the contact when the pad sinks; a step that would
-#: move the pad further than this is re-collided at the new height.
-QS_MARGIN_M = 0.5e-3
-#: The margin on roughness plates: the profile collider keeps the one MuJoCo's height-field
-#: collider had there (each node within it was a contact MuJoCo generated, which filled its
-#: contact buffer at 0.5 mm), so that their slides stayed unchanged but for the depths; a
-#: step that sinks further is re-collided.
-QS_MARGIN_MUJOCO_M = 0.1e-3
-
-
-def node_margin_m(plate) -> float:
-    """The skin nodes' collider margin for a held force on ``plate``: wide where the compiled
-    collider serves (every plate of features, and height maps; it costs nothing there),
-    narrow on roughness."""
-    if plate.texture.kind == "roughness":
-        return QS_MARGIN_MUJOCO_M
-    return QS_MARGIN_M
 
 
 def make_collider(scene, primitive: bool = True):
-    """The compiled collider on a plate of features, the profile collider on a roughness
-    plate, the map collider on a height map (each where ``primitive`` is set), else MuJoCo's.
-    The bone must be at its starting pose (its world position is read here)."""
+    """The compiled collider of the scene's plate where ``primitive`` is set: the sampled
+    surface's (:class:`~.height.SurfaceCollider`: a rough plate's profile, a height map), or
+    the features' (:class:`~.primitive.PrimitiveCollider`); else, or where neither takes
+    the plate, MuJoCo's (:class:`~.reference.MujocoCollider`, the reference). The bone must
+    be at its starting pose (its world position is read here)."""
     if primitive:
-        for kind in (PrimitiveCollider, ProfileCollider, MapCollider):
-            c = kind.from_scene(scene)
-            if c is not None:
-                return c
+        c = SurfaceCollider.from_scene(scene)
+        if c is None:
+            c = PrimitiveCollider.from_scene(scene)
+        if c is not None:
+            return c
     return MujocoCollider(scene)
+
+
+def node_depths(bone, probe, pen):
+    """The depth map of ``probe`` (a compiled collider's ``probe``) for the bone at
+    world position ``bone`` into ``pen``; whether any node is within its margin (compiled
+    code only: :func:`probe_depths` from Python)."""
+    raise NotImplementedError("node_depths runs in compiled code only")
+
+
+@overload(node_depths)
+def _node_depths(bone, probe, pen):
+    kind = getattr(probe, "instance_class", None)
+    if kind is PrimitiveProbe:
+        return lambda bone, probe, pen: depths_kernel(
+            bone,
+            probe.local,
+            probe.radius,
+            probe.margin,
+            probe.kind,
+            probe.pos,
+            probe.mat,
+            probe.size,
+            probe.top,
+            probe.origin,
+            probe.cell,
+            probe.shape,
+            probe.start,
+            probe.items,
+            probe.cell_top,
+            pen,
+        )
+    if kind is SurfaceProbe:
+        return lambda bone, probe, pen: surface_depths(
+            bone, probe.local, probe.radius, probe.margin, probe.surface, pen
+        )
+    return None
+
+
+@njit
+def probe_depths(bone, probe, pen):
+    """:func:`node_depths`, callable from Python and from compiled code: the compiled
+    collider's depth map (its own kernel, the same numbers) for the bone at ``bone`` (3,)."""
+    return node_depths(bone, probe, pen)

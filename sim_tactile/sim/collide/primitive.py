@@ -19,6 +19,7 @@ approximate one (measured 4.5e-7 m off; ours equals a brute-force distance).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -34,6 +35,28 @@ _CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
 #: a drafted ridge (MuJoCo holds it as a convex mesh): a box whose x-walls slope in from
 #: ``size[0]`` at its bottom to ``top[g]`` at its top
 _PRISM = int(mujoco.mjtGeom.mjGEOM_MESH)
+
+
+class PrimitiveProbe(NamedTuple):
+    """What :func:`depths_kernel` reads after the bone's position: the probe spheres
+    (``local`` (N, 3) in the bone's frame, ``radius``, ``margin``), the plate's geoms
+    (``kind``, ``pos``, ``mat``, ``size``, a drafted ridge's ``top``) and the broad phase's
+    grid of cells (``origin``, ``cell``, ``shape``, ``start``, ``items``, ``cell_top``)."""
+
+    local: np.ndarray
+    radius: np.ndarray
+    margin: np.ndarray
+    kind: np.ndarray
+    pos: np.ndarray
+    mat: np.ndarray
+    size: np.ndarray
+    top: np.ndarray
+    origin: np.ndarray
+    cell: float
+    shape: np.ndarray
+    start: np.ndarray
+    items: np.ndarray
+    cell_top: np.ndarray
 
 
 class PrimitiveCollider:
@@ -83,8 +106,8 @@ class PrimitiveCollider:
         self.cell_top = np.array(
             [max((tops[g] for g in b), default=-np.inf) for b in buckets], dtype=np.float64
         )
-        #: the arguments of the depth kernel after the bone's position, in its order
-        self.arrays = (
+        #: the depth kernel's arguments after the bone's position
+        self.probe = PrimitiveProbe(
             self.local,
             self.radius,
             self.margin,
@@ -176,11 +199,6 @@ class PrimitiveCollider:
             c.bind(m.body_pos[bone], scene.jx, scene.jz)
         return c
 
-    @property
-    def kernel(self):
-        """The compiled depth map: ``kernel(bone, *arrays, pen) -> near``."""
-        return depths_kernel
-
     def bind(self, bone0: np.ndarray, jx: int, jz: int) -> None:
         """Read the bone's world position as ``bone0 + (qpos[jx], 0, qpos[jz])``."""
         self.bone0 = np.array(bone0, dtype=np.float64)
@@ -192,7 +210,7 @@ class PrimitiveCollider:
         b = self._bone
         b[0] = self.bone0[0] + qpos[self.jx]
         b[2] = self.bone0[2] + qpos[self.jz]
-        return depths_kernel(b, *self.arrays, pen)
+        return depths_kernel(b, *self.probe, pen)
 
     def warnings(self) -> list[str]:
         return []
@@ -231,7 +249,7 @@ class PrimitiveCollider:
         """Fill ``pen`` (N,) with each node's deepest penetration [m] for the bone at world
         position ``bone_pos`` (3,); ``-inf`` where no plate geom is within the node's margin.
         Returns whether any node is within it."""
-        return depths_kernel(bone_pos, *self.arrays, pen)
+        return depths_kernel(bone_pos, *self.probe, pen)
 
 
 def _half_extents(kind: np.ndarray, mat: np.ndarray, size: np.ndarray) -> np.ndarray:

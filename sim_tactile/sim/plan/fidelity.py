@@ -7,8 +7,8 @@
 | L2 | L1 at half the node pitch and a quarter of the time step: the reference | auto/2 | auto/4 |
 
 ``auto`` (default) picks L1 with the coarsest node pitch and time step that resolve the
-scene: the pitch is at most 1/2.5 of the smallest feature width or gap (a height map's read
-off its samples, :mod:`~sim_tactile.sim.plan.map_scale`) and half the smallest taxel; the time
+scene: the pitch is at most 1/2.5 of the smallest feature width or gap (the plate's
+:attr:`~sim_tactile.plates.surface.Surface.feature_scale_m`; a height map's read off its samples) and half the smallest taxel; the time
 step lets each feature take at least 20 steps to cross and stays within the skin-bone
 coupling's stability limit. It warns when the taxels are coarser than the texture,
 when a forced pitch or time step is too coarse, and when the plate's roughness lies below what
@@ -40,11 +40,10 @@ import math
 from dataclasses import asdict, dataclass, field
 
 from ... import _validate as v
-from ...plates.features import features
-from ...plates.spec import Plate, Roughness
+from ...plates.spec import Plate
+from ...plates.surface import surface
 from ...scene.nodes import skin_grid
-from .lattices import anchor_refusals, anchored_cells, has_walls, skin_refusals, static_cells
-from .map_scale import map_scales
+from .lattices import anchor_refusals, anchored_cells, skin_refusals, static_cells
 from .measured_errors import (
     MAX_NODES_MEASURED,
     WARN_ABOVE,
@@ -149,23 +148,6 @@ class Fidelity:
         return d
 
 
-def feature_scale_m(plate: Plate) -> float | None:
-    """Smallest feature width or gap of the plate [m]; None for flat or rough plates. A
-    height map's are read off its samples (:func:`~.map_scale.map_scales`)."""
-    if plate.texture.kind == "heightmap":
-        return map_scales(plate.texture)[0]
-    fs = features(plate)
-    if not fs:
-        return None
-    widths = [2 * f.hx for f in fs] + [2 * f.hy for f in fs]
-    xs = sorted({round(f.x, 9) for f in fs})
-    gaps = [b - a - 2 * fs[0].hx for a, b in zip(xs, xs[1:], strict=False)]
-    ys = sorted({round(f.y, 9) for f in fs})
-    if len(ys) > 1:
-        gaps += [b - a - 2 * fs[0].hy for a, b in zip(ys, ys[1:], strict=False)]
-    return max(min(widths + [g for g in gaps if g > 0]), 1e-6)
-
-
 def choose_fidelity(
     plate: Plate,
     layout,
@@ -186,7 +168,7 @@ def choose_fidelity(
         return fidelity
     protocol = protocol.at_rate(layout.rate_hz)
     v.one_of("fidelity", fidelity, FIDELITIES)
-    scale = feature_scale_m(plate)
+    scale = surface(plate).feature_scale_m
     taxel = float(layout.sizes.min())
     taxel_x, taxel_y = (float(layout.sizes[:, k].min()) for k in (0, 1))
     need = min([taxel / 2] + ([scale / 2.5] if scale else []))
@@ -358,7 +340,7 @@ def _clippable(plate, finger, protocol, level) -> bool:
     """Whether clipped patches serve this scene: a plate with box walls, the held force, and
     a skin they serve (:func:`~.lattices.skin_refusals`)."""
     quasi_static = protocol.force_control == "quasi-static"
-    return has_walls(plate) and not skin_refusals(level, finger, quasi_static)
+    return surface(plate).has_walls and not skin_refusals(level, finger, quasi_static)
 
 
 def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnings):
@@ -423,13 +405,14 @@ def _texture_warnings(plate: Plate, layout, scale: float | None, pitch: float) -
             f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
             f"({pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes"
         )
-    if isinstance(plate.texture, Roughness):
+    surf = surface(plate)
+    if surf.ra_m is not None:
         warnings.append(
-            f"micro-roughness (Ra {plate.texture.ra_m * 1e6:.3g} um) is below the node grid: the finger simulation sees "
+            f"micro-roughness (Ra {surf.ra_m * 1e6:.3g} um) is below the node grid: the finger simulation sees "
             "it only where its nodes sample the height map (the micro-roughness model of the "
             "sensor adds what lies below)"
         )
-    period = texture_period(plate)
+    period = surf.period_m
     if period is not None and layout.min_pitch_m > period / 2 and layout.n > 1:
         warnings.append(
             f"taxel pitch {layout.min_pitch_m * 1e3:.3g} mm is coarser than half the texture "
@@ -458,7 +441,7 @@ def _varies_along_x_only(plate: Plate, finger) -> bool:
     and their measured errors are of square grids."""
     if getattr(finger, "shape", None) != "flat":
         return False
-    fs = features(plate)
+    fs = surface(plate).features
     return bool(fs) and all(f.kind == "box" and 2 * f.hy >= plate.area_width_m - 1e-9 for f in fs)
 
 
@@ -470,13 +453,3 @@ def flat_stiffness(finger, coupled: bool, k_w: float) -> float:
     if not coupled:
         return k_w * px * py
     return 2 * math.sqrt(px * py / math.pi) * finger.e_star_pa
-
-
-def texture_period(plate: Plate) -> float | None:
-    if plate.texture.kind == "heightmap":
-        return map_scales(plate.texture)[1]
-    fs = features(plate)
-    xs = sorted({round(f.x, 9) for f in fs})
-    if len(xs) < 2:
-        return None
-    return min(b - a for a, b in zip(xs, xs[1:], strict=False))

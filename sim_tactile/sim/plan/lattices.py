@@ -1,4 +1,5 @@
-"""The planning geometry of the grids that follow the plate's walls: which lines cut the
+"""The planning geometry of the grids that follow the plate's walls (the plate's
+:attr:`~sim_tactile.plates.surface.Surface.walls`): which lines cut the
 patches of the clipped grid (:mod:`~sim_tactile.sim.skin.clipped`), which lines make the
 lattice anchored to the walls (:mod:`~sim_tactile.sim.skin.anchored`), how many cells each
 has, and which scenes they serve. The planner (:mod:`.fidelity`) counts cells and asks for
@@ -13,8 +14,8 @@ import math
 import numpy as np
 
 from ...errors import ConfigError
-from ...plates.features import features
 from ...plates.spec import Plate
+from ...plates.surface import surface
 from ...scene.nodes import SkinGrid
 
 #: Lines closer than this to one already there are not added [m]: a patch thinner than it
@@ -27,23 +28,6 @@ SOLO_PERIOD_M = 4e-3
 #: Shapes of the pad's surface the anchored lattice's depth kernel evaluates
 #: (:meth:`~sim_tactile.sensors.pad.Finger.surface`), by their code in that kernel.
 PAD_SHAPE_CODES = {"flat": 0, "sphere": 1, "ellipsoid": 2}
-
-
-def wall_lines(plate: Plate) -> tuple[np.ndarray, np.ndarray]:
-    """The plate frame's x positions of the vertical walls across the slide, and y positions
-    of those along it [m]: the faces of its boxes (ridges, bumps, grating bars)."""
-    xs, ys = set(), set()
-    for f in features(plate):  # none on a rough plate or a height map
-        if f.kind == "box":
-            xs.update((round(f.x - f.hx, 12), round(f.x + f.hx, 12)))
-            ys.update((round(f.y - f.hy, 12), round(f.y + f.hy, 12)))
-    return np.array(sorted(xs)), np.array(sorted(ys))
-
-
-def has_walls(plate: Plate) -> bool:
-    """Whether the plate has box walls that clipping would follow."""
-    xs, _ = wall_lines(plate)
-    return xs.size > 0
 
 
 def merge_lines(base: np.ndarray, extra, lo: float, hi: float) -> np.ndarray:
@@ -74,7 +58,7 @@ def static_lines(grid: SkinGrid, layout, plate: Plate, y0_m: float):
     pos, size = layout.positions[:, :2], layout.sizes
     tx = np.concatenate([pos[:, 0] - size[:, 0] / 2, pos[:, 0] + size[:, 0] / 2])
     ty = np.concatenate([pos[:, 1] - size[:, 1] / 2, pos[:, 1] + size[:, 1] / 2])
-    _, walls_y = wall_lines(plate)
+    _, walls_y = surface(plate).walls
     return merge_lines(bx, tx, bx[0], bx[-1]), merge_lines(
         by, np.concatenate([ty, walls_y - y0_m]), by[0], by[-1]
     )
@@ -117,11 +101,10 @@ def check_clippable(level: str, finger, quasi_static: bool = True) -> None:
 
 # ---------------------------------------------------------------- the anchored lattice
 def period_of(plate: Plate) -> float:
-    """The period [m] along the slide over which the lattice repeats: the texture's (its
-    features' smallest spacing in x), or :data:`SOLO_PERIOD_M` for a single column."""
-    xs = sorted({round(f.x, 9) for f in features(plate)})
-    gaps = [b - a for a, b in zip(xs, xs[1:], strict=False)]
-    return min(gaps) if gaps else SOLO_PERIOD_M
+    """The period [m] along the slide over which the lattice repeats: the texture's
+    (:attr:`~sim_tactile.plates.surface.Surface.period_m`), or :data:`SOLO_PERIOD_M` for a
+    single column."""
+    return surface(plate).period_m or SOLO_PERIOD_M
 
 
 def graded(length: float, wall_m: float, pitch_m: float) -> list[float]:
@@ -144,7 +127,7 @@ def period_lines(plate: Plate, wall_m: float, pitch_m: float) -> tuple[float, fl
     """``(anchor, P, base)``: the lattice along the slide. Its lines lie at ``anchor + k P +
     base`` (plate frame) for every integer k; ``base`` (ascending, from 0, below ``P``) holds
     every wall across the slide modulo ``P`` and the graded lines between them."""
-    xs, _ = wall_lines(plate)
+    xs, _ = surface(plate).walls
     if xs.size == 0:
         raise ConfigError(f"plate {plate.name or plate.hash} has no walls to anchor a lattice to")
     P = period_of(plate)
@@ -166,7 +149,7 @@ def row_lines(finger, layout, plate: Plate, y0_m: float, pitch_y_m: float) -> np
     ny = 2 * math.ceil(ey / pitch_y_m / 2 - 1e-9) + 1
     by = (np.arange(ny + 1) - ny / 2) * pitch_y_m
     pos, size = layout.positions[:, 1], layout.sizes[:, 1]
-    _, ys = wall_lines(plate)
+    _, ys = surface(plate).walls
     extra = np.concatenate([pos - size / 2, pos + size / 2, ys - y0_m])
     return merge_lines(by, extra, by[0], by[-1])
 
@@ -183,8 +166,7 @@ def anchor_refusals(plate: Plate, layout, level="L1", finger=None, quasi_static=
     plate that is not all boxes, taxels below the surface, a pad shape the depth kernel does
     not know, and the skin's refusals (:func:`skin_refusals`)."""
     why = []
-    fs = features(plate) if plate.texture.kind != "roughness" else []
-    if not fs or any(f.kind != "box" for f in fs):
+    if not surface(plate).all_boxes:
         why.append("a plate that is not all boxes (valid: ridges, bumps and bars of boxes)")
     if (layout.depth_m > 0).any():
         why.append(f"taxels below the surface (depth up to {layout.depth_m.max():g} m; valid: 0)")

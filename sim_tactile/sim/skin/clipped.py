@@ -42,10 +42,11 @@ from scipy.linalg import lu_factor, lu_solve
 
 from ..._jit import njit
 from ...errors import PhysicsError
-from ...plates import Plate, features, height_at
+from ...plates.spec import Plate
+from ...plates.surface import surface
 from ...scene.elastic import subsurface_weights
 from ...scene.nodes import SkinGrid
-from ..plan.lattices import merge_lines, static_lines, wall_lines
+from ..plan.lattices import merge_lines, static_lines
 from .contact import MAX_ITER, TOL_REL
 
 #: The patches within this of the deepest one (or of touching) enter the solve; when the
@@ -169,16 +170,12 @@ class ClippedPatches:
 
     def __init__(self, grid: SkinGrid, finger, layout, plate: Plate, y0_m: float):
         self.sx, self.sy = static_lines(grid, layout, plate, y0_m)
-        self.walls_x, _ = wall_lines(plate)
+        self.surface = surface(plate)
+        self.walls_x, _ = self.surface.walls
         pos, size = layout.positions[:, :2], layout.sizes
         bx = self.sx
         self.lo, self.hi = bx[0], bx[-1]
         self.half_x = max(-bx[0], bx[-1])
-        sampled = plate.texture.kind in ("roughness", "heightmap")  # no features: its samples
-        fs = None if sampled else features(plate)
-        self._feats = fs
-        self._fx = None if fs is None else np.array([f.x for f in fs])
-        self._fhx = None if fs is None else np.array([f.hx for f in fs])
         self.plate, self.finger, self.y0 = plate, finger, y0_m
         self.e_star = finger.e_star_pa
         # the static cells and the weights with which the taxels read them
@@ -238,15 +235,8 @@ class ClippedPatches:
         """The plate's height above the base less the pad's undeformed surface, at the patch
         centres [m]: a patch's penetration with the pad's lowest point at z is this less z."""
         x, y = cx + x_pad, cy + self.y0
-        if self._feats is None:  # rough, a height map: the plate's own function
-            z = height_at(self.plate, x, y)
-        else:  # the features within the pad's reach (height_at over all of them, faster)
-            z = np.zeros(x.shape)
-            near = np.abs(self._fx - x_pad) <= self._fhx + self.half_x
-            for k in np.flatnonzero(near):
-                np.maximum(z, self._feats[k].height(x, y), out=z)
-            p = self.plate
-            z[(np.abs(x) > p.length_m / 2) | (np.abs(y) > p.width_m / 2)] = -np.inf
+        # the surface near the pad (on a plate of features, the features within its reach)
+        z = self.surface.height(x, y, near=(x_pad, self.half_x))
         return np.where(np.isfinite(z), z, -np.inf) - self.finger.surface(cx, cy)
 
     def solve(self, x_pad: float, z_low: float, force_n: float):

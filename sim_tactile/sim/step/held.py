@@ -15,12 +15,13 @@ the taxel loads there. One step, two implementations with the same interface
   samples), so no step pays Python's per-call costs more than once, on the smallest exact
   problem:
 
-  - **columns** (:meth:`PrimitiveCollider.y_invariant`, :meth:`ProfileCollider.y_invariant`):
+  - **columns** (:meth:`PrimitiveCollider.y_invariant`, :meth:`SurfaceCollider.y_invariant`):
     when every plate geom is a box or drafted ridge that runs past the whole pad in y
     (ridges across the slide), or the pad lies inside a rough profile's y extent, a node's
     depth does not depend on its y; the collider computes one node per distinct (x, z,
     radius, margin), the rest are copies (bit-identical). A height map never reduces
-    (:meth:`MapCollider.y_invariant`): its collider computes every node;
+    (:meth:`~sim_tactile.plates.surface.Surface.y_invariant`): its collider computes every
+    node;
   - **mirror** halving: when, in addition, the node grid is symmetric about the pad's centre
     line (nodes at y and -y alike), the depth map, and so the unique contact solution, are
     symmetric. The solve then runs on the nodes with y >= 0 only. Its unknowns are the summed
@@ -44,13 +45,9 @@ from ..._jit import njit
 from ...cache import setup_memo
 from ...errors import PhysicsError
 from ...hashing import array_digest
-from ..collide.height import (
-    MapCollider,
-    ProfileCollider,
-    map_depths_kernel,
-    profile_depths_kernel,
-)
-from ..collide.primitive import PrimitiveCollider, depths_kernel
+from ..collide.choose import probe_depths
+from ..collide.height import SurfaceCollider
+from ..collide.primitive import PrimitiveCollider
 from ..skin import contact
 from ..skin.contact.kernels import NO_K, force_loop, force_same_set
 from ..skin.models import CoupledSkin, SkinModel, SpectralSkin
@@ -154,7 +151,7 @@ class CompiledHeldStep:
 
     def __init__(
         self,
-        collider: PrimitiveCollider | ProfileCollider | MapCollider,
+        collider: PrimitiveCollider | SurfaceCollider,
         skin: SkinModel,
         W: np.ndarray,
         area_m2: float,
@@ -201,8 +198,8 @@ class CompiledHeldStep:
             self.group = group.ravel().astype(np.int64)
         else:
             self.group = np.arange(self.n, dtype=np.int64)
-        self.probe = sub
-        self._probe = _probe_args(sub)
+        #: the collider of the reduced problem's probes
+        self.probes = sub
         self.n_probes = len(sub.radius)
         self.pen = np.empty(self.n)
         self.f = np.zeros(self.n)
@@ -220,7 +217,7 @@ class CompiledHeldStep:
 
     def depths(self, bone: np.ndarray) -> bool:
         """The reduced depth map at the bone's world position into ``pen``."""
-        near = self.probe.kernel(bone, *self.probe.arrays, self._small)
+        near = probe_depths(bone, self.probes.probe, self._small)
         np.take(self._small, self.group, out=self.pen)
         return near
 
@@ -232,7 +229,7 @@ class CompiledHeldStep:
         K = s.K if s.K is not None else NO_K
         st, force, top, M2, S2, updates, rebuilds, rowsum2 = _held_kernel(
             (self.bone0, qpos, self.jx, jz),
-            self._probe,
+            self.probes.probe,
             self._reduced,
             (self.winkler_k, C, K, s.floor, s.symmetric),
             (M, S, in_set, rowsum, s.updates, s.refresh),
@@ -288,80 +285,13 @@ def _symmetric(skin: CoupledSkin, mirror: np.ndarray) -> bool:
     return bool(setup_memo("mirror symmetry of a skin", parts, compute, (__name__,))[0][0])
 
 
-#: Placeholders for the arrays of the collider a held step does not use (typed as the real
-#: ones, so that the compiled step has one signature per collider).
-_NO_PRIMITIVE = (
-    np.zeros((0, 3)),
-    np.zeros(0),
-    np.zeros(0),
-    np.zeros(0, np.int64),
-    np.zeros((0, 3)),
-    np.zeros((0, 3, 3)),
-    np.zeros((0, 3)),
-    np.zeros(0),
-    np.zeros(2),
-    1.0,
-    np.ones(2, np.int64),
-    np.zeros(1, np.int64),
-    np.zeros(0, np.int64),
-    np.full(2, -np.inf),
-)
-_NO_PROFILE = (
-    np.zeros((0, 3)),
-    np.zeros(0),
-    np.zeros(0),
-    np.zeros(2),
-    np.zeros(2),
-    1.0,
-    1.0,
-    1.0,
-    1.0,
-)
-
-
-def _read_only(a: np.ndarray) -> np.ndarray:
-    a.setflags(write=False)
-    return a
-
-
-#: (a height map's samples are read-only, so its placeholder is too)
-_NO_MAP = (
-    np.zeros((0, 3)),
-    np.zeros(0),
-    np.zeros(0),
-    _read_only(np.zeros((2, 2))),
-    1.0,
-    1.0,
-    1.0,
-    1.0,
-    1.0,
-)
-#: Which depth kernel :func:`_held_kernel` runs (``probe[0]``).
-_PRIMITIVE, _PROFILE, _MAP = 0, 1, 2
-
-
-def _probe_args(c) -> tuple:
-    """``(which, primitive arrays, profile arrays, map arrays)`` of :func:`_held_kernel`'s
-    ``probe``: the collider's own arrays (its scalars as floats), placeholders for the
-    others'."""
-    if isinstance(c, ProfileCollider | MapCollider):
-        own = tuple(float(a) if np.ndim(a) == 0 else a for a in c.arrays)
-        if isinstance(c, ProfileCollider):
-            return (_PROFILE, _NO_PRIMITIVE, own, _NO_MAP)
-        return (_MAP, _NO_PRIMITIVE, _NO_PROFILE, own)
-    return (_PRIMITIVE, c.arrays, _NO_PROFILE, _NO_MAP)
-
-
 @njit
 def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     """:meth:`CompiledHeldStep.step`. The arguments, grouped:
 
     - ``pose``: ``(bone0, qpos, jx, jz)``, the bone's rest position and the joints;
-    - ``probe``: ``(which, primitive arrays, profile arrays, map arrays)``: which
-      collider's depth map (:data:`_PRIMITIVE`: :func:`~sim_tactile.sim.collide.primitive.depths_kernel`,
-      :data:`_PROFILE`: :func:`~sim_tactile.sim.collide.height.profile_depths_kernel`, :data:`_MAP`:
-      :func:`~sim_tactile.sim.collide.height.map_depths_kernel`) and the arrays of each
-      (:func:`_probe_args`; the others' are empty placeholders);
+    - ``probe``: the collider's ``probe`` (a named tuple whose class picks its depth
+      kernel: :func:`~sim_tactile.sim.collide.choose.probe_depths`);
     - ``reduced``: ``(small, group, mult)``: the probes' depths, each node's probe, the nodes
       each reduced node stands for;
     - ``skin``: ``(winkler_k, C, K, floor, sym)``: the Winkler stiffness (> 0 for L0), else
@@ -389,12 +319,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
         bone[0] = bone0[0] + qpos[jx]
         bone[1] = bone0[1]
         bone[2] = bone0[2] + qpos[jz]
-        if probe[0] == _PROFILE:
-            near = profile_depths_kernel(bone, *probe[2], small)
-        elif probe[0] == _MAP:
-            near = map_depths_kernel(bone, *probe[3], small)
-        else:
-            near = depths_kernel(bone, *probe[1], small)
+        near = probe_depths(bone, probe, small)
         for i in range(n):
             pen[i] = small[group[i]]
         if not near:  # nothing within the margin: sink by most of it and look again
