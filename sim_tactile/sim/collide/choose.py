@@ -9,6 +9,7 @@ from __future__ import annotations
 from numba.extending import overload
 
 from ..._jit import njit
+from ...plates.surface import surface
 from .height import SurfaceCollider, SurfaceProbe, surface_depths
 from .primitive import PrimitiveCollider, PrimitiveProbe, depths_kernel
 from .reference import MujocoCollider
@@ -21,9 +22,8 @@ def make_collider(scene, primitive: bool = True):
     the plate, MuJoCo's (:class:`~.reference.MujocoCollider`, the reference). The bone must
     be at its starting pose (its world position is read here)."""
     if primitive:
-        c = SurfaceCollider.from_scene(scene)
-        if c is None:
-            c = PrimitiveCollider.from_scene(scene)
+        sampled = surface(scene.plate).arrays is not None
+        c = (SurfaceCollider if sampled else PrimitiveCollider).from_scene(scene)
         if c is not None:
             return c
     return MujocoCollider(scene)
