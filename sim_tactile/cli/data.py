@@ -39,11 +39,23 @@ def cmd_generate(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_export(args: argparse.Namespace) -> int:
-    """Write a data set's arrays as plain .npy files and its metadata as JSON."""
-    from ..datasets import export
+#: ``export --format``: plain numpy files, or Parquet shards for data hubs.
+EXPORT_FORMATS = ("numpy", "parquet")
 
-    res = export(args.store, args.out, part=args.part)
+
+def cmd_export(args: argparse.Namespace) -> int:
+    """Write a data set as plain .npy files and JSON, or for data hubs (Parquet shards of the
+    task's splits, a dataset card and Croissant metadata)."""
+    from .._validate import one_of
+
+    if one_of("--format", args.format, EXPORT_FORMATS) == "parquet":
+        from ..formats.hub import export_parquet
+
+        res = export_parquet(args.store, args.out, part=args.part, log=log)
+    else:
+        from ..datasets import export
+
+        res = export(args.store, args.out, part=args.part)
     emit(args, res, lambda: f"{res['slides']} slides -> {res['out']}/")
     return 0
 
@@ -141,8 +153,18 @@ def add_parsers(sub) -> None:
     )
     gn.add_argument("--data", default=None, help="folder of the real data set (*-real tasks)")
     ex = add_command(
-        sub, "export", cmd_export, "write a data set as plain numpy files (.npy + JSON)"
+        sub,
+        "export",
+        cmd_export,
+        "write a data set as plain numpy files (.npy + JSON), or as Parquet shards with a "
+        "dataset card and Croissant metadata for data hubs",
     )
     ex.add_argument("store", help="a store written by generate")
     ex.add_argument("--out", required=True, help="output folder (new or empty)")
     ex.add_argument("--part", default=None, help="one part of a suite's store (default: all)")
+    ex.add_argument(
+        "--format",
+        default="numpy",
+        help="numpy (default: .npy files and meta.json) or parquet (Parquet shards of the "
+        "task's splits, README.md dataset card, croissant.json; extra [hub])",
+    )
