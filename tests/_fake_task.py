@@ -6,7 +6,6 @@ simulation (quick: 3 plates x 8 slides of 0.5 s on grid3x3 at 100 Hz)."""
 from __future__ import annotations
 
 import contextlib
-import zlib
 
 import numpy as np
 
@@ -22,9 +21,9 @@ def tone_slide(job):
     taxels = job.sensor.layout.positions
     n = job.n_samples()
     rng = np.random.default_rng(int(job.seed) % (2**32))
-    k = zlib.crc32(job.plate.name.encode()) % 7
+    k = PLATES.index(job.plate.name)
     t = np.arange(n) / job.protocol.rate_hz
-    f = 3.0 + 2.5 * k + rng.normal(0, 0.2)
+    f = 4.0 * (1 + k) ** 1.3 + rng.normal(0, 0.2)
     gain = 1.0 + 0.3 * np.arange(len(taxels)) / len(taxels)
     x = gain[None] * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))[:, None]
     x = (x + rng.normal(0, 0.15, x.shape) + 2.0).astype(np.float32)
