@@ -1,11 +1,17 @@
 """A registered task whose slides are made without physics: each plate a tone of its own
 frequency on every taxel, with a per-slide phase, gain and noise drawn from the slide's seed.
 For the format bridges' tests, which need a task's splits and a learnable signal, not the
-simulation (quick: 3 plates x 8 slides of 0.5 s on grid3x3 at 100 Hz)."""
+simulation (quick: 3 plates x 12 slides of 0.5 s on grid3x3 at 100 Hz, split 8/4 per class).
+
+The fixture :func:`tones` registers the task for one test module (never longer: the
+registry's own tests list every registered task) and generates its quick store."""
 
 from __future__ import annotations
 
 import contextlib
+from types import SimpleNamespace
+
+import pytest
 
 import numpy as np
 
@@ -47,12 +53,12 @@ def tones_task(classifiers=("svm-raw",), snn=None):
             plates=PLATES,
             sensor="grid3x3",
             protocol=Protocol(duration_s=0.5),
-            slides=8,
-            quick_slides=8,
+            slides=12,
+            quick_slides=12,
         ),
         classifiers=tuple(classifiers),
-        split="6/2",
-        quick=Settings(repeats=1, split="6/2", params=params),
+        split="8/4",
+        quick=Settings(repeats=1, split="8/4", params=params),
         encoder=threshold_encoding,
     )
     register(spec)
@@ -76,3 +82,19 @@ def tones_store(path, seed: int = 0):
         log=lambda m: None,
         _worker=tone_slide,
     )
+
+
+#: The snn row's parameters in the tests (a small, quickly trained network).
+SNN = {"hidden": 16, "epochs": 40, "target_true": 20, "target_false": 3, "lr": 0.03}
+SNN.update(batch_size=6, num_threads=1)
+
+
+@pytest.fixture(scope="module")
+def tones(tmp_path_factory, cache_dir):
+    """The task (its snn row small) and its quick store, for one test module."""
+    path = tmp_path_factory.mktemp("tones") / "tones.zarr"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SIM_TACTILE_CACHE", str(cache_dir))
+        with tones_task(classifiers=("snn", "svm-spike", "svm-raw"), snn=SNN) as spec:
+            tones_store(path)
+            yield SimpleNamespace(spec=spec, store=path, task=TASK)

@@ -136,11 +136,17 @@ def codec_for(
 def _fitted(encoder: Any, source: Source) -> Any:
     """``encoder`` itself when fitted; else a clone fitted on every sample of ``source``
     (its unset ``rate_hz`` parameters get the data's rate)."""
+    import copy
+
     from sklearn.exceptions import NotFittedError
     from sklearn.utils.validation import check_is_fitted
 
     from ..tasks.methods import prepared
 
+    if not hasattr(encoder, "get_params"):  # duck-typed: fitted when it holds a learned_ state
+        if any(k.endswith("_") and not k.startswith("_") for k in vars(encoder)):
+            return encoder
+        return copy.deepcopy(encoder).fit(source.all_data())
     try:
         check_is_fitted(encoder)
         return encoder

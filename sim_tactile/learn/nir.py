@@ -201,11 +201,17 @@ def alpha_kernel_mismatch(tau_s: float, dt_s: float, steps: int | None = None) -
     }
 
 
+#: A decision of the package's network is clear when its class's neuron fires at least this
+#: many spikes more than the runner-up's.
+CLEAR_MARGIN = 2
+
+
 def agreement(clf: Any, raster: np.ndarray) -> dict:
     """The NIR graph of ``clf`` run in Norse against ``clf`` itself on ``raster``
     ``(samples, steps, channels)``: the fraction of equal decisions (Norse's: the class whose
-    neuron fires most, ties to the lowest class), the correlation of the output spike counts,
-    and both networks' mean output spikes per sample."""
+    neuron fires most, ties to the lowest class), also among the samples the package's
+    network decides clearly (:data:`CLEAR_MARGIN`), the correlation of the output spike
+    counts, and both networks' mean output spikes per sample."""
     graph = snn_to_nir(clf)
     own_counts = clf.output_counts(raster)
     own = clf.predict(raster)
@@ -213,9 +219,13 @@ def agreement(clf: Any, raster: np.ndarray) -> dict:
     theirs = clf.classes_[np.argmax(z, axis=1)]
     a, b = own_counts.ravel(), z.ravel()
     corr = float(np.corrcoef(a, b)[0, 1]) if a.std() > 0 and b.std() > 0 else float("nan")
+    top2 = np.sort(own_counts, axis=1)[:, -2:] if own_counts.shape[1] > 1 else None
+    clear = np.ones(len(own), bool) if top2 is None else top2[:, 1] - top2[:, 0] >= CLEAR_MARGIN
     return {
         "samples": int(raster.shape[0]),
         "agreement": float(np.mean(own == theirs)),
+        "clear_samples": int(clear.sum()),
+        "agreement_clear": float(np.mean(own[clear] == theirs[clear])) if clear.any() else None,
         "count_correlation": corr,
         "own_spikes_per_sample": float(own_counts.sum(1).mean()),
         "nir_spikes_per_sample": float(z.sum(1).mean()),
