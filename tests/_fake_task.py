@@ -3,7 +3,7 @@ frequency on every taxel, with a per-slide phase, gain and noise drawn from the 
 For the format bridges' tests, which need a task's splits and a learnable signal, not the
 simulation (quick: 3 plates x 12 slides of 0.5 s on grid3x3 at 100 Hz, split 8/4 per class).
 
-The fixture :func:`tones` registers the task for one test module (never longer: the
+The fixture body :func:`tones_fixture` registers the task for one test module (never longer: the
 registry's own tests list every registered task) and generates its quick store."""
 
 from __future__ import annotations
@@ -11,9 +11,8 @@ from __future__ import annotations
 import contextlib
 from types import SimpleNamespace
 
-import pytest
-
 import numpy as np
+import pytest
 
 from sim_tactile.records import Recording
 from sim_tactile.slides import SlideOutcome
@@ -89,9 +88,9 @@ SNN = {"hidden": 16, "epochs": 40, "target_true": 20, "target_false": 3, "lr": 0
 SNN.update(batch_size=6, num_threads=1)
 
 
-@pytest.fixture(scope="module")
-def tones(tmp_path_factory, cache_dir):
-    """The task (its snn row small) and its quick store, for one test module."""
+def tones_fixture(tmp_path_factory, cache_dir):
+    """The task (its snn row small) and its quick store: the body of a test module's
+    ``tones`` fixture (module scope)."""
     path = tmp_path_factory.mktemp("tones") / "tones.zarr"
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("SIM_TACTILE_CACHE", str(cache_dir))

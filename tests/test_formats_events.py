@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _fake_task import tones  # noqa: F401  (the fixture)
+from _fake_task import tones_fixture
 
 from sim_tactile import datasets, tasks
 from sim_tactile.encoders import IzhikevichEncoder, LIFEncoder, ThresholdEncoder
@@ -18,6 +18,13 @@ from sim_tactile.records import SpikeTrains, TactileDataset
 from sim_tactile.sensors.layouts import get_layout
 
 tonic = pytest.importorskip("tonic", reason="the tonic extra is not installed")
+
+
+@pytest.fixture(scope="module")
+def tones(tmp_path_factory, cache_dir):
+    """The tones task and its quick store (tests/_fake_task.py)."""
+    yield from tones_fixture(tmp_path_factory, cache_dir)
+
 
 #: Spike times that are not on the microsecond grid come back within half a microsecond.
 HALF_US = 0.5e-6 + 1e-12

@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 import pytest
-from _fake_task import tones  # noqa: F401  (the fixture)
+from _fake_task import tones_fixture
 
 from sim_tactile import datasets, tasks
 from sim_tactile.errors import MissingDependencyError, StoreError
@@ -18,6 +18,12 @@ from sim_tactile.errors import MissingDependencyError, StoreError
 hf = pytest.importorskip("datasets", reason="the hub extra is not installed")
 mlc = pytest.importorskip("mlcroissant", reason="the hub extra is not installed")
 from sim_tactile.formats.hub import export_parquet  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def tones(tmp_path_factory, cache_dir):
+    """The tones task and its quick store (tests/_fake_task.py)."""
+    yield from tones_fixture(tmp_path_factory, cache_dir)
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _fake_task import tones  # noqa: F401  (the fixture)
+from _fake_task import tones_fixture
 
 from sim_tactile import datasets, tasks
 from sim_tactile.encoders import ThresholdEncoder
@@ -14,6 +14,12 @@ from sim_tactile.errors import ConfigError
 
 torch = pytest.importorskip("torch", reason="the learn extra (torch) is not installed")
 from sim_tactile.formats.torch_data import TactileTorchDataset  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def tones(tmp_path_factory, cache_dir):
+    """The tones task and its quick store (tests/_fake_task.py)."""
+    yield from tones_fixture(tmp_path_factory, cache_dir)
 
 
 def _all(loader):

@@ -8,13 +8,19 @@ import json
 
 import numpy as np
 import pytest
-from _fake_task import tones  # noqa: F401  (the fixture)
+from _fake_task import tones_fixture
 
 from sim_tactile.errors import ConfigError
 from sim_tactile.learn.neurobench import encoder_rate, layer_metrics, neuromorphic_figures
 from sim_tactile.records import SpikeTrains
 
 torch = pytest.importorskip("torch", reason="the learn extra (torch) is not installed")
+
+
+@pytest.fixture(scope="module")
+def tones(tmp_path_factory, cache_dir):
+    """The tones task and its quick store (tests/_fake_task.py)."""
+    yield from tones_fixture(tmp_path_factory, cache_dir)
 
 
 def _snntorch_net(w1, w2):

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from _fake_task import SNN, tones  # noqa: F401  (the fixture)
+from _fake_task import SNN, tones_fixture
 
 from sim_tactile import tasks
 from sim_tactile.encoders import LIFEncoder, LIFParams
@@ -19,6 +19,13 @@ pytest.importorskip("torch", reason="the learn extra (torch) is not installed")
 nir = pytest.importorskip("nir", reason="the nir extra is not installed")
 from sim_tactile.learn import nir as bridge  # noqa: E402
 from sim_tactile.learn.snn import SNNClassifier  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def tones(tmp_path_factory, cache_dir):
+    """The tones task and its quick store (tests/_fake_task.py)."""
+    yield from tones_fixture(tmp_path_factory, cache_dir)
+
 
 #: Agreement of Norse's decisions with the package's network on a test split (12 slides).
 #: Measured on the tones task: 0.75 on repeat 0, 0.5-1.0 (mean 0.76) over six repeats and
