@@ -8,7 +8,7 @@ TORCH_PIN := torch==2.13.0
 STAMP_RUN := $(VENV)/.installed-run
 STAMP_TEST := $(VENV)/.installed-test
 
-.PHONY: demo test check lint format bench clean
+.PHONY: demo test check docs lint format bench clean
 
 $(BIN)/python:
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "make: $(PYTHON) not found; set PYTHON=..." >&2; exit 1; }
@@ -21,20 +21,29 @@ $(STAMP_RUN): pyproject.toml | $(BIN)/python
 
 $(STAMP_TEST): pyproject.toml | $(BIN)/python
 	$(BIN)/pip install -q $(TORCH_PIN)
-	$(BIN)/pip install -q -e '.[test,learn,ray]'
+	$(BIN)/pip install -q -e '.[test,learn,ray,docs,tonic,hub,nir,neurobench]'
+	# neurobench and norse (the tests' NIR consumer) declare torchaudio / torchvision, which
+	# have no wheel for the pinned torch: installed without their declared dependencies; the
+	# [neurobench] and [nir] extras above name what they import
+	$(BIN)/pip install -q --no-deps neurobench==2.3.0 norse==1.1.0
 	touch $@ $(STAMP_RUN)
 
 # the main job: the soft-finger paper's task in simulation, quick (about a minute here)
 demo: $(STAMP_RUN)
 	$(BIN)/sim-tactile run finger7-v1 --quick --out demo-out
 
-# the whole suite, on both cores (the tests are deterministic under pytest-xdist)
+# the whole suite, on both cores (the tests are deterministic under pytest-xdist); it builds
+# the manual too (tests/test_docs.py), so a broken cross-reference fails it
 test: lint $(STAMP_TEST)
 	$(BIN)/python -m pytest -q -n 2
 
 # the fast lane (under two minutes): everything but the tests marked slow
 check: lint $(STAMP_TEST)
 	$(BIN)/python -m pytest -q -n 2 -m "not slow"
+
+# the manual (docs/, Sphinx) into build/docs, warnings as errors
+docs: $(STAMP_TEST)
+	$(BIN)/sphinx-build -W --keep-going -b html docs build/docs
 
 # style, and the one-way flow of the imports (import-linter's contracts in pyproject.toml)
 lint: $(STAMP_TEST)

@@ -13,8 +13,9 @@ import json
 import sys
 from pathlib import Path
 
+from sim_tactile.tasks.figures import plot_over_time
 from sim_tactile.tasks.registry import PaperCell
-from sim_tactile.tasks.report import Report, plot_over_time
+from sim_tactile.tasks.report import Report
 
 
 def main(out: str, *reports: str) -> None:

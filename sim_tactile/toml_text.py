@@ -12,6 +12,10 @@ from pathlib import Path
 
 from .errors import ConfigError
 
+#: The largest text file (TOML or JSON) read as a user's definition [bytes]: a sensor file of
+#: 4096 taxels is about 0.5 MB; a file this size is read and parsed in well under a second.
+MAX_TEXT_BYTES = 8 * 2**20
+
 
 def value(x) -> str:
     """One TOML value: a bool, string, integer, float or list of them (or of tables, inline)."""
@@ -80,10 +84,23 @@ def read_file(path, what: str) -> dict:
         raise ConfigError(f"{what} {str(path)!r}: valid: a file ending in .toml")
     if not path.is_file():
         raise ConfigError(f"{what} {str(path)!r} does not exist")
+    check_text_size(path, what)
     try:
         return tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ConfigError(f"{what} {str(path)!r} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError(f"{what} {str(path)!r}: its values nest too deeply to read") from None
+
+
+def check_text_size(path: Path, what: str) -> None:
+    """ConfigError if the file is larger than :data:`MAX_TEXT_BYTES` (before it is read)."""
+    size = path.stat().st_size
+    if size > MAX_TEXT_BYTES:
+        raise ConfigError(
+            f"{what} {str(path)!r} is {size / 2**20:.4g} MiB; valid: at most "
+            f"{MAX_TEXT_BYTES / 2**20:g} MiB"
+        )
 
 
 def write_file(data: dict, path, what: str, header: str = ""):

@@ -19,7 +19,7 @@ ALL_SCENES = tuple(scenes())
 class Sweep:
     """What to run.
 
-    scenes: keys of :data:`SCENES`. levels: which levels are swept (the L2 reference always
+    scenes: keys of :data:`ALL_SCENES`. levels: which levels are swept (the L2 reference always
     runs, the errors need it). dt_factors / pitch_factors: multiples of each level's auto
     time step and node pitch for L0 and L1 (1 = the auto setting); l2_*: the same for L2,
     never finer than the reference. duration_s: slide duration [s] (None: cross the whole

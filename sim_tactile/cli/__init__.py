@@ -21,6 +21,16 @@ from ..errors import SimTactileError, Terminated, os_error_message
 from . import bench, data, plates, sim, tasks
 from ._common import log
 
+DESCRIPTION = (
+    "The sim-tactile command line of a physics-simulated benchmark for tactile texture perception. Build "
+    "textured plates, simulate a finger sliding over them, and run the benchmark tasks of "
+    "four papers with your own methods beside the built-in ones."
+)
+EPILOG = (
+    "Every command takes --json, and then prints one JSON document on stdout; progress and "
+    "logs go to stderr. Run 'sim-tactile COMMAND --help' for a command's options, and "
+    "'sim-tactile tasks' for the tasks."
+)
 EXIT_ERROR = 2
 #: An error the package did not expect (a bug): exit status, and what the line asks for.
 EXIT_INTERNAL = 3
@@ -28,12 +38,22 @@ EXIT_INTERRUPTED = 130
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="sim-tactile", description=__doc__.splitlines()[0])
-    p.add_argument("--version", action="version", version=f"sim-tactile {__version__}")
-    p.add_argument("--debug", action="store_true", help="show the traceback of an error")
-    sub = p.add_subparsers(dest="command", required=True)
-    for group in (plates, sim, tasks, data, bench):
+    p = argparse.ArgumentParser(prog="sim-tactile", description=DESCRIPTION, epilog=EPILOG)
+    p.add_argument(
+        "--version",
+        action="version",
+        version=f"sim-tactile {__version__}",
+        help="Print the version and exit.",
+    )
+    p.add_argument(
+        "--debug",
+        action="store_true",
+        help="Show the traceback of an error instead of its one-line reason.",
+    )
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for group in (tasks, plates, sim, data, bench):
         group.add_parsers(sub)
+    _sentence_help(p)
     return p
 
 
@@ -58,6 +78,16 @@ def _signals() -> Iterator[None]:
 
 def _one_line_warnings(message, category, filename, lineno, line=None) -> str:
     return f"sim-tactile: warning: {message}\n"
+
+
+def _sentence_help(parser: argparse.ArgumentParser) -> None:
+    """argparse's own ``-h`` says "show this help message and exit": a sentence, like ours."""
+    for action in parser._actions:
+        if isinstance(action, argparse._HelpAction):
+            action.help = "Show this help and exit."
+        if isinstance(action, argparse._SubParsersAction):
+            for sp in action.choices.values():
+                _sentence_help(sp)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from collections.abc import Callable, Sequence
 
@@ -52,27 +53,77 @@ def names_arg(value: str | None, option: str, valid: Sequence[str]) -> list[str]
 def add_command(parent, name: str, func, help: str) -> argparse.ArgumentParser:
     """A subcommand with ``--json`` that runs ``func(args)``."""
     sp = parent.add_parser(name, help=help, description=help)
-    sp.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+    sp.add_argument(
+        "--json",
+        action="store_true",
+        help="Print one JSON document on stdout (progress and logs go to stderr).",
+    )
     sp.add_argument(
         "--debug",
         action="store_true",
         default=argparse.SUPPRESS,
-        help="show the traceback of an error",
+        help="Show the traceback of an error instead of its one-line reason.",
     )
     sp.set_defaults(func=func)
     return sp
 
 
+#: About how long the simulator's numba kernels take to compile on a first run (measured on
+#: 2 cores: 80-110 s for `sim-tactile run finger7-v1 --quick` in a fresh installation).
+COMPILE_NOTICE = (
+    "sim-tactile: first run on this installation: compiling the simulator's kernels once "
+    "(about 1.5-2 minutes on 2 cores); they are cached, and later runs start in seconds."
+)
+
+
+def kernels_to_compile(modules: Sequence[str] = ("sim_tactile.sim.simulate",)) -> int | None:
+    """How many of the compiled kernels that ``modules`` load have no compiled copy on disk
+    yet (numba's cache index), or None where that cannot be told (a numba without the cache
+    API read here). Imports ``modules``."""
+    import importlib
+
+    for name in modules:
+        importlib.import_module(name)
+    try:
+        from numba.core.registry import CPUDispatcher
+    except ImportError:
+        return None
+    missing = 0
+    for name, mod in list(sys.modules.items()):
+        if not name.startswith("sim_tactile.") or mod is None:
+            continue
+        for obj in list(vars(mod).values()):
+            if not isinstance(obj, CPUDispatcher):
+                continue
+            try:
+                index = obj._cache._cache_file._index_path
+            except AttributeError:
+                continue  # not cached to disk (cache=False), or another numba
+            if not os.path.exists(index):
+                missing += 1
+    return missing
+
+
+def announce_compile(modules: Sequence[str] = ("sim_tactile.sim.simulate",)) -> None:
+    """Say, on stderr, that the kernels compile now when they have never been compiled
+    here: otherwise a first run is silent for a minute or two."""
+    if kernels_to_compile(modules):
+        log(COMPILE_NOTICE)
+
+
 PLATE_HELP = (
-    "preset plate name, a plate file (.toml: copy one of assets/plates), a part (.step, .stp, "
-    ".stl, a CadQuery script .py[:function], in mm unless units=...) or a height map (.npy in "
-    "m, 16-bit .png), with options after '?' (see --plate-frame)"
+    "The plate: a preset's name ('sim-tactile plates list'), a plate file (.toml; copy one of "
+    "assets/plates), a part (.step, .stp, .stl, or a CadQuery script .py[:function], in mm "
+    "unless units=...) or a height map (.npy in m, 16-bit .png), with options after '?' (see "
+    "--plate-frame)."
 )
 PLATE_FRAME_HELP = (
-    "options of a part or height map, comma-separated key=value: units (mm, m, um, in), up "
-    "(+z, -z, +x, -x, +y, -y: the part's axis that points up), rotate_deg (about z), scale, "
-    "pixel_m (the height map's sample spacing), z_scale_m (a PNG's metres per count), "
-    "thickness_m, fill_overhangs (true/false), timeout_s (a script's time limit), name"
+    "The options of a part or height map, as comma-separated key=value: units (mm, m, um, "
+    "in), up (+z, -z, +x, -x, +y, -y: the part's axis that points up), rotate_deg (about z), "
+    "scale, pixel_m (the height map's sample spacing), z_scale_m (a PNG's metres per count), "
+    "thickness_m, fill_overhangs (true or false), holes (true or false: keep a map's NaN "
+    "samples or a hole through a part as intended holes), timeout_s (a script's time limit) "
+    "and name."
 )
 
 

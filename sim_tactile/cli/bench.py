@@ -89,8 +89,10 @@ def cmd_bench_sim_real(args: argparse.Namespace) -> int:
 def add_parsers(sub) -> None:
     bn = sub.add_parser(
         "bench",
-        help="benchmarks: speed against error, stability",
-        description="benchmarks: speed against error of the fidelity levels, stability",
+        help="Run the benchmarks of the simulator: speed against error, simulated against "
+        "real streams, and stability.",
+        description="Run the benchmarks of the simulator: speed against error of the fidelity "
+        "levels, simulated against real streams, and stability.",
     )
     bn.add_argument("--json", dest="bench_json", action="store_true", help=argparse.SUPPRESS)
     bn.set_defaults(func=cmd_bench)
@@ -99,67 +101,77 @@ def add_parsers(sub) -> None:
         bsub,
         "speed-error",
         cmd_bench_speed_error,
-        "real-time factor against error (vs the finest level and the closed forms) of every "
-        "fidelity level, time step and node pitch on each task's scene; table and Pareto figure",
+        "Measure the real-time factor against the error (against the finest level, the "
+        "physics and the closed forms) of every fidelity level, time step and node pitch on "
+        "each task's scene, with a table and a Pareto figure.",
     )
     se.add_argument(
-        "--quick", action="store_true", help="three scenes, fewer settings, short slides (~1 min)"
+        "--quick",
+        action="store_true",
+        help="Three scenes, fewer settings and short slides (about a minute).",
     )
-    se.add_argument("--out", required=True, help="output directory")
+    se.add_argument("--out", required=True, help="The folder to write the table and figure into.")
     se.add_argument(
         "--scenes",
         default=None,
-        help="comma-separated scenes: each task's (finger7, multilayer3, roughness8, "
+        help="Comma-separated scenes: each task's (finger7, multilayer3, roughness8, "
         "textures20, textures20-icub) and hertz (default: all but those a task leaves out; "
-        "--quick: finger7, textures20, hertz)",
+        "with --quick: finger7, textures20 and hertz).",
     )
     se.add_argument(
-        "--levels", default=None, help="comma-separated levels to sweep: L0, L1, L2 (default: all)"
+        "--levels",
+        default=None,
+        help="Comma-separated levels to sweep: L0, L1, L2 (default: all).",
     )
     se.add_argument(
         "--duration",
         type=float,
         default=None,
-        help="slide duration [s] (default: cross the texture; --quick: until the probe taxel "
-        "has crossed a few features)",
+        help="The slide's duration [s] (default: the time to cross the texture; with --quick: "
+        "until the probe taxel has crossed a few features).",
     )
     se.add_argument(
         "--no-physics",
         action="store_true",
-        help="leave out the error against physics (static presses against Tamaas's half-space, "
-        "a test extra; about 10 s per scene and offset)",
+        help="Leave out the error against physics (static presses against Tamaas's "
+        "half-space, a test extra; about 10 s per scene and offset).",
     )
     sr = add_command(
         bsub,
         "sim-real",
         cmd_bench_sim_real,
-        "simulated against real streams of each sensor with real data: the distributions of "
-        "mean, maximum, temporal spread, noise, spectral slope, channel correlation and class "
-        "separability; table and figure",
+        "Set simulated against real streams of each sensor with real data: the distributions "
+        "of mean, maximum, temporal spread, noise, spectral slope, channel correlation and "
+        "class separability, with a table and a figure.",
     )
-    sr.add_argument("--data", required=True, help="folder of the real data set")
-    sr.add_argument("--out", required=True, help="output directory (the figure)")
+    sr.add_argument("--data", required=True, help="The folder of the real data set.")
+    sr.add_argument("--out", required=True, help="The folder to write the figure into.")
     sr.add_argument(
-        "--sensors", default=None, help="comma-separated: biotac19, icub60 (default: both)"
+        "--sensors",
+        default=None,
+        help="Comma-separated sensors: biotac19, icub60 (default: both).",
     )
     sr.add_argument(
         "--slides",
         type=int,
         default=None,
-        help="slides per class, real and simulated (default: BioTac 5, iCub 2)",
+        help="The slides per class, real and simulated (default: 5 for the BioTac, 2 for the "
+        "iCub).",
     )
     sr.add_argument(
         "--sensor-config",
         action="append",
         default=None,
-        help="a calibration (.toml, or a shipped one by its sensor's name) for one of the "
-        "sensors: a column of its own (repeat it for each sensor)",
+        help="A calibration (.toml, or a shipped one by its sensor's name) for one of the "
+        "sensors, shown in a column of its own; repeat it for each sensor.",
     )
     st = add_command(
         bsub,
         "stability",
         cmd_bench_stability,
-        "hard cases (fast slides, high forces, coarse steps, extreme neuron inputs, dead taxels, "
-        "empty spike trains): each must end in a measured result or a named error",
+        "Run the hard cases (fast slides, high forces, coarse steps, extreme neuron inputs, "
+        "dead taxels, empty spike trains): each must end in a measured result or a named error.",
     )
-    st.add_argument("--cases", default=None, help="comma-separated case names (default: all)")
+    st.add_argument(
+        "--cases", default=None, help="Comma-separated case names (default: all of them)."
+    )

@@ -104,7 +104,7 @@ def add_sensor_config(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--sensor-config",
         default=None,
-        help="a sensor calibration (.toml, from 'sim-tactile calibrate') for the sensor",
+        help="A sensor calibration (.toml, from 'sim-tactile calibrate') for the sensor.",
     )
 
 
@@ -113,58 +113,76 @@ def add_parsers(sub) -> None:
         sub,
         "calibrate",
         cmd_calibrate,
-        "fit a sensor model's gains, offsets, noise, drift and ADC step to real recordings",
+        "Fit a sensor model's gains, offsets, noise, drift and ADC step to real recordings.",
     )
-    cb.add_argument("sensor", help="the sensor to calibrate (biotac19, icub60)")
-    cb.add_argument("--data", required=True, help="folder of the sensor's real data set")
-    cb.add_argument("--out", required=True, help="the calibration file to write (.toml)")
+    cb.add_argument("sensor", help="The sensor to calibrate: biotac19 or icub60.")
+    cb.add_argument("--data", required=True, help="The folder of the sensor's real data set.")
+    cb.add_argument("--out", required=True, help="The calibration file to write (.toml).")
 
     gn = add_command(
         sub,
         "generate",
         cmd_generate,
-        "simulate every slide of a task or of a configuration file into a Zarr store, in "
-        "parallel (local processes or Ray), resumably",
+        "Simulate every slide of a task or of a configuration file into a Zarr store, in "
+        "parallel (local processes or Ray), resumably.",
     )
     gn.add_argument(
         "task",
-        help="a task id (a suite such as textures20-v1 gets one group per part; a *-real task "
-        "copies its recordings, with --data) or a configuration file (.toml / .json: plates, "
-        "sensor, protocol, randomise, finger, slides_per_plate, seed)",
+        help="A task id (a suite such as textures20-v1 gets one group per part; a real-data task "
+        "copies its recordings, with --data) or a configuration file (.toml or .json: plates, "
+        "sensor, protocol, randomise, finger, slides_per_plate, seed).",
     )
-    gn.add_argument("--out", required=True, help="the store, a folder (e.g. set.zarr)")
+    gn.add_argument("--out", required=True, help="The store to write, a folder (set.zarr).")
     add_sensor_config(gn)
     gn.add_argument(
         "--workers",
         type=int,
         default=None,
-        help="worker processes (default: every core), or the CPUs of a local Ray instance",
-    )
-    gn.add_argument("--backend", default="local", choices=BACKENDS)
-    gn.add_argument(
-        "--address", default=None, help="Ray cluster address (HOST:PORT or auto; --backend ray)"
-    )
-    gn.add_argument("--quick", action="store_true", help="the task's quick slides")
-    gn.add_argument(
-        "--resume", action="store_true", help="continue an interrupted store of this configuration"
+        help="The worker processes (default: every core), or the CPUs of a local Ray instance.",
     )
     gn.add_argument(
-        "--seed", type=int, default=None, help="data set seed (default: 0, or the file's seed)"
+        "--backend",
+        default="local",
+        choices=BACKENDS,
+        help="Simulate on local processes (the default) or on Ray.",
     )
-    gn.add_argument("--data", default=None, help="folder of the real data set (*-real tasks)")
+    gn.add_argument(
+        "--address",
+        default=None,
+        help="The Ray cluster's address (HOST:PORT, or auto), with --backend ray.",
+    )
+    gn.add_argument("--quick", action="store_true", help="Simulate the task's quick slides.")
+    gn.add_argument(
+        "--resume",
+        action="store_true",
+        help="Continue an interrupted store of this configuration.",
+    )
+    gn.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        help="The data set's seed (default 0, or the configuration file's own).",
+    )
+    gn.add_argument(
+        "--data",
+        default=None,
+        help="The folder of the real data set (the real-data tasks need it).",
+    )
     ex = add_command(
         sub,
         "export",
         cmd_export,
-        "write a data set as plain numpy files (.npy + JSON), or as Parquet shards with a "
-        "dataset card and Croissant metadata for data hubs",
+        "Write a data set as plain numpy files (.npy and JSON), or as Parquet shards with a "
+        "dataset card and Croissant metadata for data hubs.",
     )
-    ex.add_argument("store", help="a store written by generate")
-    ex.add_argument("--out", required=True, help="output folder (new or empty)")
-    ex.add_argument("--part", default=None, help="one part of a suite's store (default: all)")
+    ex.add_argument("store", help="A store that 'sim-tactile generate' wrote.")
+    ex.add_argument("--out", required=True, help="The folder to write (new or empty).")
+    ex.add_argument(
+        "--part", default=None, help="One part of a suite's store (default: all of them)."
+    )
     ex.add_argument(
         "--format",
         default="numpy",
-        help="numpy (default: .npy files and meta.json) or parquet (Parquet shards of the "
-        "task's splits, README.md dataset card, croissant.json; extra [hub])",
+        help="numpy (the default: .npy files and meta.json) or parquet (Parquet shards of the "
+        "task's splits, a README.md dataset card and croissant.json; the [hub] extra).",
     )

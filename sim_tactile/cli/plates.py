@@ -52,13 +52,20 @@ def cmd_plates_build(args: argparse.Namespace) -> int:
 
 
 def add_parsers(sub) -> None:
-    plates = sub.add_parser("plates", help="list and build the textured plates")
-    psub = plates.add_subparsers(dest="plates_command", required=True)
-    add_command(psub, "list", cmd_plates_list, "list the preset plates")
-    b = add_command(
-        psub, "build", cmd_plates_build, "build a plate's STL, STEP, MJCF and preview PNG"
+    plates = sub.add_parser(
+        "plates",
+        help="List and build the textured plates.",
+        description="List and build the textured plates.",
     )
-    b.add_argument("name", nargs="?", help="e.g. finger7/ridges-4; " + PLATE_HELP)
+    psub = plates.add_subparsers(dest="plates_command", required=True)
+    add_command(psub, "list", cmd_plates_list, "List the preset plates with their family and hash.")
+    b = add_command(
+        psub,
+        "build",
+        cmd_plates_build,
+        "Build a plate's STL and STEP (in mm), its MJCF (in m) and a preview PNG.",
+    )
+    b.add_argument("name", nargs="?", help=PLATE_HELP + " For example finger7/ridges-4.")
     b.add_argument("--plate-frame", default=None, help=PLATE_FRAME_HELP)
-    b.add_argument("--all", action="store_true", help="build every preset")
-    b.add_argument("--out", required=True, help="output directory")
+    b.add_argument("--all", action="store_true", help="Build every preset plate.")
+    b.add_argument("--out", required=True, help="The folder to write the files into.")

@@ -166,115 +166,150 @@ def add_parsers(sub) -> None:
 
 def _add_simulate(sub) -> None:
     sm = add_command(
-        sub, "simulate", cmd_simulate, "press a finger on a plate, slide it, record the taxels"
+        sub,
+        "simulate",
+        cmd_simulate,
+        "Press a finger on a plate, slide it across, and record its taxels (one slide).",
     )
     add_plate_args(sm, required=True)
     sm.add_argument(
         "--sensor",
         default=None,
-        help="sensor: grid3x3 (default), multilayer3x3x2, biotac19, icub60, pvdf2, a sensor "
-        "file (.toml: copy one of assets/sensors), or a bare layout dense-<pitch>mm",
+        help="The sensor: grid3x3 (the default), multilayer3x3x2, biotac19, icub60, pvdf2, a "
+        "sensor file (.toml; copy one of assets/sensors), or a bare layout dense-<pitch>mm.",
     )
     sm.add_argument(
         "--sensor-config",
         default=None,
-        help="a sensor calibration (.toml, from 'sim-tactile calibrate'); its sensor unless "
-        "--sensor names it",
+        help="A sensor calibration (.toml, from 'sim-tactile calibrate'); it names the sensor "
+        "unless --sensor does.",
     )
-    sm.add_argument("--speed", type=float, default=0.06, help="slide speed [m/s]")
-    sm.add_argument("--force", type=float, default=1.0, help="normal force [N]")
+    sm.add_argument("--speed", type=float, default=0.06, help="The slide speed [m/s].")
+    sm.add_argument("--force", type=float, default=1.0, help="The normal force [N].")
     sm.add_argument(
         "--duration",
         type=float,
         default=None,
-        help="slide duration [s] (default: cross the texture)",
+        help="The slide's duration [s] (default: the time to cross the texture).",
     )
     sm.add_argument(
-        "--rate", type=float, default=None, help="sample rate [Hz] (default: the sensor's)"
+        "--rate", type=float, default=None, help="The sample rate [Hz] (default: the sensor's)."
     )
-    sm.add_argument("--fidelity", default="auto", choices=FIDELITIES)
+    sm.add_argument(
+        "--fidelity",
+        default="auto",
+        choices=FIDELITIES,
+        help="The fidelity level: auto (the default) picks the node grid and step for the "
+        "scene; L0, L1 and L2 force a level.",
+    )
     sm.add_argument(
         "--force-control",
         default="quasi-static",
         choices=FORCE_CONTROLS,
-        help="hold the force exactly each step (quasi-static, default) or a damped bone mass",
+        help="Hold the force exactly at each step (quasi-static, the default), or push a "
+        "damped bone mass (dynamic).",
     )
     sm.add_argument(
         "--start",
         default="flat",
         choices=STARTS,
-        help="start on flat ground and cross the texture (default), or start on the "
-        "texture and stay on it for --duration (the textures20-long strips)",
+        help="Start on flat ground and cross the texture (flat, the default), or start on the "
+        "texture and stay on it for --duration (texture; the textures20-long strips).",
     )
-    sm.add_argument("--seed", type=int, default=0)
-    sm.add_argument("--ideal", action="store_true", help="record the noise-free normal load [N]")
-    sm.add_argument("--out", required=True, help="output .npz")
+    sm.add_argument(
+        "--seed", type=int, default=0, help="The seed of the slide's jitters and noise."
+    )
+    sm.add_argument(
+        "--ideal",
+        action="store_true",
+        help="Record the noise-free normal load on each taxel [N] instead of the sensor's output.",
+    )
+    sm.add_argument("--out", required=True, help="The recording to write (.npz).")
 
 
 def _add_press(sub) -> None:
     pr = add_command(
-        sub, "press", cmd_press, "static indentation of a pad on a plate, read by a dense grid"
+        sub,
+        "press",
+        cmd_press,
+        "Press a pad statically on a plate and read the pressure with a dense grid of taxels.",
     )
-    pr.add_argument("--finger", default="sphere", choices=["sphere", "flat"])
-    pr.add_argument("--radius", type=float, default=8e-3, help="sphere radius [m]")
-    pr.add_argument("--size", type=float, default=12e-3, help="flat pad side [m]")
-    pr.add_argument("--young", type=float, default=0.3e6, help="Young's modulus [Pa]")
-    pr.add_argument("--poisson", type=float, default=0.5)
+    pr.add_argument(
+        "--finger",
+        default="sphere",
+        choices=["sphere", "flat"],
+        help="The pad's shape: a sphere (the default) or a flat square.",
+    )
+    pr.add_argument("--radius", type=float, default=8e-3, help="The sphere's radius [m].")
+    pr.add_argument("--size", type=float, default=12e-3, help="The flat pad's side [m].")
+    pr.add_argument("--young", type=float, default=0.3e6, help="The skin's Young's modulus [Pa].")
+    pr.add_argument("--poisson", type=float, default=0.5, help="The skin's Poisson ratio.")
     pr.add_argument(
         "--thickness",
         type=float,
         default=5e-3,
-        help="skin thickness [m]: how deep the half-space skin may be pressed, or the layer's "
-        "thickness on a --backing",
+        help="The skin's thickness [m]: how deep the half-space skin may be pressed, or the "
+        "layer's thickness on a --backing.",
     )
     pr.add_argument(
         "--backing",
         default="none",
         choices=["none", "rigid", "halfspace"],
-        help="none: the skin is a half-space (default); rigid or halfspace: the skin is a layer "
-        "(or --layers) bonded to that backing",
+        help="The skin's backing: with none (the default) the skin is a half-space; with rigid "
+        "or halfspace it is a layer (or --layers) bonded to that backing.",
     )
     pr.add_argument(
         "--layers",
         default=None,
-        help='the skin\'s layers from the surface down, as JSON: [{"thickness_m": 0.001, '
-        '"young_pa": 3e5, "poisson": 0.5}, ...] (overrides --thickness, --young, --poisson)',
+        help='The skin\'s layers from the surface down, as JSON: [{"thickness_m": 0.001, '
+        '"young_pa": 3e5, "poisson": 0.5}, ...]; they override --thickness, --young and '
+        "--poisson.",
     )
     pr.add_argument(
         "--backing-young",
         type=float,
         default=3e6,
-        help="Young's modulus of a halfspace backing [Pa]",
+        help="The Young's modulus of a halfspace backing [Pa].",
     )
-    pr.add_argument("--backing-poisson", type=float, default=0.5)
+    pr.add_argument(
+        "--backing-poisson",
+        type=float,
+        default=0.5,
+        help="The Poisson ratio of a halfspace backing.",
+    )
     pr.add_argument(
         "--friction",
         type=float,
         default=None,
-        help="the skin carries sliding friction of this coefficient (q = mu p against "
-        "--slide-dir); buried taxels (--depth) read its stress",
+        help="The skin carries sliding friction of this coefficient (q = mu p against "
+        "--slide-dir), and buried taxels (--depth) read its stress.",
     )
     pr.add_argument(
         "--slide-dir",
         default="x",
         choices=list(SLIDE_DIRS),
-        help="the direction the pad slides in, for --friction (write --slide-dir=-x for -x)",
+        help="The direction the pad slides in, for --friction (write --slide-dir=-x for -x).",
     )
     pr.add_argument(
         "--depth",
         type=float,
         default=0.0,
-        help="read the vertical stress this far under the surface [m] (default 0: the pressure)",
+        help="Read the vertical stress this far under the surface [m] (default 0: the pressure).",
     )
-    pr.add_argument("--force", type=float, default=1.0, help="normal force [N]")
+    pr.add_argument("--force", type=float, default=1.0, help="The normal force [N].")
     pr.add_argument(
-        "--pitch", type=float, default=0.25e-3, help="taxel pitch of the dense grid [m]"
+        "--pitch", type=float, default=0.25e-3, help="The taxel pitch of the dense grid [m]."
     )
     pr.add_argument(
         "--node-pitch",
         type=float,
         default=None,
-        help="the skin's node pitch [m] (default: the taxel pitch, at most 0.2 mm)",
+        help="The skin's node pitch [m] (default: the taxel pitch, at most 0.2 mm).",
     )
     add_plate_args(pr, default="finger7/flat")
-    pr.add_argument("--fidelity", default="L1", choices=PRESS_LEVELS)
+    pr.add_argument(
+        "--fidelity",
+        default="L1",
+        choices=PRESS_LEVELS,
+        help="The skin model: L1 (coupled, the default) or L0 (a Winkler bed).",
+    )

@@ -1,12 +1,14 @@
-"""``sim-tactile run`` (a benchmark task) and ``ablate`` (a grid sweep over its slides)."""
+"""``sim-tactile tasks`` (the registered tasks), ``run`` (a benchmark task) and ``ablate``
+(a grid sweep over its slides)."""
 
 from __future__ import annotations
 
 import argparse
+import re
 
 from ..errors import ConfigError
 from ..tables import text_table
-from ._common import add_command, emit, log
+from ._common import add_command, announce_compile, emit, log
 from .data import add_sensor_config
 
 
@@ -21,6 +23,76 @@ def _task_options(args: argparse.Namespace) -> dict:
         "log": log,
         "store": args.store,
     }
+
+
+#: The sensors of the tasks that read real recordings (their data are not a slide set).
+REAL_SENSORS = {"biotac20-real-v1": "biotac19", "icub20-real-v1": "icub60"}
+
+
+def paper_of(reference: str) -> tuple[str, str]:
+    """A task's paper: the title in its reference, and its number among the four papers
+    the benchmark reproduces (``"000"`` .. ``"003"``, the tasks' docstrings name them so)."""
+    m = re.search(r"\(seed paper (\d{3})\)", reference)
+    head = reference[: m.start()] if m else reference
+    authors = re.match(r"^(?:[A-Z]\.(?: ?[A-Z]\.)* [\w-]+, )*[A-Z]\.(?: ?[A-Z]\.)* [\w-]+: ", head)
+    title = head[authors.end() :] if authors else head
+    title = title.split(":")[0].strip().rstrip(",")
+    return title, (m[1] if m else "")
+
+
+def task_summary(task_id: str) -> dict:
+    """``{id, paper, sensor, classes, slides}`` of a registered task (a suite: its parts'
+    sensors and slides), with its title, quick slides and aliases."""
+    from ..datasets.real import N_MATERIALS, N_SLIDES
+    from ..slides import SlideSet
+    from ..tasks import get_task
+
+    spec = get_task(task_id)
+    paper, number = paper_of(spec.reference)
+    if spec.parts:
+        parts = [task_summary(p) for p in spec.parts]
+        sensor = "+".join(p["sensor"] for p in parts)
+        classes, slides = parts[0]["classes"], sum(p["slides"] for p in parts)
+        quick = sum(p["quick_slides"] for p in parts)
+    elif isinstance(spec.get_data, SlideSet):
+        ss = spec.get_data
+        sensor, classes = str(ss.sensor), len(ss.plates)
+        slides = ss.slides * classes
+        quick = ss.quick_slides * len(ss.quick_plates or ss.plates)
+    else:
+        sensor, classes = REAL_SENSORS.get(spec.id, "?"), N_MATERIALS
+        slides = quick = N_MATERIALS * N_SLIDES
+    return {
+        "id": spec.id,
+        "paper": paper,
+        "paper_number": number,
+        "sensor": sensor,
+        "classes": classes,
+        "slides": slides,
+        "quick_slides": quick,
+        "title": spec.title,
+        "parts": list(spec.parts),
+        "needs_data": spec.needs_data_path,
+        "aliases": spec.describe()["aliases"],
+    }
+
+
+def _short(text: str, n: int) -> str:
+    return text if len(text) <= n else text[: n - 3].rstrip() + "..."
+
+
+def cmd_tasks(args: argparse.Namespace) -> int:
+    """List the registered benchmark tasks, one line each."""
+    from ..tasks import task_ids
+
+    rows = [task_summary(t) for t in task_ids()]
+    head = ["id", "paper", "sensor", "classes", "slides"]
+    table = [
+        [r["id"], _short(r["paper"], 48), r["sensor"], str(r["classes"]), str(r["slides"])]
+        for r in rows
+    ]
+    emit(args, rows, lambda: "\n".join(text_table(head, table, right=(3, 4))))
+    return 0
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -47,6 +119,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         if is_config_path(task_id):
             task_id = config_task(task_id)[0].id
         base = load_baseline(args.baseline, task_id, args.quick)
+    announce_compile(("sim_tactile.sim.simulate", "sim_tactile.encoders"))
     report = run_task(
         args.task,
         args.out,
@@ -73,7 +146,9 @@ def cmd_ablate(args: argparse.Namespace) -> int:
     """Sweep encoder / neuron / classifier parameters over a task's cached recordings."""
     from ..tasks.ablate import ablate, ablation_rows, parse_sets
 
-    rep = ablate(args.task, parse_sets(args.sets), args.out, **_task_options(args))
+    sets = parse_sets(args.sets)
+    announce_compile(("sim_tactile.sim.simulate", "sim_tactile.encoders"))
+    rep = ablate(args.task, sets, args.out, **_task_options(args))
 
     def table() -> str:
         head, rows = ablation_rows(rep)
@@ -85,75 +160,107 @@ def cmd_ablate(args: argparse.Namespace) -> int:
 
 def _add_task_options(p: argparse.ArgumentParser, quick_help: str) -> None:
     p.add_argument("--quick", action="store_true", help=quick_help)
-    p.add_argument("--data", default=None, help="folder of the real data set (*-real tasks)")
+    p.add_argument(
+        "--data",
+        default=None,
+        help="The folder of the real data set (the real-data tasks need it).",
+    )
     p.add_argument(
         "--classifiers",
         default=None,
-        help="comma-separated names (default: the task's; none: no built-in row)",
+        help="Comma-separated classifier names instead of the task's own; 'none' leaves out "
+        "every built-in row.",
     )
-    p.add_argument("--repeats", type=int, default=None, help="splits per classifier")
+    p.add_argument(
+        "--repeats", type=int, default=None, help="The number of splits for every classifier."
+    )
     p.add_argument(
         "--seed",
         type=int,
         default=None,
-        help="seed of the splits and models (default 0; a configuration file's own seed)",
+        help="The seed of the splits and the models (default 0, or a configuration file's own).",
     )
-    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--out", required=True, help="The folder to write the report into.")
     p.add_argument(
-        "--store", default=None, help="read the data from a store made by 'generate TASK'"
+        "--store",
+        default=None,
+        help="Read the data from a store that 'sim-tactile generate TASK' wrote.",
+    )
+
+
+def _set_help() -> str:
+    from ..tasks.ablate import PARAM_HELP
+
+    names = "; ".join(f"{k}: {v}" for k, v in PARAM_HELP.items())
+    return (
+        "A swept parameter and its values; repeat --set for a grid. 'sim-tactile tasks' and "
+        f"the manual's task pages say which ones each task uses. The parameters: {names}."
     )
 
 
 def add_parsers(sub) -> None:
-    rn = add_command(sub, "run", cmd_run, "run a benchmark task's evaluation protocol and report")
+    add_command(
+        sub,
+        "tasks",
+        cmd_tasks,
+        "List the registered benchmark tasks, one line each: id, paper, sensor, classes, slides.",
+    )
+    rn = add_command(
+        sub,
+        "run",
+        cmd_run,
+        "Run a benchmark task's evaluation protocol and write its report and figures.",
+    )
     add_sensor_config(rn)
     rn.add_argument(
         "task",
-        help="task id, e.g. finger7-v1, biotac20-real-v1, or a configuration file of "
-        "'generate' (.toml / .json), scored as its [evaluate] table says",
+        help="A task id (see 'sim-tactile tasks'), or a configuration file of 'generate' "
+        "(.toml or .json) scored as its [evaluate] table says.",
     )
-    _add_task_options(rn, "the task's quick data, fewer epochs and repeats (about a minute)")
+    _add_task_options(
+        rn, "Use the task's quick data, with fewer epochs and repeats (about a minute)."
+    )
     rn.add_argument(
         "--method",
         dest="methods",
         action="append",
         metavar="NAME=module:callable",
-        help="score your own method (repeatable): the callable returns an estimator, or an "
-        "(encoder, estimator) pair; the module (or a .py file) is imported: this runs its code",
+        help="Score your own method; repeat it for several. The callable returns an "
+        "estimator or an (encoder, estimator) pair; the module (or a .py file) is imported, "
+        "which runs its code.",
     )
     rn.add_argument(
         "--baseline",
         default=None,
         metavar="REPORT.json",
-        help="compare the rows with a saved report; exit 1 when one falls below it by more "
-        "than --tolerance or is missing",
+        help="Compare the rows with a saved report, and exit 1 when one falls below it by "
+        "more than --tolerance or is missing.",
     )
     rn.add_argument(
         "--tolerance",
         type=float,
         default=0.02,
-        help="how far a row's accuracy may fall below the baseline (default 0.02)",
+        help="How far a row's accuracy may fall below the baseline (default 0.02).",
     )
     rn.add_argument(
         "--save-baseline",
         default=None,
         metavar="PATH",
-        help="write this run's report as a baseline",
+        help="Write this run's report as a baseline for --baseline.",
     )
     ab = add_command(
         sub,
         "ablate",
         cmd_ablate,
-        "grid sweep of encoder, neuron and classifier parameters over a task's cached slides",
+        "Sweep encoder, neuron and classifier parameters over a task's cached slides, as a grid.",
     )
-    ab.add_argument("task", help="task id, e.g. roughness8-v1")
+    ab.add_argument("task", help="A task id, for example roughness8-v1.")
     ab.add_argument(
         "--set",
         dest="sets",
         action="append",
         required=True,
         metavar="PARAM=v1,v2",
-        help="a swept parameter: gain, max_rate_hz, preset, a, b, c, d, K, q, tau, k, C "
-        "(repeat --set for a grid)",
+        help=_set_help(),
     )
-    _add_task_options(ab, "the task's quick data and repeats")
+    _add_task_options(ab, "Use the task's quick data and repeats.")

@@ -2,10 +2,12 @@
 writes the part's tessellation (vertices in the part's own units, triangles) as a ``.npz``.
 
 Run only by :mod:`.user`, as ``python -m sim_tactile.plates.cad_worker KIND SOURCE OUT
-[FUNCTION]`` with ``KIND`` ``step`` or ``script``, under a time limit. A script is code: it
-runs here, never in the caller's process, and only when the user names it. Exit status: 0
-written; 3 the script or the reader raised (the reason on the last line of stderr); 4 the
-result is not a CadQuery shape.
+[FUNCTION]`` with ``KIND`` ``step`` or ``script``, under a time limit (:mod:`.cad_run`: in its own session, killed whole at the limit). A
+script is code: it runs here, never in the caller's process, and only when the user names
+it. This process makes itself the reaper of its orphans and, before it exits, kills every
+process the script left behind (:func:`.cad_run.kill_session`). Exit status: 0 written; 3
+the script or the reader raised (the reason on the last line of stderr); 4 the result is not
+a CadQuery shape.
 """
 
 from __future__ import annotations
@@ -34,9 +36,9 @@ def _shape_of(result):
 
 
 def _load(kind: str, source: str, function: str):
-    import cadquery as cq
-
     if kind == "step":
+        import cadquery as cq
+
         return cq.importers.importStep(source)
     sys.path.insert(0, os.path.dirname(os.path.abspath(source)))  # its own modules beside it
     namespace = runpy.run_path(source, run_name="sim_tactile_plate_script")
@@ -50,6 +52,16 @@ def _load(kind: str, source: str, function: str):
 
 
 def main(argv: list[str]) -> int:
+    from .cad_run import become_subreaper, kill_session
+
+    become_subreaper()
+    try:
+        return _main(argv)
+    finally:
+        kill_session(os.getpid(), spare=os.getpid())  # what the script left running
+
+
+def _main(argv: list[str]) -> int:
     from .cad import STL_ANGULAR_TOLERANCE_RAD, STL_TOLERANCE_MM
 
     kind, source, out = argv[:3]

@@ -14,9 +14,16 @@ The steps, each of which refuses bad input with an error that names the file:
    space under the top surface is filled and the filling reported.
 5. **Sampled**: the top surface is z-buffered every ``pixel_m`` on a grid centred on the
    textured area (the samples more than 1 um above the lowest point of the top surface; the
-   whole part if none is); that lowest point becomes z = 0. Samples beyond the part are NaN
-   (no material).
-6. **Resolved**: every raised feature (above half the relief) must be at least three samples
+   whole part if none is); that lowest point becomes z = 0.
+6. **Outlined**: the part has material wherever its footprint does. A sample on the part's
+   outline that round-off puts outside it takes the height of the nearest triangle's plane
+   (:data:`OUTLINE_EPS`). Samples that no triangle covers and that reach the grid's border (beyond the part's outline: the grid, centred on
+   the texture, extends past an off-centre part on one side, and a sample on the part's edge
+   may fall just outside it) are the plate's flat base, z = 0, as the plate's base around
+   the map is; the plate's notes say so where the grid reaches more than a sample beyond the
+   part. Samples without material enclosed by the part (a through-hole) are refused, or with
+   ``holes`` kept as holes (NaN: no material) and reported.
+7. **Resolved**: every raised feature (above half the relief) must be at least three samples
    across, so that the collider, which interpolates the samples bilinearly, holds it (the
    slivers the part's outline cuts from features are not held to it).
 """
@@ -42,6 +49,11 @@ TEXTURE_TOL_M = 1e-6
 OVERHANG_TOL_M = 1e-6
 #: Samples a raised feature must span to be resolved.
 RESOLVE_SAMPLES = 3
+#: Barycentric slack within which a sample that no triangle covers takes the plane of the
+#: nearest, and how far beyond a triangle's bounding box it is looked for [samples]: a
+#: sample on the part's outline may fall outside it by the STL's float32 round-off (6e-8 of
+#: a coordinate: 3 nm at 50 mm), 3e-5 of a 0.1 mm triangle and 6e-5 of a 50 um sample.
+OUTLINE_EPS = 1e-3
 UNITS_M = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "in": 0.0254}
 UPS = ("+z", "-z", "+x", "-x", "+y", "-y")
 
@@ -135,7 +147,13 @@ def _grid(centre: float, lo: float, hi: float, pixel: float) -> np.ndarray:
 
 
 def sample_part(
-    mesh, placement: Placement, pixel_m: float, where: str, *, fill_overhangs: bool = False
+    mesh,
+    placement: Placement,
+    pixel_m: float,
+    where: str,
+    *,
+    fill_overhangs: bool = False,
+    holes: bool = False,
 ) -> SampledPart:
     """The top surface of a closed mesh (:func:`closed_mesh`) as a centred height map; see
     the module for the checks."""
@@ -151,11 +169,17 @@ def sample_part(
         )
     a, b, c = (v[mesh.faces[:, k]] for k in range(3))
     normal_z = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    up = mesh.faces[normal_z > 0]
+    is_up = normal_z > 0
+    up = mesh.faces[is_up]
+    # the top's rim: upward faces beside others (walls), the only ones a sample on the
+    # outline can be near
+    pairs = mesh.face_adjacency
+    beside = pairs[is_up[pairs[:, 0]] != is_up[pairs[:, 1]]].ravel()
+    rim = mesh.faces[beside[is_up[beside]]]
     # first pass: where the texture lies
     xs = lo[0] + np.arange(math.ceil((hi[0] - lo[0]) / pixel_m) + 1) * pixel_m
     ys = lo[1] + np.arange(math.ceil((hi[1] - lo[1]) / pixel_m) + 1) * pixel_m
-    top = zbuffer(v, up, xs, ys)
+    top = _top(v, up, rim, xs, ys)
     base = float(np.nanmin(top))
     relief = float(np.nanmax(top)) - base
     if relief > MAX_FEATURE_HEIGHT_M:
@@ -180,13 +204,92 @@ def sample_part(
     cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
     # second pass: a grid centred on the texture
     xs, ys = _grid(cx, lo[0], hi[0], pixel_m), _grid(cy, lo[1], hi[1], pixel_m)
-    top = zbuffer(v, up, xs, ys)
+    top = _top(v, up, rim, xs, ys)
     _check_overhangs(v, up, xs, ys, pixel_m, where, fill_overhangs, notes)
     z = top - float(np.nanmin(top))  # this grid's lowest point (the first's, to round-off)
     _check_resolved(z, pixel_m, where)
+    z = _outline(z, pixel_m, where, holes, notes)
+    beyond = {
+        "-x": lo[0] - xs[0],
+        "+x": xs[-1] - hi[0],
+        "-y": lo[1] - ys[0],
+        "+y": ys[-1] - hi[1],
+    }
+    side = max(beyond, key=beyond.get)
+    if beyond[side] > pixel_m:
+        notes.append(
+            f"the map, centred on the texture, reaches {beyond[side] * 1e3:.4g} mm beyond the "
+            f"part on its {side} side: the plate's flat base (z = 0) is the surface there"
+        )
     span = ((z.shape[1] - 1) * pixel_m, (z.shape[0] - 1) * pixel_m)
     area = (min(area[0], span[0]), min(area[1], span[1]))
     return SampledPart(z, pixel_m, base - float(lo[2]), area, notes)
+
+
+def _top(v, up, rim, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """The top surface's heights on the grid (:func:`.zbuffer.zbuffer` of the upward faces
+    ``up``); a sample on the part's outline that round-off puts outside it takes the plane of
+    the nearest face of the top's ``rim``."""
+    top = zbuffer(v, up, xs, ys)
+    if np.isnan(top).any() and len(rim):
+        near = zbuffer(v, rim, xs, ys, edge_eps=OUTLINE_EPS, reach=OUTLINE_EPS)
+        top = np.where(np.isnan(top), near, top)
+    return top
+
+
+def nan_regions(z: np.ndarray, pixel: float) -> tuple[int, int, float, float]:
+    """Where a map ``z`` (ny, nx) sampled every ``pixel`` [m] has no material (NaN): the
+    number of such samples, the largest 4-connected region's, and its centre (x, y) [m] in the
+    plate frame (the map centred on the origin)."""
+    from scipy import ndimage
+
+    nan = np.isnan(z)
+    labels, n = ndimage.label(nan)
+    if n == 0:
+        return 0, 0, 0.0, 0.0
+    sizes = np.bincount(labels.ravel())[1:]
+    k = int(np.argmax(sizes)) + 1
+    iy, ix = ndimage.center_of_mass(nan, labels, k)
+    ny, nx = z.shape
+    return (
+        int(nan.sum()),
+        int(sizes[k - 1]),
+        (ix - (nx - 1) / 2) * pixel,
+        (iy - (ny - 1) / 2) * pixel,
+    )
+
+
+def describe_nan(z: np.ndarray, pixel: float) -> str:
+    """What :func:`nan_regions` finds, in words (mm)."""
+    n, big, x, y = nan_regions(z, pixel)
+    return (
+        f"{n} samples without material (NaN); the largest region, {big} samples, around "
+        f"x = {round(x * 1e3, 3) + 0.0:.3f} mm, y = {round(y * 1e3, 3) + 0.0:.3f} mm"
+    )
+
+
+def _outline(z: np.ndarray, pixel: float, where: str, holes: bool, notes: list) -> np.ndarray:
+    """``z`` with its samples beyond the part's outline (those without material that reach
+    the grid's border) on the base, z = 0; samples without material inside the outline (a
+    through-hole) refused, or with ``holes`` kept (NaN) and reported."""
+    from scipy import ndimage
+
+    nan = np.isnan(z)
+    if not nan.any():
+        return z
+    labels, _ = ndimage.label(nan)
+    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    z = np.where(np.isin(labels, border[border > 0]), 0.0, z)
+    if not np.isnan(z).any():
+        return z
+    what = f"the part has holes through it: {describe_nan(z, pixel)}"
+    if not holes:
+        raise ConfigError(
+            f"{where}: {what}; valid: material at every sample inside the part's outline, or "
+            "pass holes=true if the holes are intended (no material: the pad meets nothing there)"
+        )
+    notes.append(f"{what}; kept as holes (holes=true)")
+    return z
 
 
 def _check_overhangs(v, up, xs, ys, pixel, where, fill, notes) -> None:

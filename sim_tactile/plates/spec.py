@@ -36,6 +36,9 @@ MAX_ROUGHNESS_SAMPLES = 200_001
 MAX_DRAFT_DEG = 60.0
 #: Largest number of samples a height map may have (128 MB of float64).
 MAX_HEIGHTMAP_SAMPLES = 16_000_000
+#: Most raised features (ridges, grating ridges, bumps) a plate may carry: each is a MuJoCo
+#: geom, and 10,000 build in 0.4 s into a 1 MB MJCF; a million took minutes and 100 MB.
+MAX_FEATURES = 10_000
 
 BumpShape = Literal["box", "cylinder", "hemisphere"]
 BUMP_SHAPES = ("box", "cylinder", "hemisphere")
@@ -81,7 +84,7 @@ class Ridges:
     kind: Literal["ridges"] = field(default="ridges", init=False)
 
     def __post_init__(self) -> None:
-        v.integer("ridges.count", self.count, 1, 10_000)
+        v.integer("ridges.count", self.count, 1, MAX_FEATURES)
         v.in_range("ridges.width_m", self.width_m, MIN_FEATURE_SIZE_M, None, unit="m")
         v.in_range(
             "ridges.height_m", self.height_m, MIN_FEATURE_SIZE_M, MAX_FEATURE_HEIGHT_M, unit="m"
@@ -200,6 +203,11 @@ class Bumps:
         v.integer("bumps.rows", self.rows, 1, 1000)
         v.integer("bumps.cols", self.cols, 1, 1000)
         v.one_of("bumps.shape", self.shape, BUMP_SHAPES)
+        if self.rows * self.cols > MAX_FEATURES:
+            raise ConfigError(
+                f"bumps.rows x bumps.cols = {self.rows} x {self.cols} = {self.rows * self.cols} "
+                f"bumps; valid: at most {MAX_FEATURES} (each bump is a MuJoCo geom)"
+            )
         v.in_range("bumps.size_m", self.size_m, MIN_FEATURE_SIZE_M, None, unit="m")
         if self.height_m is None:
             if self.shape != "hemisphere":
@@ -412,6 +420,12 @@ class Plate:
                         f"the height map spans {span:g} m along {key} ((samples - 1) x pixel_m); "
                         f"valid: from the textured area's {area:g} m to the plate's {side:g} m"
                     )
+        n = math.floor(self.area_length_m / t.period_m + 1e-9) if isinstance(t, Grating) else 0
+        if n > MAX_FEATURES:
+            raise ConfigError(
+                f"grating.period_m = {t.period_m:g} m gives {n} ridges over {self.area_length_m:g} m; valid: at most {MAX_FEATURES} (each "
+                f"ridge is a MuJoCo geom: period_m >= {self.area_length_m / MAX_FEATURES:g} m)"
+            )
         # expanding the features checks that they fit and do not overlap
         self.texture.features(self.area_length_m, self.area_width_m)
 
@@ -444,14 +458,14 @@ class Plate:
         """Build a plate from :meth:`params`-style data (e.g. a TOML or JSON file). A height
         map's parameters name its samples by SHA-256: ``maps`` holds them by that hash (a
         data set's store does, :func:`~sim_tactile.datasets.store.plate_maps`)."""
-        if not isinstance(params, dict) or "texture" not in params:
+        if not isinstance(params, dict) or not isinstance(params.get("texture"), dict):
             raise ConfigError("plate parameters must be a table with a 'texture' table")
         p = dict(params)
         tex = dict(p.pop("texture"))
         kind = tex.pop("kind", None)
         if kind == "heightmap":
             return cls._from_map_params(p, tex, name, maps or {})
-        if kind not in _TEXTURES:
+        if not isinstance(kind, str) or kind not in _TEXTURES:
             raise ConfigError(
                 f"texture.kind = {kind!r} is not valid; valid: {', '.join(_TEXTURES)}"
             )
@@ -466,7 +480,7 @@ class Plate:
     @classmethod
     def _from_map_params(cls, p: dict, tex: dict, name, maps: dict) -> Plate:
         sha = tex.get("sha256")
-        if sha not in maps:
+        if not isinstance(sha, str) or sha not in maps:
             raise ConfigError(
                 f"plate {name or ''!s}: its height map (sha256 {sha}) is not given; a height-map "
                 "plate is re-created from its samples (a data set's store holds them)"

@@ -13,11 +13,22 @@ Each becomes a :class:`~.spec.Plate` with a :class:`~.spec.HeightMap` texture in
 frame: top surface at z = 0 (the lowest point of the part's top surface), features rising,
 the textured area centred, sliding along +x. The options (``Source``): ``units``, ``up``,
 ``rotate_deg``, ``scale`` (the placement, :class:`~.mesh_map.Placement`), ``pixel_m``,
-``z_scale_m``, ``thickness_m`` (a height map's base), ``fill_overhangs``, ``timeout_s`` (a
-script's or STEP reader's time limit) and ``name``.
+``z_scale_m``, ``thickness_m`` (a height map's base), ``fill_overhangs``, ``holes``,
+``timeout_s`` (a script's or STEP reader's time limit) and ``name``.
+
+A plate has material wherever its part or map has: a map's samples must all be numbers, and
+a part's top surface must cover its outline (beyond it, where the grid centred on the
+texture reaches past an off-centre part, the plate's flat base is the surface). Holes (NaN
+in a map, a hole through a part) are refused, saying where, unless ``holes=true`` says they
+are intended; the plate's notes then report them. The samples, NaN included, are the
+plate's identity, so a plate with holes is another plate than one without.
+
+Files are read within bounds (:mod:`.map_files`): their size, a ``.npy``'s header and a
+PNG's dimensions are checked before their contents are read.
 
 A STEP file is read and a script is run in a separate process (:mod:`.cad_worker`) under a
-time limit: **a script is code** and runs only because its path was given. STL, NPY and
+time limit, in its own session, killed whole at the limit or when it ends (:mod:`.cad_run`):
+**a script is code** and runs only because its path was given. STL, NPY and
 PNG files are read as data (numpy's reader without pickles, Pillow, trimesh). The checks
 (closed solid, size, overhangs, resolution) are :mod:`.mesh_map`'s; every refusal names the
 file, the value and the valid range, and nothing is written.
@@ -29,11 +40,8 @@ process by the file's content and the options.
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
-import signal
-import subprocess
 import sys
 import tempfile
 from dataclasses import dataclass, fields, replace
@@ -43,7 +51,15 @@ from urllib.parse import unquote
 import numpy as np
 
 from ..errors import ConfigError
-from .mesh_map import DEFAULT_PIXEL_M, PLATE_SIDE_RANGE_M, Placement, closed_mesh, sample_part
+from . import map_files
+from .mesh_map import (
+    DEFAULT_PIXEL_M,
+    PLATE_SIDE_RANGE_M,
+    Placement,
+    closed_mesh,
+    describe_nan,
+    sample_part,
+)
 from .spec import HeightMap, Plate
 
 SUFFIXES = {
@@ -78,6 +94,7 @@ class Source:
     z_scale_m: float | None = None
     thickness_m: float | None = None
     fill_overhangs: bool = False
+    holes: bool = False
     timeout_s: float = DEFAULT_TIMEOUT_S
     name: str | None = None
 
@@ -103,6 +120,7 @@ def _text(x) -> str:
 
 
 _FLOATS = ("rotate_deg", "scale", "pixel_m", "z_scale_m", "thickness_m", "timeout_s")
+_BOOLS = ("fill_overhangs", "holes")
 
 
 def is_user_plate(ref) -> bool:
@@ -152,7 +170,7 @@ def _option(where: str, key: str, val):
             if not math.isfinite(x):
                 raise ValueError
             return x
-        if key == "fill_overhangs":
+        if key in _BOOLS:
             if isinstance(val, bool):
                 return val
             if str(val).lower() not in ("true", "false", "1", "0"):
@@ -160,9 +178,8 @@ def _option(where: str, key: str, val):
             return str(val).lower() in ("true", "1")
     except (TypeError, ValueError):
         raise ConfigError(
-            f"plate {where!r}: {key} = {val!r} is not valid; valid: a number"
-            if key != "fill_overhangs"
-            else f"plate {where!r}: fill_overhangs = {val!r} is not valid; valid: true or false"
+            f"plate {where!r}: {key} = {val!r} is not valid; valid: "
+            + ("true or false" if key in _BOOLS else "a number")
         ) from None
     return str(val)
 
@@ -177,42 +194,48 @@ def load_user_plate(ref: str | Source, *, base_dir: str | Path | None = None, **
     where = f"plate file {str(src.path)!r}"
     if not path.is_file():
         raise ConfigError(f"{where}: no such file ({path.resolve()})")
-    data = path.read_bytes()
-    key = (str(path.resolve()), hashlib.sha256(data).hexdigest(), replace(src, path=""))
+    map_files.check_size(path, where)
+    digest = map_files.file_sha256(path)
+    key = (str(path.resolve()), digest, replace(src, path=""))
     if key in _MEMO:
         return _MEMO[key]
-    plate = _load(src, path, data, where)
+    plate = _load(src, path, digest, where)
     if len(_MEMO) >= _MEMO_MAX:
         _MEMO.pop(next(iter(_MEMO)))
     _MEMO[key] = plate
     return plate
 
 
-def _load(src: Source, path: Path, data: bytes, where: str) -> Plate:
+def _load(src: Source, path: Path, digest: str, where: str) -> Plate:
     name = src.name or (path.stem if src.function == "plate" else f"{path.stem}-{src.function}")
     if src.kind in ("npy", "png"):
-        z, pixel = _raster(src, path, where)
+        z, pixel, notes = _raster(src, path, where)
         span = ((z.shape[1] - 1) * pixel, (z.shape[0] - 1) * pixel)
         thickness = src.thickness_m or DEFAULT_THICKNESS_M
-        return _plate(z, pixel, span, thickness, name, src, data, [])
+        return _plate(z, pixel, span, thickness, name, src, digest, notes)
     placement = Placement(src.units or "mm", src.up, src.rotate_deg, src.scale)
     if src.kind == "stl":
-        vertices, faces = _read_stl(data, where)
+        vertices, faces = _read_stl(path.read_bytes(), where)
     else:
         vertices, faces = _run_worker(src, path, where)
     mesh = closed_mesh(vertices, faces, where)
     part = sample_part(
-        mesh, placement, src.pixel_m or DEFAULT_PIXEL_M, where, fill_overhangs=src.fill_overhangs
+        mesh,
+        placement,
+        src.pixel_m or DEFAULT_PIXEL_M,
+        where,
+        fill_overhangs=src.fill_overhangs,
+        holes=src.holes,
     )
     thickness = src.thickness_m or part.thickness_m
-    return _plate(part.z, part.pixel_m, part.area_m, thickness, name, src, data, part.notes)
+    return _plate(part.z, part.pixel_m, part.area_m, thickness, name, src, digest, part.notes)
 
 
-def _plate(z, pixel: float, area, thickness: float, name: str, src: Source, data, notes) -> Plate:
+def _plate(z, pixel: float, area, thickness: float, name: str, src: Source, digest, notes) -> Plate:
     """The plate of a map: the map over the textured area ``area`` (x, y) [m] and the rest of
     the part; a flat base extends it to :data:`RUN_IN_M` beyond the texture along x."""
     where = f"plate file {src.path!r}"
-    digest = hashlib.sha256(data).hexdigest()[:16]
+    digest = digest[:16]
     ny, nx = z.shape
     span = ((nx - 1) * pixel, (ny - 1) * pixel)
     length = max(span[0], area[0] + 2 * RUN_IN_M)
@@ -253,8 +276,9 @@ def _read_stl(data: bytes, where: str):
     return mesh.vertices, mesh.faces
 
 
-def _raster(src: Source, path: Path, where: str) -> tuple[np.ndarray, float]:
-    """A height map file's samples [m] (rows along +y, lowest at 0) and pixel size."""
+def _raster(src: Source, path: Path, where: str) -> tuple[np.ndarray, float, list[str]]:
+    """A height map file's samples [m] (rows along +y, lowest at 0), pixel size and notes;
+    its size checked from its header before it is read (:mod:`.map_files`)."""
     if src.pixel_m is None:
         raise ConfigError(f"{where}: a height map needs its sample spacing: pass pixel_m=... (m)")
     if src.up != "+z":
@@ -265,60 +289,52 @@ def _raster(src: Source, path: Path, where: str) -> tuple[np.ndarray, float]:
             f"{where}: rotate_deg = {src.rotate_deg:g} is not valid for a height map; valid: "
             "a multiple of 90"
         )
+    pixel = src.pixel_m * src.scale
     if src.kind == "npy":
-        try:
-            z = np.load(path, allow_pickle=False)
-        except Exception as exc:  # noqa: BLE001
-            raise ConfigError(
-                f"{where}: not a readable .npy array without pickles ({exc})"
-            ) from None
         unit = {None: 1.0, "m": 1.0, "mm": 1e-3, "um": 1e-6}.get(src.units)
         if unit is None:
             raise ConfigError(f"{where}: units = {src.units!r} is not valid; valid: m, mm, um")
+        shape, _, _ = map_files.npy_header(path, where)
+        _check_sides(shape[::-1] if round(turns) % 2 else shape, pixel, where)
+        z = map_files.read_npy(path, where) * unit
     else:
-        z, unit = _read_png(src, path, where), 1.0
-    if not (isinstance(z, np.ndarray) and z.ndim == 2 and z.dtype.kind in "fiu"):
-        raise ConfigError(f"{where}: the height map must be a 2-D array of numbers")
-    z = np.rot90(np.asarray(z, float) * unit, int(round(turns)) % 4) * src.scale
-    pixel = src.pixel_m * src.scale
+        if src.z_scale_m is None:
+            raise ConfigError(
+                f"{where}: a PNG height map needs its scale: pass z_scale_m=... (m a count)"
+            )
+        z = map_files.read_png(path, where)[::-1] * src.z_scale_m  # picture rows run -y
+    z = np.rot90(np.asarray(z, float), int(round(turns)) % 4) * src.scale
+    _check_sides(z.shape, pixel, where)
+    notes = []
+    if np.isnan(z).any():
+        what = f"the map has {describe_nan(z, pixel)}"
+        if not src.holes:
+            raise ConfigError(
+                f"{where}: {what}; valid: a height at every sample, or pass holes=true if the "
+                "NaN samples are intended holes (no material: the pad meets nothing there)"
+            )
+        notes.append(f"{what}; kept as holes (holes=true)")
+    if np.isfinite(z).any():
+        z = z - np.nanmin(z)
+    return z, pixel, notes
+
+
+def _check_sides(shape: tuple[int, ...], pixel: float, where: str) -> None:
     lo_m, hi_m = PLATE_SIDE_RANGE_M
-    for axis, n in zip("yx", z.shape, strict=True):
+    for axis, n in zip("yx", shape, strict=True):
         side = (n - 1) * pixel
         if not lo_m <= side <= hi_m:
             raise ConfigError(
                 f"{where}: the map is {side:.4g} m along {axis} ({n} samples of {pixel:g} m); "
                 f"valid: [{lo_m:g}, {hi_m:g}] m"
             )
-    if np.isfinite(z).any():
-        z = z - np.nanmin(z)
-    return z, pixel
-
-
-def _read_png(src: Source, path: Path, where: str) -> np.ndarray:
-    from PIL import Image
-
-    if src.z_scale_m is None:
-        raise ConfigError(
-            f"{where}: a PNG height map needs its scale: pass z_scale_m=... (m a count)"
-        )
-    try:
-        with Image.open(path) as im:
-            if im.format != "PNG":
-                raise ConfigError(f"{where}: not a PNG file ({im.format})")
-            if im.mode not in ("I;16", "I;16B", "I", "L"):
-                raise ConfigError(
-                    f"{where}: PNG mode {im.mode} is not valid; valid: 16-bit grey (or 8-bit)"
-                )
-            counts = np.asarray(im, dtype=np.float64)
-    except ConfigError:
-        raise
-    except Exception as exc:  # noqa: BLE001
-        raise ConfigError(f"{where}: not a readable PNG ({exc})") from None
-    return counts[::-1] * src.z_scale_m  # image rows run down the picture: -y
 
 
 def _run_worker(src: Source, path: Path, where: str):
-    """The tessellation of a STEP file or a script's part, made in a separate process."""
+    """The tessellation of a STEP file or a script's part, made in a separate process in its
+    own session, which is killed whole when it ends or at the limit (:mod:`.cad_run`)."""
+    from .cad_run import run_limited
+
     if not 1 <= src.timeout_s <= 3600:
         raise ConfigError(
             f"{where}: timeout_s = {src.timeout_s:g} is not valid; valid: [1, 3600] s"
@@ -335,27 +351,22 @@ def _run_worker(src: Source, path: Path, where: str):
         ]
         if src.kind == "script":
             cmd.append(src.function)
-        proc = subprocess.Popen(
+        finished, status, err = run_limited(
             cmd,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
             cwd=str(path.resolve().parent),
-            start_new_session=True,
             env={**os.environ, "PYTHONPATH": _package_root()},
+            timeout_s=src.timeout_s,
+            log=Path(tmp) / "stderr.txt",
         )
-        try:
-            _, err = proc.communicate(timeout=src.timeout_s)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.communicate()
+        if not finished:
             what = f"{src.function}()" if src.kind == "script" else "reading it"
             raise ConfigError(
                 f"{where}: {what} did not finish within timeout_s = {src.timeout_s:g} s; valid: "
                 "a part made within the limit (pass timeout_s=... for a slow one)"
-            ) from None
-        if proc.returncode != 0 or not out.is_file():
-            lines = [ln for ln in err.decode(errors="replace").splitlines() if ln.strip()]
-            reason = lines[-1] if lines else f"exit status {proc.returncode}"
+            )
+        if status != 0 or not out.is_file():
+            lines = [ln for ln in err.splitlines() if ln.strip()]
+            reason = lines[-1] if lines else f"exit status {status}"
             what = f"{src.function}() failed" if src.kind == "script" else "could not be read"
             raise ConfigError(f"{where}: {what}: {reason}")
         with np.load(out, allow_pickle=False) as npz:

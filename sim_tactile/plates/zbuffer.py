@@ -23,13 +23,15 @@ def zbuffer(
     *,
     lowest: bool = False,
     edge_eps: float = _EDGE_EPS,
+    reach: float = 1e-9,
 ) -> np.ndarray:
     """Highest surface z at every node of the grid ``xs`` x ``ys`` (the lowest with
     ``lowest``).
 
     vertices: (V, 3); faces: (F, 3) int; xs: (nx,) and ys: (ny,) increasing and evenly
     spaced. Returns (ny, nx), NaN where no triangle covers the node. ``edge_eps``: the
-    barycentric slack (negative: only nodes strictly inside a triangle count).
+    barycentric slack (negative: only nodes strictly inside a triangle count); ``reach``: how
+    far beyond a triangle's bounding box a node is tried [grid steps].
     """
     xs, ys = np.asarray(xs, float), np.asarray(ys, float)
     tri = vertices[faces]  # (F, 3, 3)
@@ -39,10 +41,10 @@ def zbuffer(
     dx, dy = xs[1] - xs[0], ys[1] - ys[0]
     lo = tri[:, :, :2].min(axis=1)
     hi = tri[:, :, :2].max(axis=1)
-    ix0 = np.clip(np.ceil((lo[:, 0] - xs[0]) / dx - 1e-9).astype(np.int64), 0, len(xs))
-    ix1 = np.clip(np.floor((hi[:, 0] - xs[0]) / dx + 1e-9).astype(np.int64) + 1, 0, len(xs))
-    iy0 = np.clip(np.ceil((lo[:, 1] - ys[0]) / dy - 1e-9).astype(np.int64), 0, len(ys))
-    iy1 = np.clip(np.floor((hi[:, 1] - ys[0]) / dy + 1e-9).astype(np.int64) + 1, 0, len(ys))
+    ix0 = np.clip(np.ceil((lo[:, 0] - xs[0]) / dx - reach).astype(np.int64), 0, len(xs))
+    ix1 = np.clip(np.floor((hi[:, 0] - xs[0]) / dx + reach).astype(np.int64) + 1, 0, len(xs))
+    iy0 = np.clip(np.ceil((lo[:, 1] - ys[0]) / dy - reach).astype(np.int64), 0, len(ys))
+    iy1 = np.clip(np.floor((hi[:, 1] - ys[0]) / dy + reach).astype(np.int64) + 1, 0, len(ys))
     nxs, nys = np.maximum(ix1 - ix0, 0), np.maximum(iy1 - iy0, 0)
     counts = nxs * nys
     out = np.full(len(ys) * len(xs), np.inf if lowest else -np.inf)

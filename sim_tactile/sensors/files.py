@@ -71,6 +71,12 @@ from .transducers import Capacitive, Impedance, Imperfections, Piezoelectric, Pi
 
 #: The file format this module reads and writes.
 FORMAT = 1
+#: Most taxels a sensor file may define: a 64 x 64 array, as dense as tactile arrays come;
+#: every slide records rate x duration x taxels samples (4096 taxels at 1 kHz for 2 s are
+#: 65 MB of float64), and the encoders and classifiers scale with the channels.
+MAX_TAXELS = 4096
+#: Two taxels of one layer closer than this are at one point [m] (a nanometre).
+SAME_POINT_M = 1e-9
 TOP_KEYS = (
     "format",
     "name",
@@ -156,16 +162,19 @@ def _layout(t: dict, name: str, rate: float) -> Layout:
                 raise ConfigError(f"layout.grid.{k} is missing")
         rows = v.integer("layout.grid.rows", g["rows"], 1, 1000)
         cols = v.integer("layout.grid.cols", g["cols"], 1, 1000)
+        _count("layout.grid.rows x layout.grid.cols", rows * cols)
         pitch = v.positive("layout.grid.pitch_m", g["pitch_m"], unit="m")
         size = v.positive("layout.grid.size_m", g["size_m"], unit="m")
         depth = v.non_negative("layout.grid.depth_m", g.get("depth_m", 0.0), unit="m")
-        return grid_layout(name, cols, rows, pitch, size, depth_m=depth, rate_hz=rate)
+        return _distinct(grid_layout(name, cols, rows, pitch, size, depth_m=depth, rate_hz=rate))
     for k in ("x_m", "y_m"):
         if k not in t:
             raise ConfigError(
                 f"layout.{k} is missing; valid: a list of taxel positions [m], "
                 "or a [layout.grid] table"
             )
+    if isinstance(t["x_m"], list):
+        _count("layout.x_m", len(t["x_m"]))
     x = _numbers("layout.x_m", t["x_m"])
     n = len(x)
     y = _numbers("layout.y_m", t["y_m"], n)
@@ -193,7 +202,29 @@ def _layout(t: dict, name: str, rate: float) -> Layout:
         )
     # z = -depth (-0.0 at the surface, as grid_layout has it: the same bytes, the same keys)
     pos = np.column_stack([x, y, -np.asarray(depth, dtype=float)])
-    return Layout(name, pos, sizes, np.asarray(layer, dtype=int), rate, names, grid)
+    return _distinct(Layout(name, pos, sizes, np.asarray(layer, dtype=int), rate, names, grid))
+
+
+def _count(name: str, n: int) -> None:
+    if n > MAX_TAXELS:
+        raise ConfigError(f"{name}: {n} taxels; valid: at most {MAX_TAXELS}")
+
+
+def _distinct(layout: Layout) -> Layout:
+    """``layout``, unless two taxels of one layer lie at one point (within
+    :data:`SAME_POINT_M`): they would read one load twice."""
+    key = np.column_stack([np.round(layout.positions / SAME_POINT_M), layout.layer])
+    order = np.lexsort(key.T[::-1])
+    same = np.flatnonzero((np.diff(key[order], axis=0) == 0).all(axis=1))
+    if len(same):
+        i, j = sorted((int(order[same[0]]), int(order[same[0] + 1])))
+        x, y, z = layout.positions[i] * 1e3
+        raise ConfigError(
+            f"layout: taxels {i} ({layout.names[i]}) and {j} ({layout.names[j]}) of layer "
+            f"{int(layout.layer[i])} lie at one point (x = {x:.6g} mm, y = {y:.6g} mm, depth "
+            f"{-z + 0.0:.6g} mm); valid: one taxel a point in each layer"
+        )
+    return layout
 
 
 def _renamed(layout: Layout, name: str, rate: float) -> Layout:

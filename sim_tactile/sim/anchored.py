@@ -263,8 +263,8 @@ class AnchoredLattice:
     def solve(self, x_pad: float, z_low: float, force_n: float) -> tuple[float, float]:
         """The contact carrying ``force_n`` [N] with the pad at ``x_pad``, its lowest point
         first ``z_low`` [m] above the plate's base: ``(dz, off)``, how far the pad moved down
-        [m] and the window's offset; the cells' loads [N] are in :attr:`f`, their
-        penetrations at the new height in :attr:`pen`."""
+        [m] and the window's offset; the cells' loads [N] are in ``f``, their
+        penetrations at the new height in ``pen``."""
         off = self.offset(x_pad)
         pen, f = self.pen, self.f
         depths(

@@ -1,6 +1,6 @@
 """Colliders: the penetration-depth map of the skin's probe spheres against the plate.
 
-A collider answers one question, :meth:`depths_at`: with the finger's joints at ``qpos``, how
+A collider answers one question, :meth:`PrimitiveCollider.depths_at`: with the finger's joints at ``qpos``, how
 deep is each skin node in the plate (``-inf`` where no plate geom lies within the node's
 margin), and is any node that close. :func:`make_collider` chooses one, in one place:
 

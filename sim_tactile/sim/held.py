@@ -66,7 +66,7 @@ def _no_height(force_n: float, margin: float) -> PhysicsError:
 
 
 class HeldStep:
-    """The held step as a plain loop over ``collider`` (any, with :meth:`depths_at`) and
+    """The held step as a plain loop over ``collider`` (any, with ``depths_at``: :meth:`~sim_tactile.sim.collide.PrimitiveCollider.depths_at`) and
     ``skin`` (any skin model, with ``solve_force``); ``W`` maps node loads to taxel loads."""
 
     def __init__(self, collider, skin: SkinModel, W: np.ndarray, area_m2: float, margin: float):

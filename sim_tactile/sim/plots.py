@@ -15,22 +15,35 @@ def _figure(*args, **kw):
     return Figure(*args, **kw)
 
 
+#: Up to this many taxels, each has its own colour and a line in the legend; beyond, the
+#: colour runs over the taxel index and a colour bar says so.
+LEGEND_UP_TO = 20
+
+
 def plot_traces(rec: Recording, path: str | Path) -> Path:
-    """One line per taxel, load against time, in rows of taxels that share a y."""
-    fig = _figure(figsize=(8, 4.5), layout="constrained")
+    """One line per taxel, its output against time, ordered by the taxel's row (y) then its
+    column (x); each labelled with its name and its position on the pad."""
+    import matplotlib
+
+    n = len(rec.taxels)
+    fig = _figure(figsize=(8.8 if n <= LEGEND_UP_TO else 8, 4.5), layout="constrained")
     ax = fig.add_subplot()
     pos = rec.taxels
     order = np.lexsort((pos[:, 0], pos[:, 1]))
-    cmap = __import__("matplotlib").colormaps["viridis"]
+    names = [f"t{i}" for i in range(n)]  # the channel names of a sensor: t0, t1, ...
+    if n <= 10:
+        colours = [matplotlib.colormaps["tab10"](k) for k in range(n)]
+    elif n <= LEGEND_UP_TO:
+        colours = [matplotlib.colormaps["tab20"](k) for k in range(n)]
+    else:
+        colours = [matplotlib.colormaps["viridis"](k / (n - 1)) for k in range(n)]
     for k, i in enumerate(order):
         ax.plot(
             rec.times,
             rec.data[:, i],
             lw=0.9,
-            color=cmap(k / max(len(order) - 1, 1)),
-            label=f"x={pos[i, 0] * 1e3:+.1f} y={pos[i, 1] * 1e3:+.1f} mm"
-            if len(order) <= 12
-            else None,
+            color=colours[k],
+            label=f"{names[i]} ({pos[i, 0] * 1e3:+.1f}, {pos[i, 1] * 1e3:+.1f}) mm",
         )
     ax.set_xlabel("time since the slide started [s]")
     ax.set_ylabel(f"taxel output [{rec.units}]")
@@ -41,8 +54,13 @@ def plot_traces(rec: Recording, path: str | Path) -> Path:
         f"{meta.get('protocol', {}).get('force_n', 0):.2g} N, {meta.get('fidelity', {}).get('level', '')}",
         fontsize=10,
     )
-    if len(order) <= 12:
-        ax.legend(fontsize=7, ncol=3)
+    if n <= LEGEND_UP_TO:
+        fig.legend(loc="outside right upper", fontsize=7, title="taxel (x, y)", title_fontsize=7)
+    else:
+        sm = matplotlib.cm.ScalarMappable(
+            norm=matplotlib.colors.Normalize(0, n - 1), cmap=matplotlib.colormaps["viridis"]
+        )
+        fig.colorbar(sm, ax=ax, label="taxel, by row then column")
     ax.grid(alpha=0.3)
     path = Path(path)
     fig.savefig(path, dpi=100)
@@ -50,21 +68,33 @@ def plot_traces(rec: Recording, path: str | Path) -> Path:
 
 
 def plot_heatmap(rec: Recording, path: str | Path) -> Path:
-    """Each taxel's mean and peak load at its position on the pad."""
+    """Each taxel's mean and peak load at its position on the pad (a panel whose taxels all
+    read the same shows that value, without a colour bar)."""
     fig = _figure(figsize=(8, 3.6), layout="constrained")
     pos = rec.taxels * 1e3
     for j, (title, vals) in enumerate(
         (("mean", rec.data.mean(axis=0)), ("peak", rec.data.max(axis=0)))
     ):
         ax = fig.add_subplot(1, 2, j + 1)
+        varies = np.ptp(vals) > 1e-9 * max(1.0, float(np.abs(vals).max()))
+        lim = {} if varies else {"vmin": float(vals[0]) - 1.0, "vmax": float(vals[0]) + 1.0}
         sc = ax.scatter(
-            pos[:, 0], pos[:, 1], c=vals, s=max(20, 4000 / len(pos)), marker="s", cmap="magma"
+            pos[:, 0],
+            pos[:, 1],
+            c=vals,
+            s=max(20, 4000 / len(pos)),
+            marker="s",
+            cmap="magma",
+            **lim,
         )
-        fig.colorbar(sc, ax=ax, label=f"{title} [{rec.units}]")
+        if varies:
+            fig.colorbar(sc, ax=ax, label=f"{title} [{rec.units}]")
+        else:
+            title = f"{title} (every taxel {float(vals[0]):.3g} {rec.units})"
         ax.set_aspect("equal")
         ax.set_xlabel("x (slide) [mm]")
         ax.set_ylabel("y [mm]")
-        ax.set_title(f"{title} taxel output")
+        ax.set_title(f"{title} taxel output", fontsize=10)
     path = Path(path)
     fig.savefig(path, dpi=100)
     return path

@@ -1,8 +1,8 @@
 """The slide protocol and its window: what the pad does, where, and for how long.
 
 :class:`Protocol` is the recipe of one slide (speed, force, window, rate, the phases before
-the slide, and how much speed, force and offset vary from slide to slide); :meth:`Protocol.
-drawn` is the one place where a slide's values are drawn from its seed. :class:`SlideWindow`
+the slide, and how much speed, force and offset vary from slide to slide);
+:meth:`Protocol.drawn` is the one place where a slide's values are drawn from its seed. :class:`SlideWindow`
 says where a slide starts and stops on a given plate, for a pad of a given length, and how
 many samples it records. This module imports no simulator: the task and data-set layers
 describe slides with it without loading MuJoCo.

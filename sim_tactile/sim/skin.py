@@ -3,10 +3,10 @@
 A skin model answers three questions about the pad's skin, each on the penetration-depth map
 of its nodes (m, ``-inf`` for nodes out of reach):
 
-- :meth:`solve`: the pressures [Pa] where the pad is;
-- :meth:`solve_force`: the pressures and the shift ``dz`` [m] of the pad at which they sum
+- ``solve``: the pressures [Pa] where the pad is;
+- ``solve_force``: the pressures and the shift ``dz`` [m] of the pad at which they sum
   to a given total (the pad held at a normal force);
-- :meth:`stiffness`: the pad's contact stiffness [N/m] at its current contact.
+- ``stiffness``: the pad's contact stiffness [N/m] at its current contact.
 
 :func:`make_skin` chooses one for a fidelity level, in one place:
 
@@ -27,7 +27,7 @@ of its nodes (m, ``-inf`` for nodes out of reach):
 
 When the finger's skin carries its sliding friction (``Finger.skin_tractions``) and the skin
 is not an incompressible half-space, the tractions ``q = mu p`` against the slide deflect
-the surface normally too (:func:`~sim_tactile.scene.layered.shear_normal_compliance`): the
+the surface normally too (:func:`~sim_tactile.scene.tractions.shear_normal_compliance`): the
 normal problem's compliance becomes ``C - mu D``, no longer symmetric: the contact solve's
 block updates then take their general formulas (``symmetric=False``).
 """

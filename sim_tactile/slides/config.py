@@ -57,7 +57,17 @@ from ..sensors.files import load_sensor_file
 from ..sim.fidelity import FIDELITIES
 from ..sim.protocol import Protocol
 from ..sim.rig import ProbeRig
+from ..toml_text import check_text_size
 from .slide_set import SLIDES_RANGE, SlideSet
+
+#: Most plates (classes) a configuration may name: each is loaded (a script runs, within its
+#: time limit) before anything is simulated, and the evaluation's confusion matrices grow as
+#: the square of the classes. The textures20 task has 20.
+MAX_PLATES = 1000
+#: Most slides a configuration may ask for (plates x slides_per_plate): a store indexes
+#: every one, and a million 1 s slides take 11 hours of a core at the faster scenes' 25x
+#: real time (the README's throughput; the slower scenes, days).
+MAX_SLIDES = 1_000_000
 
 #: The keys of a configuration file, and what each takes.
 TOP_KEYS = {
@@ -85,6 +95,7 @@ def load_config(path: str | Path) -> dict:
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"configuration file {str(path)!r} does not exist")
+    check_text_size(path, "configuration file")
     text = path.read_bytes()
     try:
         if path.suffix.lower() == ".json":
@@ -93,6 +104,8 @@ def load_config(path: str | Path) -> dict:
             cfg = tomllib.loads(text.decode())
     except (ValueError, UnicodeDecodeError) as exc:
         raise ConfigError(f"configuration file {path}: cannot be parsed: {exc}") from None
+    except RecursionError:
+        raise ConfigError(f"configuration file {path}: its values nest too deeply") from None
     if not isinstance(cfg, dict):
         raise ConfigError(f"configuration file {path}: the top level must be a table / object")
     return cfg
@@ -126,6 +139,8 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
             f"plates must be a list of preset plate names, plate files, parts or height maps, "
             f"got {plates!r}"
         )
+    if len(plates) > MAX_PLATES:
+        raise ConfigError(f"plates names {len(plates)} plates; valid: at most {MAX_PLATES}")
     plates = [_plate(p, base_dir) for p in plates]
     if len(plates) < 2 or len(set(plates)) != len(plates):
         raise ConfigError(f"plates must name at least 2 distinct plates, got {plates}")
@@ -135,6 +150,12 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         raise ConfigError(f"name must be a string, got {name!r}")
     seed = v.integer("seed", cfg.get("seed", 0), 0, 2**32 - 1)
     slides = v.integer("slides_per_plate", cfg["slides_per_plate"], *SLIDES_RANGE)
+    if slides * len(plates) > MAX_SLIDES:
+        raise ConfigError(
+            f"slides_per_plate = {slides} over {len(plates)} plates is {slides * len(plates)} "
+            f"slides; valid: at most {MAX_SLIDES} in all (slides_per_plate <= "
+            f"{MAX_SLIDES // len(plates)})"
+        )
     quick = v.integer("quick_slides_per_plate", cfg.get("quick_slides_per_plate", 2), 2, slides)
     fidelity = v.one_of("fidelity", cfg.get("fidelity", "auto"), FIDELITIES)
     ideal = cfg.get("ideal", False)

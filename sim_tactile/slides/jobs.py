@@ -139,7 +139,8 @@ class SlideJob:
 @dataclass(frozen=True)
 class SlideOutcome:
     """What simulating (or reading) one slide gave: the recording, the simulation's warnings
-    (none when it came from the cache), the wall time [s] and whether it was cached."""
+    (a cached slide's, as its simulation gave them), the wall time [s] and whether it was
+    cached."""
 
     recording: Recording
     warnings: tuple[str, ...]
@@ -165,8 +166,9 @@ class SlideWorker:
         cache = ArtefactCache(self.cache_root)
         key = job.key()
         rec = cached_slide(cache, key)
-        if rec is not None:
-            return SlideOutcome(rec, (), time.perf_counter() - t0, True)
+        if rec is not None:  # with the warnings its simulation gave (kept in its meta)
+            warns = tuple(str(w) for w in rec.meta.get("warnings") or ())
+            return SlideOutcome(rec, warns, time.perf_counter() - t0, True)
         res = job.simulate(cache)
         if self.write:
             cache.put(key, SLIDE_EXT, res.recording.to_npz())

@@ -1,8 +1,8 @@
 """A data set to write into a store: its layout and, per slide, the job that makes it.
 
 :func:`slide_plan` turns a :class:`~.slide_set.SlideSet` (a task's, or a configuration
-file's) into a :class:`Plan`: the store's layout (:class:`~sim_tactile.datasets.store.
-StoreSpec`: labels, seeds, the drawn speed, force and offset of every slide, names, rate,
+file's) into a :class:`Plan`: the store's layout
+(:class:`~sim_tactile.datasets.store.StoreSpec`: labels, seeds, the drawn speed, force and offset of every slide, names, rate,
 units, the configuration and its hash, the slide code's version) and the slide jobs. The
 drawn values come from the jobs themselves (:meth:`~.jobs.SlideJob.drawn`), the same draw the
 simulation makes. :func:`task_slide_config` is what a task reading a store checks it against.

@@ -298,7 +298,9 @@ def run_slides(
     keys = [j.key() for j in jobs]
     recs: list[Recording | None] = [cached_slide(cache, k) for k in keys]
     todo = [i for i, r in enumerate(recs) if r is None]
-    warns: Counter[str] = Counter()
+    warns: Counter[str] = Counter(
+        str(w) for r in recs if r is not None for w in r.meta.get("warnings") or ()
+    )
     t0 = time.perf_counter()
     if todo:
         n = workers or default_workers()
@@ -319,6 +321,9 @@ def run_slides(
     shapes = Counter(r.data.shape for r in recs)
     if len(shapes) > 1:
         raise ConfigError(f"simulated slides differ in shape: {dict(shapes)}")
+    if log:
+        for line in warning_lines(warns, len(jobs)):
+            log(line)
     stats = {
         "simulate_s": sim_s,
         "slides_simulated": len(todo),
@@ -326,6 +331,12 @@ def run_slides(
         "sim_warnings": [f"{w} (x{c})" for w, c in warns.most_common()],
     }
     return recs, stats
+
+
+def warning_lines(warns: Counter, n_slides: int) -> list[str]:
+    """One line for each distinct simulation warning, with the number of slides it touched
+    (most frequent first): what ``run`` and ``generate`` print."""
+    return [f"warning: {w} ({c} of {n_slides} slides)" for w, c in warns.most_common()]
 
 
 __all__ = [
@@ -340,4 +351,5 @@ __all__ = [
     "make_backend",
     "run_slides",
     "stream",
+    "warning_lines",
 ]

@@ -5,21 +5,8 @@
 before), then for every point of the grid re-encodes and re-runs the task's protocol with the
 changed parameters, and writes a table and one plot of accuracy over each swept parameter.
 
-Parameters (what each changes):
-
-========================= ================================================================
-``gain``                  Izhikevich / LIF input gain (replaces a max-rate calibration)
-``max_rate_hz``           Izhikevich gain calibrated for this maximum rate [Hz]
-``preset``                Izhikevich preset (RS, FS, SA, RA, ...)
-``a``, ``b``, ``c``, ``d`` one Izhikevich parameter (the others from the task's preset)
-``K``                     threshold encoding: the number of thresholds (2K + 1 spike
-                          channels): K levels 1 SD apart around 0 for per-slide standardised
-                          encodings, at 1 .. K of a [0, K + 1] range for range encodings
-``q``                     Victor-Purpura cost [1/s] of the STD-kNN rows
-``tau``                   van Rossum time constant [s] of the STD-kNN rows
-``k``                     neighbours of the kNN and STD-kNN rows
-``C``                     the linear SVMs' regularisation
-========================= ================================================================
+The parameters, each with what it changes, are :data:`PARAM_HELP`; ``sim-tactile tasks``
+and the manual's task pages name the ones each task uses (:func:`used_params`).
 
 A parameter that no step of the task uses is an error that names the parameter and the
 valid ones, rather than a sweep that silently changes nothing.
@@ -48,6 +35,23 @@ from ..tables import markdown_table
 from .registry import Run, TaskSpec, get_task
 from .runner import evaluate_task, load_task, stderr_log, task_runs
 
+#: What each ablation parameter (``--set NAME=v1,v2``) changes, with its unit and range.
+PARAM_HELP = {
+    "gain": "the Izhikevich or LIF input gain (> 0), replacing the task's max-rate calibration",
+    "max_rate_hz": "the Izhikevich gain calibrated for this maximum firing rate [Hz] (> 0)",
+    "preset": "the Izhikevich preset: RS, FS, SA (= RS) or RA (= FS)",
+    "a": "the Izhikevich recovery time scale a (the others from the task's preset)",
+    "b": "the Izhikevich recovery sensitivity b (the others from the task's preset)",
+    "c": "the Izhikevich reset potential c [mV] (the others from the task's preset)",
+    "d": "the Izhikevich reset of the recovery variable d (the others from the task's preset)",
+    "K": "the number of thresholds of the threshold encoding (1..10; 2K + 1 spike channels): "
+    "K levels 1 SD apart around 0 for per-slide standardised encodings, at 1 .. K of a "
+    "[0, K + 1] range for range encodings",
+    "q": "the Victor-Purpura cost [1/s] of the STD-kNN rows (> 0)",
+    "tau": "the van Rossum time constant [s] of the STD-kNN rows (> 0)",
+    "k": "the number of neighbours of the kNN and STD-kNN rows (1..500)",
+    "C": "the regularisation of the linear SVMs (> 0)",
+}
 ENCODER_PARAMS = ("gain", "max_rate_hz", "preset", "a", "b", "c", "d", "K")
 CLASSIFIER_PARAMS = ("q", "tau", "k", "C")
 PARAMS = ENCODER_PARAMS + CLASSIFIER_PARAMS
@@ -132,8 +136,10 @@ def encoding_params(steps: Steps, point: Mapping) -> dict:
     return out
 
 
-def _used(spec: TaskSpec) -> set[str]:
-    """The parameters of PARAMS that some step of ``spec`` uses."""
+def used_params(spec: TaskSpec) -> set[str]:
+    """The parameters of :data:`PARAMS` that some step of ``spec`` uses (a suite: none)."""
+    if spec.parts:
+        return set()
     from ..learn.classifiers import LearnContext
 
     used = set()
@@ -219,11 +225,11 @@ def ablate(
             raise ConfigError(f"ablate: unknown parameter {k!r}; valid: {', '.join(PARAMS)}")
         if not v:
             raise ConfigError(f"ablate: parameter {k} has no values")
-    unused = sorted(set(sets) - _used(spec))
+    unused = sorted(set(sets) - used_params(spec))
     if unused:
         raise ConfigError(
             f"task {task_id} does not use {', '.join(unused)}; it uses: "
-            f"{', '.join(p for p in PARAMS if p in _used(spec))}"
+            f"{', '.join(p for p in PARAMS if p in used_params(spec))}"
         )
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -308,19 +314,23 @@ def _markdown(path: Path, report: dict) -> None:
 
 def plot_ablation(rows: list[dict], sets: Mapping[str, Sequence], title: str, out: Path) -> None:
     """One panel per swept parameter: accuracy against its values, the other parameters at
-    their first value, one line per run of the task."""
+    their first value, one line per run of the task (up to 20, each in its own colour and
+    marker), the legend beside the panels."""
+    import matplotlib
     from matplotlib.figure import Figure
 
     keys = list(sets)
-    fig = Figure(figsize=(5.0 * len(keys), 3.8), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(1, len(keys), squeeze=False)).ravel()
-    labels = list(dict.fromkeys(r["run"] for r in rows))
+    labels = list(dict.fromkeys(r["run"] for r in rows))[:20]
+    colours = matplotlib.colormaps["tab10" if len(labels) <= 10 else "tab20"]
+    markers = "osD^v<>pXh"
+    fig = Figure(figsize=(4.6 * len(keys) + 2.6, 3.9), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(keys), squeeze=False, sharey=True)).ravel()
     for ax, key in zip(axes, keys, strict=True):
         others = {k: sets[k][0] for k in keys if k != key}
         values = list(sets[key])
         numeric = all(isinstance(v, int | float) for v in values)
         xs = values if numeric else list(range(len(values)))
-        for lab in labels[:12]:
+        for n, lab in enumerate(labels):
             sel = [
                 r
                 for r in rows
@@ -329,20 +339,40 @@ def plot_ablation(rows: list[dict], sets: Mapping[str, Sequence], title: str, ou
             by = {str(r["params"][key]): r for r in sel}
             m = [by[str(v)]["accuracy_mean"] if str(v) in by else np.nan for v in values]
             s = [by[str(v)]["accuracy_std"] if str(v) in by else np.nan for v in values]
-            ax.errorbar(xs, m, yerr=s, marker="o", capsize=2, label=lab)
-        if not numeric:
-            ax.set_xticks(xs, [str(v) for v in values])
-        elif len(values) > 2 and min(values) > 0 and max(values) / min(values) >= 20:
+            ax.errorbar(
+                xs,
+                m,
+                yerr=s,
+                marker=markers[n % len(markers)],
+                ms=4,
+                lw=1.2,
+                capsize=2,
+                color=colours(n),
+                label=lab,
+            )
+        if numeric and len(values) > 2 and min(values) > 0 and max(values) / min(values) >= 20:
             ax.set_xscale("log")
-        ax.set_xlabel(key)
-        ax.set_ylabel("accuracy")
+        ax.set_xticks(xs, [f"{v:g}" if numeric else str(v) for v in values])
+        ax.minorticks_off()
+        if len(values) > 6:
+            ax.tick_params(axis="x", labelrotation=45)
+        ax.set_xlabel(key, fontsize=9)
         ax.set_ylim(0, 1.02)
         ax.grid(alpha=0.3)
-        if others:
-            ax.set_title(", ".join(f"{k} = {v}" for k, v in others.items()), fontsize=8)
-    axes[0].legend(fontsize=6, loc="lower left")
+        ax.set_title(
+            ", ".join(f"{k} = {v}" for k, v in others.items()) if others else "",
+            fontsize=8,
+        )
+    axes[0].set_ylabel("accuracy (mean and SD over the repeats)", fontsize=9)
+    fig.legend(
+        *axes[0].get_legend_handles_labels(),
+        loc="outside right upper",
+        fontsize=7,
+        title="run",
+        title_fontsize=7,
+    )
     fig.suptitle(f"ablation of {title}", fontsize=10)
     fig.savefig(out, dpi=110)
 
 
-__all__ = ["PARAMS", "ablate", "parse_sets", "plot_ablation", "Run"]
+__all__ = ["PARAMS", "PARAM_HELP", "ablate", "parse_sets", "plot_ablation", "used_params", "Run"]

@@ -32,10 +32,11 @@ from ..slides import SlideSet
 from ..slides.plan import task_slide_config
 from .config_task import PREFIX as CONFIG_PREFIX
 from .config_task import config_task, is_config_path
+from .figures import write_figures
 from .methods import Method, as_methods, classify_methods, method_row
 from .precompute import Precomputed
 from .registry import DataRequest, Run, TaskSpec, get_task, with_calibration
-from .report import Report, ResultRow, compare, write_figures
+from .report import Report, ResultRow, compare
 from .splits import splits_digest, task_splits
 
 

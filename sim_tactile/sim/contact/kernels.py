@@ -14,7 +14,7 @@ def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
     """Whether the contact set S still solves the problem for ``pen``; if so, write the
     pressures to ``p``. Checks the three conditions :meth:`ActiveSet.solve` would: every node
     of S can touch and carries compression, and no other node that can touch is left inside
-    the plate. ``floor``: the depth above which a node can touch (:attr:`ActiveSet.floor`)."""
+    the plate. ``floor``: the depth above which a node can touch (``ActiveSet.floor``)."""
     n = pen.shape[0]
     m = S.shape[0]
     big = 0.0

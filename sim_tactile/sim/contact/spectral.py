@@ -142,7 +142,7 @@ class Spectral:
         lattice's extra rows hold no load and its extra columns are not read: the transforms
         along x skip them (half the work of a plain 2D transform).
 
-        The four transforms call scipy.fft's pocketfft binding directly (:attr:`direct`),
+        The four transforms call scipy.fft's pocketfft binding directly (``direct``),
         the same transforms bit for bit (tested, and checked when this module loads) without
         the dispatch that cost as much as a small block's arithmetic (30 against 18 us on a
         curved finger's 25 x 30 block); else :meth:`apply_public`, scipy.fft's functions."""

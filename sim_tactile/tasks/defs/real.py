@@ -16,7 +16,7 @@ Choices the paper leaves open (fixed here, so these ids keep their meaning):
   (:func:`~sim_tactile.learn.classifiers.threshold_encoding`): the 1-5 s window lies inside
   steady contact, so thresholds fixed in sensor units are rarely crossed. iCub: each taxel is
   scaled so that its 1st-99th percentile over the training set spans [0, 3] and the thresholds
-  sit at 1 and 2 (:func:`~sim_tactile.learn.classifiers.range_threshold_encoding`): the
+  sit at 1 and 2 (:func:`~sim_tactile.encoders.encodings.range_threshold_encoding`): the
   1.5 s window holds the contacts' onsets, whose levels the crossings then carry. Each sensor
   was given the scaling that suits its data on this data set (as the paper chose K);
   ``report.json`` records which one ran.

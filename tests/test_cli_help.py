@@ -1,0 +1,96 @@
+"""The command line introduces itself: whole-sentence help, ``tasks``, ``--version`` and the
+first run's notice that the kernels compile."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+import sim_tactile
+from sim_tactile.cli import build_parser
+from sim_tactile.cli._common import COMPILE_NOTICE
+from sim_tactile.cli.tasks import paper_of, task_summary
+from sim_tactile.tasks import get_task, task_ids
+from sim_tactile.tasks.ablate import PARAM_HELP, PARAMS
+
+
+def _helps(parser: argparse.ArgumentParser, path: str) -> list[tuple[str, str]]:
+    """(where, text) of every description and help of the parser and its subcommands."""
+    out = [(f"{path} (description)", parser.description or "")]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            out += [(f"{path} {c.dest}", c.help or "") for c in action._choices_actions]
+            for name, sub in action.choices.items():
+                out += _helps(sub, f"{path} {name}")
+        elif action.help != argparse.SUPPRESS:
+            out.append((f"{path} {'/'.join(action.option_strings) or action.dest}", action.help))
+    return out
+
+
+def test_every_help_text_is_a_whole_sentence():
+    bad = [
+        (where, text)
+        for where, text in _helps(build_parser(), "sim-tactile")
+        if not (text[:1].isupper() and text.rstrip().endswith((".", ".)")))
+    ]
+    assert bad == []
+
+
+def test_version_is_the_package_version(cli):
+    assert cli(["--version"]).stdout.strip() == f"sim-tactile {sim_tactile.__version__}"
+
+
+def test_tasks_lists_every_registered_task_one_line_each(cli):
+    lines = cli(["tasks"]).stdout.strip().splitlines()
+    assert lines[0].split() == ["id", "paper", "sensor", "classes", "slides"]
+    assert [line.split()[0] for line in lines[1:]] == list(task_ids())
+
+
+def test_tasks_json_gives_id_paper_sensor_classes_and_slides(cli):
+    rows = json.loads(cli(["tasks", "--json"]).stdout)
+    by_id = {r["id"]: r for r in rows}
+    assert list(by_id) == list(task_ids())
+    f7 = by_id["finger7-v1"]
+    assert (f7["sensor"], f7["classes"], f7["slides"], f7["quick_slides"]) == (
+        "grid3x3",
+        7,
+        7 * 32,
+        7 * 8,
+    )
+    assert f7["paper"].startswith("Texture discrimination using a flexible tactile sensor")
+    assert by_id["biotac20-real-v1"]["sensor"] == "biotac19"
+    assert by_id["icub20-real-v1"]["slides"] == 20 * 50
+    suite = by_id["textures20-v1"]
+    assert suite["sensor"] == "biotac19+icub60" and suite["slides"] == 2 * 20 * 50
+    for r in rows:
+        assert {"id", "paper", "sensor", "classes", "slides"} <= set(r)
+        assert r["paper"] and r["sensor"] and "?" not in r["sensor"], r
+
+
+def test_paper_of_takes_the_title_without_the_authors():
+    ref = "A. B. Smith, C. Jones: A study of touch, IROS 2020 (seed paper 000)"
+    assert paper_of(ref) == ("A study of touch, IROS 2020", "000")
+    assert paper_of("Touch: a soft approach (seed paper 001): details") == ("Touch", "001")
+
+
+def test_every_ablate_parameter_is_explained():
+    assert set(PARAM_HELP) == set(PARAMS)
+    assert task_summary("finger7-v1")["id"] == get_task("finger7-v1").id
+
+
+def test_first_run_counts_the_kernels_not_compiled_here(tmp_path):
+    """With an empty numba cache every cached kernel is still to compile, and the run says
+    so; the count is what the notice rests on."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    code = (
+        "from sim_tactile.cli._common import kernels_to_compile as k;"
+        "print(k(('sim_tactile.sim.contact.kernels',)))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    assert int(out.stdout.strip()) > 0
+    assert "compiling" in COMPILE_NOTICE and "minutes" in COMPILE_NOTICE

@@ -1,0 +1,117 @@
+"""The package installs without the Makefile: a wheel that carries its assets, installed in
+a fresh virtual environment, runs a task's quick form from a folder outside the repository;
+its metadata builds without a warning."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import sysconfig
+import tomllib
+import zipfile
+from pathlib import Path
+
+import pytest
+
+import sim_tactile
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_license_citation_and_changelog_exist_and_agree():
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert meta["license"] == "Apache-2.0" and meta["license-files"] == ["LICENSE"]
+    assert "Apache License" in (ROOT / "LICENSE").read_text()
+    cff = (ROOT / "CITATION.cff").read_text()
+    assert f'version: "{sim_tactile.__version__}"' in cff and "license: Apache-2.0" in cff
+    assert "## [Unreleased]" in (ROOT / "CHANGELOG.md").read_text()
+    assert "version" in meta.get("dynamic", []) and "version" not in meta
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> tuple[Path, str]:
+    out = tmp_path_factory.mktemp("wheel")
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "--no-build-isolation",
+            "-w",
+            str(out),
+            str(ROOT),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return next(out.glob("sim_tactile-*.whl")), proc.stdout + proc.stderr
+
+
+@pytest.mark.slow
+def test_the_wheel_carries_the_assets_and_builds_without_warnings(wheel):
+    path, log = wheel
+    names = set(zipfile.ZipFile(path).namelist())
+    assert "sim_tactile/sim/measured_errors.json" in names
+    assert "sim_tactile/assets/plates/finger7/ridges-4.toml" in names
+    assert "sim_tactile/assets/sensors/grid3x3.toml" in names
+    assert "sim_tactile/sensors/calibrations/biotac19.toml" in names
+    assert any(n.endswith("licenses/LICENSE") for n in names)
+    warnings = [
+        line for line in log.splitlines() if "warning" in line.lower() and "byte-compil" not in line
+    ]
+    assert warnings == []
+
+
+@pytest.mark.slow
+def test_the_wheel_runs_a_quick_task_in_a_fresh_environment(wheel, tmp_path):
+    path, _ = wheel
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
+    py = venv / "bin" / "python"
+    site = Path(
+        subprocess.check_output(
+            [str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"], text=True
+        ).strip()
+    )
+    # the dependencies: this interpreter's (a .pth file); the package: only the wheel's
+    (site / "deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--no-deps", "--target", str(site), str(path)],
+        check=True,
+        capture_output=True,
+    )
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
+    env.update(
+        SIM_TACTILE_CACHE=str(tmp_path / "cache"),
+        MPLBACKEND="Agg",
+        NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+    )
+    where = subprocess.check_output(
+        [str(py), "-c", "import sim_tactile; print(sim_tactile.__file__)"],
+        cwd=elsewhere,
+        env=env,
+        text=True,
+    )
+    assert str(ROOT) not in where and str(site) in where
+    exe = site / "bin" / "sim-tactile"
+    cmd = [str(exe)] if exe.exists() else [str(py), "-m", "sim_tactile.cli"]
+    proc = subprocess.run(
+        [*cmd, "run", "finger7-v1", "--quick", "--out", "out", "--json"],
+        cwd=elsewhere,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    report = json.loads(proc.stdout)
+    assert report["task"] == "finger7-v1" and report["results"]
+    assert (elsewhere / "out" / "report.md").is_file()

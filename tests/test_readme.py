@@ -1,0 +1,56 @@
+"""The README is a short introduction whose code runs as written."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+TEXT = README.read_text()
+LINES = TEXT.splitlines()
+
+
+def _first(pattern: str) -> int:
+    return next(i + 1 for i, line in enumerate(LINES) if re.search(pattern, line))
+
+
+def test_the_readme_is_short_and_has_no_commit_hash():
+    assert len(LINES) <= 200
+    assert re.findall(r"`[0-9a-f]{7,40}`", TEXT) == []
+    assert "since `" not in TEXT
+
+
+def test_install_the_two_commands_and_the_quick_start_come_first():
+    assert _first(r"pip install") <= 60
+    assert _first(r"^make demo") <= 60 and _first(r"^make test") <= 60
+    assert _first(r"tasks\.load\(") <= 60 and _first(r"tasks\.evaluate\(") <= 60
+
+
+def test_every_link_to_a_file_points_at_one():
+    root = README.parent
+    for target in re.findall(r"\]\(([^)#]+)\)", TEXT):
+        if not target.startswith("http"):
+            assert (root / target).exists(), target
+
+
+def test_every_number_of_the_task_table_is_on_the_results_page():
+    page = (README.parent / "docs" / "results" / "task-runs.md").read_text()
+    table = [line for line in LINES if line.startswith("| `")]
+    assert len(table) >= 10
+    for line in table:
+        for number in re.findall(r"\b0\.\d{3}\b", line):
+            assert number in page, (number, line)
+
+
+@pytest.mark.slow
+def test_every_python_block_runs_as_written(tmp_path, monkeypatch, cache_dir):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("SIM_TACTILE_CACHE", str(cache_dir))
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    blocks = re.findall(r"```python\n(.*?)```", TEXT, flags=re.S)
+    assert blocks
+    for code in blocks:
+        exec(compile(code, str(README), "exec"), {"__name__": "__readme__"})
+    assert (tmp_path / "out" / "mine" / "report.json").is_file()
