@@ -235,3 +235,13 @@ def test_the_real_recordings_give_events(dataset_dir):
     assert ev.sensor_size == (19, 1, 5)  # electrodes on x, the 2K + 1 trains on p
     events, target = ev[3]
     assert len(events) > 0 and target == 1
+
+
+def test_a_missing_extra_names_its_install_command(monkeypatch):
+    import sys
+
+    from sim_tactile.errors import MissingDependencyError
+
+    monkeypatch.setitem(sys.modules, "tonic", None)
+    with pytest.raises(MissingDependencyError, match=r"pip install 'sim-tactile\[tonic\]'"):
+        TactileEvents(_data(9, {}), encoder=ThresholdEncoder(rate_hz=100.0))

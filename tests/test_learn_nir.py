@@ -135,3 +135,13 @@ def test_the_lif_encoder_exports_where_nir_has_the_primitive():
         bridge.lif_encoder_to_nir(LIFEncoder())
     with pytest.raises(ConfigError, match="not fitted"):
         SNNClassifier().to_nir()
+
+
+def test_a_missing_nir_names_its_install_command(fitted, monkeypatch):
+    import sys
+
+    from sim_tactile.errors import MissingDependencyError
+
+    monkeypatch.setitem(sys.modules, "nir", None)
+    with pytest.raises(MissingDependencyError, match=r"pip install 'sim-tactile\[nir\]'"):
+        fitted[0].to_nir()

@@ -21,17 +21,21 @@ CITATION = """@software{sim_tactile,
   version = {VERSION},
   note = {CadQuery plates, a MuJoCo soft finger with a taxel array, neuromorphic encoders}
 }"""
+#: The drawn slide parameters' columns (``PARAM_NAMES``; a new one needs its line here).
+PARAM_DOCS = {
+    "speed_m_s": "the slide's drawn speed [m/s] (NaN for recordings)",
+    "force_n": "the slide's drawn normal force [N] (NaN for recordings)",
+    "offset_y_m": "the slide's drawn offset across the slide [m] (NaN for recordings)",
+}
+#: The export's columns: name, type, meaning.
 COLUMNS = (
     ("data", "list of T lists of N float32", "the slide's samples (time x channel), in `units`"),
     ("label", "class label", "the plate (class) of the slide"),
     ("index", "int64", "the slide's number in the store"),
     ("slide", "int64", "the slide's number within its class"),
     ("seed", "uint64", "the slide's simulation seed (0 for recordings)"),
-    ("speed_m_s", "float64", "the slide's drawn speed [m/s] (NaN for recordings)"),
-    ("force_n", "float64", "the slide's drawn normal force [N] (NaN for recordings)"),
-    ("offset_y_m", "float64", "the slide's drawn offset across the slide [m] (NaN for recordings)"),
+    *((k, "float64", PARAM_DOCS[k]) for k in PARAM_NAMES),
 )
-assert tuple(c for c, _, _ in COLUMNS[5:]) == PARAM_NAMES  # noqa: S101 (a fact of the code)
 
 
 def _size_category(n: int) -> str:

@@ -32,10 +32,6 @@ import numpy as np
 from ..errors import ConfigError
 from ..records import SpikeTrains
 
-#: How to install NeuroBench: it declares torchaudio, which has no wheel for the pinned
-#: torch; its Benchmark and metrics do not import it.
-NEUROBENCH_INSTALL = "pip install 'sim-tactile[neurobench]' && pip install --no-deps neurobench"
-
 
 def _spiking(x: np.ndarray) -> bool:
     """NeuroBench's test of a spiking input: every value is 0, 1 or -1."""
