@@ -235,6 +235,9 @@ def test_the_real_recordings_give_events(dataset_dir):
     assert ev.sensor_size == (19, 1, 5)  # electrodes on x, the 2K + 1 trains on p
     events, target = ev[3]
     assert len(events) > 0 and target == 1
+    icub = datasets.load_icub(dataset_dir)  # 6 patches x 10 taxels: its grid, as STMNIST's
+    ev = TactileEvents(icub.subset(np.arange(4)), encoder=ThresholdEncoder(rate_hz=50.0))
+    assert ev.sensor_size == (10, 6, 5) and ev.layout.grid
 
 
 def test_a_missing_extra_names_its_install_command(monkeypatch):
