@@ -50,7 +50,7 @@ nitpick_ignore_regex = [
     (
         r"py:.*",
         r"(numpy|np|scipy|sklearn|mujoco|numba|zarr|torch|matplotlib|pathlib|collections"
-        r"|typing|argparse|trimesh|cadquery|ray|concurrent|dataclasses|json|enum|tomllib)\..*",
+        r"|typing|argparse|trimesh|cadquery|ray|concurrent|dataclasses|json|enum|tomllib|ast)\..*",
     ),
     (r"py:mod", r"(numpy|scipy|sklearn|mujoco|numba|zarr|torch|matplotlib|tomllib|trimesh|ray)"),
     (

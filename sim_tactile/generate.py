@@ -31,14 +31,39 @@ import numpy as np
 from . import _validate as v
 from .cache import default_root
 from .datasets.export import spec_from_tactile
-from .datasets.store import SlideWriter, config_hash, create_store, open_root, versions
+from .datasets.fs import StoreLock, fs_errors, no_empty_folders_left
+from .datasets.integrity import (
+    chunk_files,
+    compare_index,
+    damaged_index,
+    reading,
+    values_digest,
+)
+from .datasets.store import (
+    DataGroup,
+    SlideWriter,
+    config_hash,
+    create_store,
+    open_data,
+    open_root,
+    read_checksums,
+    set_attrs,
+    versions,
+)
 from .errors import ConfigError, StoreError, Terminated, WorkerError
 from .hashing import canonical_json
 from .sensors.calibration import load_calibration
 from .slides.config import config_slide_set, load_config
 from .slides.jobs import SlideWorker
 from .slides.plan import Plan, slide_plan
-from .slides.run import BACKENDS, MAX_WORKERS, default_workers, make_backend, stream
+from .slides.run import (
+    BACKENDS,
+    MAX_WORKERS,
+    default_workers,
+    make_backend,
+    stream,
+    warning_lines,
+)
 from .slides.slide_set import SlideSet
 from .tasks import DataRequest, get_task, task_ids
 from .tasks.registry import with_calibration
@@ -106,11 +131,13 @@ def resolve(target: str, *, quick: bool, seed: int | None, data=None, log=None, 
 def _describe_existing(out: Path) -> str:
     try:
         root = open_root(out)
+        groups = [root[p] for p in root.attrs.get("parts") or []] or [root]
+        n = sum(int(g.attrs["n_slides"]) for g in groups)
+        done = sum(int((read_checksums(g["checksum"], str(out))[0] != 0).sum()) for g in groups)
     except StoreError as exc:
         return str(exc)
-    groups = [root[p] for p in root.attrs.get("parts") or []] or [root]
-    n = sum(int(g.attrs["n_slides"]) for g in groups)
-    done = sum(int((g["checksum"][:] != 0).sum()) for g in groups)
+    except Exception:  # a damaged store: saying so is enough here
+        return "a store that cannot be read"
     return f"a data set of {n} slides, {done} written, configuration {root.attrs.get('config_hash', '?')}"
 
 
@@ -129,9 +156,7 @@ def _diff(a: dict, b: dict, prefix: str = "") -> list[str]:
     return out
 
 
-def _check_same(group, plan: Plan, out: Path) -> None:
-    attrs = group.attrs
-    where = f"{out}" + (f"/{plan.group}" if plan.group else "")
+def _check_same(attrs: dict, plan: Plan, where: str) -> None:
     if attrs.get("config_hash") != plan.spec.hash:
         diffs = _diff(attrs.get("config") or {}, plan.spec.config)
         raise StoreError(
@@ -147,9 +172,46 @@ def _check_same(group, plan: Plan, out: Path) -> None:
         )
 
 
-def _open_or_create(out: Path, plans: list[Plan], root_attrs: dict, resume: bool):
-    """The store's root group: the existing one, checked to hold the same configuration and
-    code (``--resume``), or a new one. Nothing is written before every check has passed."""
+def _check_index(dg: DataGroup, plan: Plan, where: str) -> None:
+    """The index arrays against the ones the configuration gives: the intact ones by value,
+    the damaged ones by the digest the store recorded (they can be written again only if
+    the configuration gives those values)."""
+    expected = plan.spec.index()
+    recorded = dg.attrs["integrity"]["values"]
+    for name, why in dg.damage.items():
+        if values_digest(expected[name]) != recorded[name]:
+            raise damaged_index(where, {name: f"{why}, and the configuration gives other values"})
+    intact = [k for k in expected if k not in dg.damage]
+    compare_index({k: dg.index[k] for k in intact}, {k: expected[k] for k in intact}, where)
+
+
+def _repair_index(dg: DataGroup, plan: Plan, where: str, out: Path, log) -> list[str]:
+    """Write again the damaged index arrays (checked by :func:`_check_index`) from the
+    configuration, and record their chunk files' new digests. Returns their names."""
+    if not dg.damage:
+        return []
+    expected = plan.spec.index()
+    files = dict(dg.attrs["integrity"]["files"])
+    folder = out / plan.group if plan.group else out
+    for name, why in dg.damage.items():
+        with fs_errors(out):
+            dg.arrays[name][...] = expected[name]
+        dg.index[name] = expected[name]
+        files = {k: d for k, d in files.items() if not k.startswith(f"{name}/c/")}
+        files.update(chunk_files(folder, name))  # the bytes as written now
+        log(
+            f"{where}: the array {name!r} was damaged ({why}); written again from the configuration"
+        )
+    dg.attrs["integrity"] = {**dg.attrs["integrity"], "files": files}
+    set_attrs(dg.group, {"integrity": dg.attrs["integrity"]}, out)
+    return [f"{plan.group}/{k}" if plan.group else k for k in dg.damage]
+
+
+def _open_or_create(out: Path, plans: list[Plan], root_attrs: dict, resume: bool, log):
+    """The store's root group and each plan's checked group: the existing ones, checked to
+    hold the same configuration and code, with the index arrays the configuration gives
+    (``--resume``; damaged ones are written again), or new ones. Nothing is written before
+    every check has passed. The caller holds the store's lock."""
     import zarr
 
     if out.exists() and not resume:
@@ -166,14 +228,27 @@ def _open_or_create(out: Path, plans: list[Plan], root_attrs: dict, resume: bool
                 f"{out} holds {root.attrs.get('parts') or 'one data set'}, this target "
                 f"{root_attrs.get('parts') or 'one data set'}: choose a new --out"
             )
-        for plan in plans:
-            _check_same(root[plan.group] if plan.group else root, plan, out)
-        return root
-    root_attrs = {**root_attrs, "versions": versions(), "runs": []}
-    if root_attrs.get("parts"):  # a suite: the hash of its parts' hashes
-        root_attrs["config_hash"] = config_hash({p.group: p.spec.hash for p in plans})
-    create_store(out, {p.group: p.spec for p in plans}, root_attrs)
-    return zarr.open_group(str(out), mode="r+")
+    else:
+        root_attrs = {**root_attrs, "versions": versions(), "runs": []}
+        if root_attrs.get("parts"):  # a suite: the hash of its parts' hashes
+            root_attrs["config_hash"] = config_hash({p.group: p.spec.hash for p in plans})
+        create_store(out, {p.group: p.spec for p in plans}, root_attrs)
+        with reading(str(out), "the store just made"):
+            root = zarr.open_group(str(out), mode="r+")
+    groups, wheres = [], []
+    for plan in plans:  # every check first...
+        where = f"{out}" + (f"/{plan.group}" if plan.group else "")
+        with reading(where, "its zarr.json"):
+            group = root[plan.group] if plan.group else root
+        dg = open_data(group, out / plan.group if plan.group else out, where)
+        _check_same(dg.attrs, plan, where)
+        _check_index(dg, plan, where)
+        groups.append(dg)
+        wheres.append(where)
+    repaired = []  # ...then the repairs
+    for plan, dg, where in zip(plans, groups, wheres, strict=True):
+        repaired += _repair_index(dg, plan, where, out, log)
+    return root, groups, repaired
 
 
 @dataclass
@@ -192,23 +267,32 @@ class _Run:
     interrupted: bool = False
     #: the signal that stopped the run (SIGTERM), None for Ctrl-C or none
     signal: str | None = None
+    repaired: list[str] = field(default_factory=list)
 
 
-def _recheck_written(root, run: _Run, resumed: bool, log) -> None:
+_KEPT = "every slide written so far is kept: run the same command with --resume to continue"
+
+
+def _recheck_written(groups: list[DataGroup], run: _Run, resumed: bool, out: Path, log) -> None:
     """Open a writer per data set; on resume, read every written slide back against its
-    checksum and mark the ones that fail to be written again. Fills ``run.todo``."""
-    for k, plan in enumerate(run.plans):
-        w = SlideWriter(root[plan.group] if plan.group else root)
+    checksum and mark the ones that fail (or whose checksum chunk is unreadable) to be
+    written again. Fills ``run.todo``."""
+    for k, (plan, dg) in enumerate(zip(run.plans, groups, strict=True)):
+        w = SlideWriter(dg.group, out, dg.index["lengths"], _KEPT)
         run.writers.append(w)
         run.warns.append(Counter())
-        done = w.done() if resumed else np.zeros(plan.spec.n_slides, bool)
+        n = plan.spec.n_slides
+        done, unreadable = w.done() if resumed else (np.zeros(n, bool), {})
+        bad = dict(unreadable)
         for i in np.flatnonzero(done):
-            bad = w.check(int(i))
-            if bad:
-                log(f"{plan.group + ': ' if plan.group else ''}slide {i}: {bad}; writing it again")
-                run.corrupt.append({"part": plan.group, "slide": int(i), "reason": bad})
-                w.clear(int(i))
-                done[i] = False
+            why = w.check(int(i))
+            if why:
+                bad[int(i)] = why
+        for i, why in sorted(bad.items()):
+            log(f"{plan.group + ': ' if plan.group else ''}slide {i}: {why}; writing it again")
+            run.corrupt.append({"part": plan.group, "slide": i, "reason": why})
+            w.clear(i)
+            done[i] = False
         run.reused += int(done.sum())
         run.todo += [(k, int(i)) for i in np.flatnonzero(~done)]
 
@@ -229,10 +313,7 @@ def _drain(backend, run: _Run, bar) -> None:
             _write(run, k, i, out.data, out.warnings, out.wall_s)
             bar.update(1)
     except WorkerError as exc:
-        raise StoreError(
-            f"{exc}; every slide written so far is kept: run the same command with "
-            "--resume to continue"
-        ) from None
+        raise StoreError(f"{exc}; {_KEPT}") from None
 
 
 def _slide_name(run: _Run, key: tuple[int, int]) -> str:
@@ -290,52 +371,63 @@ def generate(
         target, quick=quick, seed=seed, data=data, log=log, sensor_config=sensor_config
     )
     total = sum(p.spec.n_slides for p in plans)
-    resumed = out.exists()
+    StoreLock.probe(out)  # refused before the workers start (the lock below is what counts)
     simulated = any(p.jobs is not None for p in plans)
     fn = _worker or SlideWorker(str(default_root()), write=False)
-    # the workers start before this process opens the store (and its I/O threads): fork
-    # copies the parent as it is
+    # the workers start before this process opens the store, its lock and its I/O threads:
+    # fork copies the parent as it is
     runner = (  # recorded data needs no workers: it is copied in this process
         make_backend(fn, kind=backend, workers=workers, address=address, log=log)
         if simulated
         else make_backend(fn, workers=1)
     )
     try:
-        root = _open_or_create(out, plans, root_attrs, resume)
-    except BaseException:
-        runner.close(cancel=True)
-        raise
-    run = _Run(plans)
-    try:
-        _recheck_written(root, run, resumed, log)
-        if resumed:
-            log(
-                f"resuming {out}: {run.reused} of {total} slides written and checked, "
-                f"{len(run.todo)} to go ({len(run.corrupt)} corrupt)"
-            )
-        if run.todo and simulated:
-            log(f"{out}: {len(run.todo)} slides on {runner.name}, {runner.workers} worker(s)")
-        bar = _progress(total, run.reused, out.name, progress)
-        try:
-            _drain(runner, run, bar)
-        finally:
-            bar.close()
-    except KeyboardInterrupt as exc:
-        run.interrupted = True
-        if isinstance(exc, Terminated):
-            run.signal = signal.Signals(exc.signum).name
-        log(
-            f"{'stopped by ' + run.signal if run.signal else 'interrupted'}: "
-            f"{run.reused + run.written} of {total} slides are in {out}; "
-            "run the same command with --resume to continue"
-        )
-        raise
+        with no_empty_folders_left(out), StoreLock(out):
+            resumed = out.exists()
+            root, groups, repaired = _open_or_create(out, plans, root_attrs, resume, log)
+            run = _Run(plans, repaired=repaired)
+            try:
+                _fill(runner, run, groups, resumed, out, total, simulated, progress, log)
+            except BaseException as exc:
+                if isinstance(exc, KeyboardInterrupt):
+                    run.interrupted = True
+                    if isinstance(exc, Terminated):
+                        run.signal = signal.Signals(exc.signum).name
+                    log(
+                        f"{'stopped by ' + run.signal if run.signal else 'interrupted'}: "
+                        f"{run.reused + run.written} of {total} slides are in {out}; run the "
+                        "same command with --resume to continue"
+                    )
+                runner.close(cancel=True)
+                _record_run(root, run, backend, runner.workers, address, t_start, out, log)
+                raise
+            runner.close(cancel=True)
+            _record_run(root, run, backend, runner.workers, address, t_start, out)
     finally:
         runner.close(cancel=True)
-        _record_run(root, run, backend, runner.workers, address, t_start)
+    for plan, warns in zip(plans, run.warns, strict=False):
+        for line in warning_lines(warns, plan.spec.n_slides):
+            log(f"{plan.group + ': ' if plan.group else ''}{line}")
     return _summary(
         out, total, resumed, backend, workers, runner.workers, plans, root, run, t_start
     )
+
+
+def _fill(runner, run: _Run, groups, resumed, out: Path, total, simulated, progress, log) -> None:
+    """Check what is written (on resume), then simulate and write the rest."""
+    _recheck_written(groups, run, resumed, out, log)
+    if resumed:
+        log(
+            f"resuming {out}: {run.reused} of {total} slides written and checked, "
+            f"{len(run.todo)} to go ({len(run.corrupt)} corrupt)"
+        )
+    if run.todo and simulated:
+        log(f"{out}: {len(run.todo)} slides on {runner.name}, {runner.workers} worker(s)")
+    bar = _progress(total, run.reused, out.name, progress)
+    try:
+        _drain(runner, run, bar)
+    finally:
+        bar.close()
 
 
 def _summary(out, total, resumed, backend, workers, n_workers, plans, root, run, t_start) -> dict:
@@ -350,6 +442,7 @@ def _summary(out, total, resumed, backend, workers, n_workers, plans, root, run,
         "reused": run.reused,
         "regenerated": len(run.corrupt),
         "corrupt": run.corrupt,
+        "repaired": run.repaired,
         "backend": backend,
         "workers": n_workers if backend == "local" else workers,
         "parts": [p.group for p in plans if p.group],
@@ -357,32 +450,47 @@ def _summary(out, total, resumed, backend, workers, n_workers, plans, root, run,
         "simulate_s": round(run.sim_s, 3),
         "write_s": round(run.write_s, 4),
         "store_overhead": round(run.write_s / run.sim_s, 5) if run.sim_s > 0 else None,
+        "warnings": {
+            (p.group or p.spec.name): [f"{w} (x{c})" for w, c in warns.most_common()]
+            for p, warns in zip(plans, run.warns, strict=False)
+            if warns
+        },
     }
 
 
-def _record_run(root, run: _Run, backend, workers, address, t_start) -> None:
-    """Completion flags, warnings and the run's line in the store's history (parent only)."""
-    for plan, w, c in zip(run.plans, run.writers, run.warns, strict=False):
-        group = root[plan.group] if plan.group else root
-        old = Counter(group.attrs.get("sim_warnings") or {})
-        old.update(c)
-        group.attrs.update(
-            {"sim_warnings": dict(old.most_common()), "complete": bool(w.done().all())}
-        )
-    entry = {
-        "at": datetime.now(UTC).isoformat(timespec="seconds"),
-        "backend": backend,
-        "workers": workers,
-        "address": address,
-        "written": run.written,
-        "regenerated": len(run.corrupt),
-        "interrupted": run.interrupted,
-        "signal": run.signal,
-        "wall_s": round(time.perf_counter() - t_start, 3),
-    }
-    if backend == "ray":
-        entry["ray"] = sys.modules["ray"].__version__ if "ray" in sys.modules else None
-    root.attrs.update({"runs": [*(root.attrs.get("runs") or []), entry]})
+def _record_run(root, run: _Run, backend, workers, address, t_start, out: Path, log=None) -> None:
+    """Completion flags, warnings and the run's line in the store's history (parent only,
+    under the store's lock). With ``log`` (the run is failing already), a failure to write
+    them is logged, not raised: the first fault is the one to report."""
+    try:
+        for w, c in zip(run.writers, run.warns, strict=False):
+            group = w.group
+            old = Counter(group.attrs.get("sim_warnings") or {})
+            old.update(c)
+            set_attrs(
+                group,
+                {"sim_warnings": dict(old.most_common()), "complete": bool(w.done()[0].all())},
+                out,
+            )
+        entry = {
+            "at": datetime.now(UTC).isoformat(timespec="seconds"),
+            "backend": backend,
+            "workers": workers,
+            "address": address,
+            "written": run.written,
+            "regenerated": len(run.corrupt),
+            "repaired": run.repaired,
+            "interrupted": run.interrupted,
+            "signal": run.signal,
+            "wall_s": round(time.perf_counter() - t_start, 3),
+        }
+        if backend == "ray":
+            entry["ray"] = sys.modules["ray"].__version__ if "ray" in sys.modules else None
+        set_attrs(root, {"runs": [*(root.attrs.get("runs") or []), entry]}, out)
+    except Exception as exc:
+        if log is None:
+            raise
+        log(f"the store's history was not updated: {exc}")
 
 
 def _progress(total: int, initial: int, desc: str, enabled: bool):

@@ -250,6 +250,33 @@ def test_corrupted_chunks_are_found_and_written_again(tiny, tmp_path):
     assert datasets.open(out).verify() == []
 
 
+def test_a_flipped_label_is_refused_by_readers_and_run_and_resume_writes_it_again(tiny, tmp_path):
+    """The issue users met: one bit of ``labels/c/0`` relabelled a slide, ``verify()`` was
+    clean, ``--resume`` reused everything and ``run --store`` scored the wrong labels."""
+    from sim_tactile.tasks.config_task import config_task
+    from sim_tactile.tasks.registry import DataRequest
+    from sim_tactile.tasks.runner import task_data
+
+    cfg, ref = tiny
+    out = tmp_path / "flip.zarr"
+    shutil.copytree(ref, out)
+    chunk = out / "labels" / "c" / "0"
+    b = bytearray(chunk.read_bytes())
+    b[-1] ^= 0x01  # in the last value: decodes, as another label
+    chunk.write_bytes(bytes(b))
+    with pytest.raises(StoreError, match="'labels'.*--resume"):
+        datasets.open(out)
+    spec, seed = config_task(cfg)
+    with pytest.raises(StoreError, match="'labels'"):
+        task_data(spec, DataRequest(None, False, seed, lambda m: None, out))
+    lines: list[str] = []
+    res = generate(str(cfg), out, workers=1, resume=True, progress=False, log=lines.append)
+    assert res["repaired"] == ["labels"] and res["written"] == 0 and res["reused"] == 6
+    assert any("'labels' was damaged" in line for line in lines), lines
+    assert_same_store(ref, out)
+    assert datasets.open(out).verify() == []
+
+
 def test_existing_stores_and_other_configurations_are_refused(tiny, tmp_path):
     cfg, ref = tiny
     before = {p: p.stat().st_mtime_ns for p in ref.rglob("*") if p.is_file()}
@@ -476,6 +503,17 @@ def test_a_suite_gets_one_group_per_part(tmp_path):
         _quiet("textures20-v1", out, quick=True, _worker=_fake_slide)
     res = _quiet("textures20-v1", out, quick=True, resume=True, _worker=_fake_slide)
     assert res["reused"] == 24 and res["written"] == 0
+    # a part's damaged index array and slide: refused by readers, written again by --resume
+    icub = out / "textures20-icub60-v1"
+    labels = icub.joinpath("labels", "c", "0")
+    labels.write_bytes(labels.read_bytes()[:-1])
+    with pytest.raises(StoreError, match="textures20-icub60-v1'.*'labels'"):
+        datasets.open(out, part="textures20-icub60-v1")
+    (icub / "data" / "c" / "2" / "0" / "0").unlink()
+    res = _quiet("textures20-v1", out, quick=True, resume=True, _worker=_fake_slide)
+    assert res["repaired"] == ["textures20-icub60-v1/labels"] and res["written"] == 1
+    assert [c["slide"] for c in res["corrupt"]] == [2]
+    assert datasets.open(out, part="textures20-icub60-v1").verify() == []
 
 
 def test_a_configuration_on_the_probe_rig_writes_its_slides(tmp_path):

@@ -31,7 +31,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
         res,
         lambda: (
             f"{res['out']}: {res['trials']} slides ({res['written']} simulated now, "
-            f"{res['reused']} kept, {res['regenerated']} corrupt ones redone) in "
+            f"{res['reused']} kept, {res['regenerated']} corrupt ones redone"
+            + (f", {', '.join(res['repaired'])} written again" if res["repaired"] else "")
+            + ") in "
             f"{res['wall_s']:.1f} s; store overhead "
             + (f"{100 * res['store_overhead']:.2f}%" if res["store_overhead"] else "-")
         ),
@@ -39,23 +41,22 @@ def cmd_generate(args: argparse.Namespace) -> int:
     return 0
 
 
-#: ``export --format``: plain numpy files, or Parquet shards for data hubs.
-EXPORT_FORMATS = ("numpy", "parquet")
-
-
 def cmd_export(args: argparse.Namespace) -> int:
-    """Write a data set as plain .npy files and JSON, or for data hubs (Parquet shards of the
-    task's splits, a dataset card and Croissant metadata)."""
+    """Write a data set as plain files (``--format``: numpy, .npy files and its metadata as
+    JSON; parquet, Parquet shards of the task's splits, a dataset card and Croissant
+    metadata), built beside ``--out`` and renamed when whole."""
     from .._validate import one_of
+    from ..datasets.export import FORMATS
 
-    if one_of("--format", args.format, EXPORT_FORMATS) == "parquet":
+    fmt = one_of("--format", args.format, (*FORMATS, "parquet"))
+    if fmt == "parquet":  # it needs the task's splits: a layer above the data sets
         from ..formats.hub import export_parquet
 
         res = export_parquet(args.store, args.out, part=args.part, log=log)
     else:
         from ..datasets import export
 
-        res = export(args.store, args.out, part=args.part)
+        res = export(args.store, args.out, part=args.part, format=fmt)
     emit(args, res, lambda: f"{res['slides']} slides -> {res['out']}/")
     return 0
 
@@ -183,6 +184,7 @@ def add_parsers(sub) -> None:
     ex.add_argument(
         "--format",
         default="numpy",
-        help="numpy (the default: .npy files and meta.json) or parquet (Parquet shards of the "
-        "task's splits, a README.md dataset card and croissant.json; the [hub] extra).",
+        help="The files to write: numpy (the default: .npy arrays and meta.json) or parquet "
+        "(Parquet shards of the task's splits, a README.md dataset card and croissant.json; "
+        "the [hub] extra); an unknown format writes nothing.",
     )

@@ -1,19 +1,31 @@
 """Data sets from recordings and to plain files: :func:`from_tactile` writes any
 :class:`~sim_tactile.records.TactileDataset` (the real recordings) in a store's form,
-:func:`export` writes a store as ``.npy`` files and JSON."""
+:func:`export` writes a store as plain files in one of :data:`FORMATS`.
+
+An export is built in a temporary folder beside ``--out`` and renamed when whole: a failure
+(a damaged slide, a full disk, a read-only folder) leaves nothing behind. A new format is
+one function ``(SlideStore, folder) -> {kind: file name}`` added to :data:`FORMATS`.
+"""
 
 from __future__ import annotations
 
 import hashlib
 import json
+import shutil
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import StoreError
+from ..errors import ConfigError, StoreError
 from ..records import TactileDataset
+from .fs import StoreLock, building
+from .integrity import DIGEST_ATTR
 from .reader import SlideStore, open_store, parts_of
-from .store import PARAM_NAMES, SlideWriter, StoreSpec, create_store, slide_digest, zarr_module
+from .store import PARAM_NAMES, SlideWriter, StoreSpec, create_store, set_attrs, zarr_module
+
+#: attributes that check the store itself: not part of an export's metadata
+_STORE_ONLY = ("integrity", DIGEST_ATTR)
 
 
 def spec_from_tactile(ds: TactileDataset, name: str, config: dict | None = None) -> StoreSpec:
@@ -53,66 +65,83 @@ def _dataset_digest(ds: TactileDataset) -> str:
 
 def from_tactile(ds: TactileDataset, path: str | Path, *, name: str = "dataset") -> SlideStore:
     """Write a :class:`TactileDataset` (e.g. :func:`~sim_tactile.datasets.load_biotac`) into a
-    new store at ``path`` and open it."""
+    new store at ``path`` and open it. A failure part-way removes the store it began."""
     path = Path(path)
     if path.exists():
         raise StoreError(f"{str(path)!r} exists; give a new path")
     spec = spec_from_tactile(ds, name)
-    create_store(path, {"": spec}, {})
-    root = zarr_module().open_group(str(path), mode="r+")
-    w = SlideWriter(root)
-    for i in range(ds.n_samples):
-        w.write(i, ds.data[i])
-    root.attrs.update({"complete": True})
+    with StoreLock(path):
+        if path.exists():
+            raise StoreError(f"{str(path)!r} exists; give a new path")
+        create_store(path, {"": spec}, {})
+        try:
+            root = zarr_module().open_group(str(path), mode="r+")
+            w = SlideWriter(root, path)
+            for i in range(ds.n_samples):
+                w.write(i, ds.data[i])
+            set_attrs(root, {"complete": True}, path)
+        except BaseException:
+            shutil.rmtree(path, ignore_errors=True)
+            raise
     return open_store(path)
 
 
-def export(path: str | Path, out: str | Path, *, part: str | None = None) -> dict:
-    """Write a complete data set as plain numpy files into the folder ``out``: ``data.npy``
-    (slides, T, N) float32 (NaN past each slide's length), ``labels.npy``, ``lengths.npy``,
-    ``slide.npy``, ``seed.npy``, ``params.npy`` (slides, 3), ``taxel_positions.npy`` (if
-    known) and ``meta.json`` (configuration, names, versions). A suite's store exports each
-    part into ``out/<part>/``. Slides are copied a batch at a time: memory stays flat."""
+def write_numpy(st: SlideStore, folder: Path) -> dict[str, str]:
+    """A data set as ``.npy`` files and JSON in ``folder``: ``data.npy`` (slides, T, N)
+    float32 (NaN past each slide's length), ``labels.npy``, ``lengths.npy``, ``slide.npy``,
+    ``seed.npy``, ``params.npy`` (slides, 3), ``taxel_positions.npy`` (if known) and
+    ``meta.json`` (configuration, names, versions). Slides are copied a batch at a time,
+    each checked against its checksum: memory stays flat."""
+    header = {"descr": "<f4", "fortran_order": False, "shape": tuple(st.data.shape)}
+    with open(folder / "data.npy", "wb") as f:  # streamed: a full disk is an OSError
+        np.lib.format.write_array_header_1_0(f, header)
+        for _, x in st.padded_batches():
+            f.write(np.ascontiguousarray(x, dtype="<f4").tobytes())
+    files = {"data": "data.npy"}
+    arrays = st.index_arrays()
+    if st.taxel_positions is not None:
+        arrays["taxel_positions"] = st.taxel_positions
+    for k, arr in arrays.items():
+        np.save(folder / f"{k}.npy", arr, allow_pickle=False)
+        files[k] = f"{k}.npy"
+    meta = {k: v for k, v in st.meta.items() if k not in _STORE_ONLY}
+    (folder / "meta.json").write_text(json.dumps(meta, indent=1, sort_keys=True))
+    files["meta"] = "meta.json"
+    return files
+
+
+#: ``--format`` -> the function that writes one data set into a folder
+FORMATS: dict[str, Callable[[SlideStore, Path], dict[str, str]]] = {"numpy": write_numpy}
+
+
+def export(
+    path: str | Path, out: str | Path, *, part: str | None = None, format: str = "numpy"
+) -> dict:
+    """Write a complete data set as plain files into the new (or empty) folder ``out``, in
+    ``format`` (:data:`FORMATS`; ``numpy``: :func:`write_numpy`). A suite's store exports
+    each part into ``out/<part>/``. Everything is checked before it is copied, and the
+    export is built beside ``out`` and renamed when whole: on any failure nothing is left."""
+    writer = FORMATS.get(format)
+    if writer is None:
+        raise ConfigError(f"--format {format!r} is not valid; valid: {', '.join(FORMATS)}")
     path, out = Path(path), Path(out)
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise StoreError(f"--out {str(out)!r} exists and is not an empty folder")
     parts = parts_of(path)
-    if parts and part is None:
-        files = {p: export(path, out / p, part=p) for p in parts}
-        return {"out": str(out), "parts": files, "slides": sum(f["slides"] for f in files.values())}
-    st = open_store(path, part)
-    missing = int((st.checksums() == 0).sum())
-    if missing:
-        raise StoreError(
-            f"{str(st.path)!r} is incomplete ({missing} of {len(st)} slides missing); finish it "
-            "with 'sim-tactile generate ... --resume' before exporting"
-        )
-    out.mkdir(parents=True, exist_ok=True)
-    n, t, c = st.data.shape
-    mm = np.lib.format.open_memmap(out / "data.npy", mode="w+", dtype=np.float32, shape=(n, t, c))
-    sums = st.checksums()
-    for a in range(0, n, 256):
-        b = min(a + 256, n)
-        x = np.asarray(st.data[a:b])
-        for k in range(a, b):
-            if slide_digest(x[k - a, : st.lengths[k]]) != sums[k]:
-                st[k]  # raises with the reason
-        mm[a:b] = x
-    mm.flush()
-    del mm
-    files = {"data": "data.npy"}
-    arrays = {
-        "labels": st.labels,
-        "lengths": st.lengths,
-        "slide": st.slide_numbers,
-        "seed": st.seeds,
-        "params": np.stack([st.params[k] for k in PARAM_NAMES], axis=1),
-    }
-    if st.taxel_positions is not None:
-        arrays["taxel_positions"] = st.taxel_positions
-    for k, arr in arrays.items():
-        np.save(out / f"{k}.npy", arr, allow_pickle=False)
-        files[k] = f"{k}.npy"
-    (out / "meta.json").write_text(json.dumps(st.meta, indent=1, sort_keys=True))
-    files["meta"] = "meta.json"
-    return {"out": str(out), "slides": n, "files": files}
+    suite = bool(parts) and part is None
+    names = parts if suite else [part]
+    stores = {name: open_store(path, name) for name in names}
+    for st in stores.values():
+        st.require_complete(" before exporting")
+    docs = {}
+    with building(out) as tmp:
+        for name, st in stores.items():
+            folder = tmp / name if suite else tmp
+            folder.mkdir(exist_ok=True)
+            docs[name] = {"slides": len(st), "files": writer(st, folder)}
+    if suite:
+        for name, doc in docs.items():
+            doc["out"] = str(out / name)
+        slides = sum(d["slides"] for d in docs.values())
+        return {"out": str(out), "format": format, "parts": docs, "slides": slides}
+    return {"out": str(out), "format": format, **docs[part]}

@@ -1,4 +1,10 @@
-"""Reading a data set from its store lazily: :class:`SlideStore` and :func:`open_store`."""
+"""Reading a data set from its store lazily: :class:`SlideStore` and :func:`open_store`.
+
+Everything served is checked first (:mod:`.integrity`): opening checks the attributes, the
+arrays' metadata files and the index arrays against their digests; every slide read is
+checked against its checksum. A fault is a :class:`~sim_tactile.errors.StoreError` naming
+the slide or array and the damage, never a value read wrong.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +16,16 @@ import numpy as np
 
 from ..errors import StoreError
 from ..records import Recording, TactileDataset
-from .store import FORMAT, PARAM_NAMES, check_slide, open_root, plate_maps, slide_digest
+from .integrity import SLIDE_HINT, compare_index, damaged_index, reading
+from .store import (
+    PARAM_NAMES,
+    check_slide,
+    open_data,
+    open_root,
+    plate_maps,
+    read_checksums,
+    rows_damage,
+)
 
 
 def parts_of(path: str | Path) -> list[str]:
@@ -20,24 +35,28 @@ def parts_of(path: str | Path) -> list[str]:
 
 class SlideStore:
     """A data set in a store, read lazily: the per-slide indices (labels, seeds, parameters)
-    are loaded on open, the samples only when a slide is read; every read checks the slide's
-    checksum. ``len(store)`` slides; ``store[i]`` is slide ``i``'s ``(T_i, N)`` samples;
-    iterating yields ``(samples, label)`` pairs one slide at a time."""
+    are loaded (and checked against their digests) on open, the samples only when a slide is
+    read; every read checks the slide's checksum. ``len(store)`` slides; ``store[i]`` is
+    slide ``i``'s ``(T_i, N)`` samples; iterating yields ``(samples, label)`` pairs one slide
+    at a time."""
 
     def __init__(self, group, path: Path) -> None:
-        self.path = path
+        self.path = Path(path)
+        self._where = repr(str(self.path))
+        dg = open_data(group, self.path, self._where)
+        if dg.damage:
+            raise damaged_index(self._where, dg.damage)
         self.group = group
-        self.meta: dict = group.attrs.asdict()
-        if self.meta.get("format") != FORMAT or "data" not in group:
-            raise StoreError(f"{str(path)!r} holds no sim_tactile data set")
-        self.labels: np.ndarray = group["labels"][:]
-        self.lengths: np.ndarray = group["lengths"][:]
-        self.slide_numbers: np.ndarray = group["slide"][:]
-        self.seeds: np.ndarray = group["seed"][:]
-        p = group["params"][:]
+        self.meta: dict = dg.attrs
+        self._key = str(self.meta["config_hash"])
+        self.labels: np.ndarray = dg.index["labels"]
+        self.lengths: np.ndarray = dg.index["lengths"]
+        self.slide_numbers: np.ndarray = dg.index["slide"]
+        self.seeds: np.ndarray = dg.index["seed"]
+        p = dg.index["params"]
         self.params: dict[str, np.ndarray] = {k: p[:, j] for j, k in enumerate(PARAM_NAMES)}
-        self.data = group["data"]  # the Zarr array itself: slicing reads only those chunks
-        self._checksum = group["checksum"]
+        self.data = dg.arrays["data"]  # the Zarr array itself: slicing reads only those chunks
+        self._checksum = dg.arrays["checksum"]
         self.class_names = tuple(self.meta["class_names"])
         self.channel_names = tuple(self.meta["channel_names"])
         self.rate_hz = float(self.meta["rate_hz"])
@@ -57,8 +76,8 @@ class SlideStore:
 
         params = self.config.get("plate_params")
         if params is None:
-            raise StoreError(f"{str(self.path)!r} records no plates (not a simulated data set)")
-        maps = plate_maps(self.group)
+            raise StoreError(f"{self._where} records no plates (not a simulated data set)")
+        maps = plate_maps(self.group, self.meta, self._where)
         return [
             Plate.from_params(p, name=name, maps=maps)
             for p, name in zip(params, self.class_names, strict=True)
@@ -73,7 +92,24 @@ class SlideStore:
         return bool(self.meta.get("complete")) or bool(self.checksums().all())
 
     def checksums(self) -> np.ndarray:
-        return self._checksum[:]
+        """Each slide's checksum (0: not written, or its checksum chunk is unreadable)."""
+        return read_checksums(self._checksum, self._where)[0]
+
+    def index_arrays(self) -> dict[str, np.ndarray]:
+        """The index arrays as stored (name -> values), e.g. to compare with a configuration."""
+        params = np.stack([self.params[k] for k in PARAM_NAMES], axis=1)
+        return {
+            "lengths": self.lengths,
+            "labels": self.labels,
+            "slide": self.slide_numbers,
+            "seed": self.seeds,
+            "params": params,
+        }
+
+    def check_against(self, expected: dict[str, np.ndarray]) -> None:
+        """Raise unless the index arrays equal ``expected`` (e.g. ``StoreSpec.index()`` of the
+        configuration derived again), naming the first array and slide that differ."""
+        compare_index(self.index_arrays(), expected, self._where)
 
     def __len__(self) -> int:
         return int(self.labels.shape[0])
@@ -84,16 +120,39 @@ class SlideStore:
             raise IndexError(f"slide index {i} out of range; valid: [{-n}, {n - 1}]")
         return int(i) % n
 
+    def _damaged(self, i: int, why: str) -> StoreError:
+        return StoreError(f"slide {i} of {self._where}: {why}; {SLIDE_HINT}")
+
+    def _sums(self, a: int, b: int) -> np.ndarray:
+        try:
+            return np.asarray(self._checksum[a:b], dtype=np.uint64)
+        except Exception:
+            sums, bad = read_checksums(self._checksum, self._where)
+            for i in range(a, b):
+                if i in bad:
+                    raise self._damaged(i, bad[i]) from None
+            return sums[a:b]
+
+    def _rows(self, a: int, b: int) -> np.ndarray:
+        """Slides ``a..b-1`` as stored ``(b - a, T, N)``, each checked against its checksum."""
+        sums = self._sums(a, b)
+        try:
+            x = np.asarray(self.data[a:b])
+        except Exception as exc:
+            if b - a == 1:
+                msg = " ".join(str(exc).split())[:120]
+                raise self._damaged(a, f"chunk unreadable ({type(exc).__name__}: {msg})") from None
+            for k in range(a, b):
+                self._rows(k, k + 1)  # raises naming the slide
+            raise
+        bad = rows_damage(x, self.lengths[a:b], sums, a, self._key)
+        if bad:
+            raise self._damaged(*bad)
+        return x
+
     def __getitem__(self, i: int) -> np.ndarray:
         i = self._index(i)
-        expected = int(self._checksum[i])
-        bad = check_slide(self.data, self.lengths, i, expected)
-        if bad:
-            raise StoreError(
-                f"slide {i} of {str(self.path)!r}: {bad}; 'sim-tactile generate ... --resume' "
-                f"writes it again"
-            )
-        return np.asarray(self.data[i, : int(self.lengths[i])])
+        return self._rows(i, i + 1)[0, : int(self.lengths[i])]
 
     def __iter__(self) -> Iterator[tuple[np.ndarray, int]]:
         for i in range(len(self)):
@@ -102,25 +161,33 @@ class SlideStore:
     def batches(self, size: int = 256) -> Iterator[tuple[np.ndarray, np.ndarray]]:
         """``(samples (b, T, N), labels (b,))`` for consecutive slides, ``size`` at a time
         (one read per batch; the slides must have one length)."""
-        sums = self.checksums()
+        if (self.lengths != self.data.shape[1]).any():
+            raise StoreError("batches needs slides of one length; index slides instead")
         for a in range(0, len(self), size):
             b = min(a + size, len(self))
-            x = np.asarray(self.data[a:b])
-            for k in range(a, b):
-                if int(sums[k]) == 0 or slide_digest(x[k - a, : self.lengths[k]]) != sums[k]:
-                    self[k]  # raises with the reason
-            if (self.lengths[a:b] != x.shape[1]).any():
-                raise StoreError("batches needs slides of one length; index slides instead")
-            yield x, self.labels[a:b].copy()
+            yield self._rows(a, b), self.labels[a:b].copy()
+
+    def padded_batches(self, size: int = 256) -> Iterator[tuple[int, np.ndarray]]:
+        """``(first slide, samples (b, T, N))``, NaN past each slide's length: every slide,
+        checked, ``size`` at a time (what exports copy)."""
+        for a in range(0, len(self), size):
+            yield a, self._rows(a, min(a + size, len(self)))
 
     def verify(self) -> list[tuple[int, str]]:
-        """``(slide, reason)`` of every slide that is absent or fails its checksum."""
-        sums = self.checksums()
+        """Check the whole data set as it is on disk now: the attributes, the arrays'
+        metadata, the index arrays and the plate maps (a fault there raises
+        :class:`StoreError`), then every slide; returns ``(slide, reason)`` of every slide
+        that is absent or fails its checksum."""
+        dg = open_data(self.group, self.path, self._where)
+        if dg.damage:
+            raise damaged_index(self._where, dg.damage)
+        plate_maps(self.group, dg.attrs, self._where)
+        sums, bad = read_checksums(self._checksum, self._where)
         out = []
         for i in range(len(self)):
-            bad = check_slide(self.data, self.lengths, i, int(sums[i]))
-            if bad:
-                out.append((i, bad))
+            why = bad.get(i) or check_slide(self.data, self.lengths, i, int(sums[i]), self._key)
+            if why:
+                out.append((i, why))
         return out
 
     def recording(self, i: int) -> Recording:
@@ -143,19 +210,31 @@ class SlideStore:
         }
         return Recording(x, (np.arange(x.shape[0]) + 0.5) / self.rate_hz, pos, self.units, meta)
 
+    def missing(self) -> int:
+        """The number of slides not written (or whose checksum chunk is unreadable)."""
+        return int((self.checksums() == 0).sum())
+
+    def require_complete(self, what: str = "") -> None:
+        """Raise unless every slide is written (naming a slide whose checksum chunk is
+        unreadable, else how many are missing)."""
+        sums, bad = read_checksums(self._checksum, self._where)
+        for i, why in bad.items():
+            raise self._damaged(i, why)
+        missing = int((sums == 0).sum())
+        if missing:
+            raise StoreError(
+                f"{self._where} is incomplete: {missing} of {len(self)} slides are not "
+                f"written; finish it with 'sim-tactile generate ... --resume'{what}"
+            )
+
     def to_tactile(self) -> TactileDataset:
         """The whole data set in memory, as the classifiers and protocols take it."""
         if len(set(self.lengths.tolist())) != 1:
             raise StoreError(
-                f"{str(self.path)!r}: slides of several lengths ({sorted(set(self.lengths))}); "
+                f"{self._where}: slides of several lengths ({sorted(set(self.lengths))}); "
                 "a TactileDataset needs one length: crop them first"
             )
-        missing = int((self.checksums() == 0).sum())
-        if missing:
-            raise StoreError(
-                f"{str(self.path)!r} is incomplete: {missing} of {len(self)} slides are not "
-                "written; finish it with 'sim-tactile generate ... --resume'"
-            )
+        self.require_complete()
         x = np.concatenate([b for b, _ in self.batches()]) if len(self) else None
         meta = dict(self.meta.get("dataset_meta") or {})
         meta.update(
@@ -182,7 +261,7 @@ class SlideStore:
             "path": str(self.path),
             "name": self.meta.get("name"),
             "slides": len(self),
-            "written": int((self.checksums() != 0).sum()),
+            "written": len(self) - self.missing(),
             "config_hash": self.config_hash,
             "classes": list(self.class_names),
             "channels": len(self.channel_names),
@@ -217,4 +296,6 @@ def open_store(path: str | Path, part: str | None = None) -> SlideStore:
         raise StoreError(
             f"{str(path)!r} has no part {part!r}; valid: {', '.join(parts) or '(none)'}"
         )
-    return SlideStore(root[part], path / part)
+    with reading(repr(str(path / part)), "its zarr.json"):
+        group = root[part]
+    return SlideStore(group, path / part)

@@ -1,5 +1,6 @@
 """Data sets of slides in a Zarr store: the layout, and writing one slide at a time
-(:mod:`.reader` reads them lazily, :mod:`.export` writes recordings in and plain files out).
+(:mod:`.reader` reads them lazily, :mod:`.export` writes recordings in and plain files out,
+:mod:`.integrity` checks what is read, :mod:`.fs` keeps one writer at a time).
 
 Layout of one data set (a Zarr v3 group: the store's root, or one group per part of a suite
 such as ``textures20-v1``)::
@@ -13,7 +14,9 @@ such as ``textures20-v1``)::
     params     float64 (slides, 3)     the drawn speed [m/s], force [N] and offset [m]
 
 and as attributes the whole configuration, its hash, the version of the simulating code,
-package versions, class / channel names, rate, units, taxel positions and ``complete``.
+package versions, class / channel names, rate, units, taxel positions, ``complete``, and
+the digests that every reader checks (:mod:`.integrity`: of the attributes themselves, of
+each array's ``zarr.json`` and of the index arrays' values).
 
 Why a padded array with ``lengths`` rather than a group per slide: one array per quantity
 keeps the store to a handful of metadata files whatever its size (a group per slide would be
@@ -25,29 +28,65 @@ layout valid for data sets whose slides differ.
 A slide is complete when its ``checksum`` chunk exists: the writer writes the data chunk and
 then the checksum (each chunk file is written atomically by Zarr's local store), so a run
 killed at any point leaves every slide either whole or absent. The checksum (the first 8
-bytes of the SHA-256 of the slide's samples) also finds a chunk that was later truncated or
-altered: every read verifies it.
+bytes of the SHA-256 of the slide's samples, its index and the configuration's hash) also
+finds a chunk that was later truncated, altered or moved: every read verifies it.
+
+A store is made under a fresh temporary name beside it and renamed when whole, by a writer
+holding the store's lock (:class:`~.fs.StoreLock`).
 """
 
 from __future__ import annotations
 
-import hashlib
 import platform
 import shutil
 import sys
 from dataclasses import dataclass, field
+from glob import escape
 from pathlib import Path
 
 import numpy as np
 
 from .. import __version__
 from ..errors import MissingDependencyError, StoreError
-from ..hashing import content_hash
+from .fs import fs_errors, take, temp_name
+from .integrity import (
+    FORMAT,
+    FORMAT_VERSION,
+    INDEX_DTYPES,
+    PARAM_NAMES,
+    REMAKE_HINT,
+    check_arrays,
+    check_data_attrs,
+    check_files,
+    check_root_attrs,
+    chunk_files,
+    config_hash,
+    file_digest,
+    index_values,
+    reading,
+    sealed,
+    slide_digest,
+    values_digest,
+)
 
-FORMAT = "sim_tactile.slides"
-FORMAT_VERSION = 1
-#: the columns of ``params``: as drawn for each slide (NaN for measured data)
-PARAM_NAMES = ("speed_m_s", "force_n", "offset_y_m")
+__all__ = [
+    "FORMAT",
+    "FORMAT_VERSION",
+    "PARAM_NAMES",
+    "DataGroup",
+    "SlideWriter",
+    "StoreSpec",
+    "check_slide",
+    "config_hash",
+    "create_store",
+    "open_data",
+    "open_root",
+    "plate_maps",
+    "read_checksums",
+    "set_attrs",
+    "slide_digest",
+]
+
 #: per-slide arrays written when the store is created (chunks of this many slides)
 _INDEX_CHUNK = 65536
 
@@ -58,19 +97,6 @@ def zarr_module():
     except ImportError as exc:  # pragma: no cover - zarr is a runtime dependency
         raise MissingDependencyError("zarr is needed for data sets: pip install zarr") from exc
     return zarr
-
-
-def config_hash(config: dict) -> str:
-    """The content hash (16 hex digits) of a configuration."""
-    return content_hash(config, 16)
-
-
-def slide_digest(x: np.ndarray) -> int:
-    """The checksum of one slide's samples: never 0 (0 marks an absent slide)."""
-    x = np.ascontiguousarray(x, dtype="<f4")
-    h = hashlib.sha256(repr(x.shape).encode())
-    h.update(x.tobytes())
-    return int.from_bytes(h.digest()[:8], "little") or 1
 
 
 def versions() -> dict:
@@ -124,6 +150,12 @@ class StoreSpec:
     def hash(self) -> str:
         return config_hash(self.config)
 
+    def index(self) -> dict[str, np.ndarray]:
+        """The index arrays as the store holds them (name -> values)."""
+        cols = (self.lengths, self.labels, self.slide, self.seeds, self.params)
+        pairs = zip(INDEX_DTYPES.items(), cols, strict=True)
+        return {k: np.asarray(v).astype(t) for (k, t), v in pairs}
+
     def attrs(self) -> dict:
         pos = self.taxel_positions
         return {
@@ -149,61 +181,104 @@ class StoreSpec:
         }
 
 
-def _create_group(root, path: str, spec: StoreSpec) -> None:
+def _create_group(root, folder: Path, path: str, spec: StoreSpec) -> None:
     g = root.create_group(path) if path else root
     n, t, c = spec.n_slides, spec.n_time, len(spec.channel_names)
     idx = (min(n, _INDEX_CHUNK),)
-
-    def arr(name, values, dtype, chunks=idx, fill=0):
-        a = g.create_array(name, shape=values.shape, dtype=dtype, chunks=chunks, fill_value=fill)
-        a[...] = values
-        return a
-
     g.create_array("data", shape=(n, t, c), dtype="float32", chunks=(1, t, c), fill_value=np.nan)
     # 8 bytes a chunk: compressing them would only cost time
     g.create_array(
         "checksum", shape=(n,), dtype="uint64", chunks=(1,), fill_value=0, compressors=None
     )
-    arr("lengths", spec.lengths.astype(np.int64), "int64")
-    arr("labels", spec.labels.astype(np.int64), "int64")
-    arr("slide", spec.slide.astype(np.int64), "int64")
-    arr("seed", spec.seeds.astype(np.uint64), "uint64")
-    arr("params", spec.params.astype(np.float64), "float64", (idx[0], len(PARAM_NAMES)), np.nan)
+    values = spec.index()
+    for name, x in values.items():
+        chunks = (idx[0], len(PARAM_NAMES)) if x.ndim == 2 else idx
+        fill = np.nan if x.dtype.kind == "f" else 0
+        g.create_array(name, shape=x.shape, dtype=x.dtype, chunks=chunks, fill_value=fill)[...] = x
+    names = ["data", "checksum", *values]
     if spec.plate_maps:
         maps = g.create_group("plate_maps")
+        names.append("plate_maps")
         for sha, z in sorted(spec.plate_maps.items()):
-            a = maps.create_array(sha, shape=z.shape, dtype="float64", fill_value=np.nan)
-            a[...] = z
-    g.attrs.update(spec.attrs())
+            z = np.asarray(z, dtype=np.float64)
+            maps.create_array(sha, shape=z.shape, dtype="float64", fill_value=np.nan)[...] = z
+            values[f"plate_maps/{sha}"] = z
+            names.append(f"plate_maps/{sha}")
+    here = folder / path if path else folder
+    files = {f"{k}/zarr.json": file_digest(here / k / "zarr.json") for k in names}
+    for k in INDEX_DTYPES:
+        files.update(chunk_files(here, k))
+    integrity = {"files": files, "values": {k: values_digest(x) for k, x in values.items()}}
+    g.attrs.put(sealed({**spec.attrs(), "integrity": integrity}))
 
 
 def create_store(path: str | Path, specs: dict[str, StoreSpec], root_attrs: dict) -> None:
     """Create the store at ``path`` (which must not exist) with a group per spec (key ``""``:
-    the root itself). Built under a temporary name and renamed: a store either exists whole
-    or not at all."""
+    the root itself). Built under a fresh temporary name beside it and renamed: a store
+    either exists whole or not at all, and is refused if ``path`` appeared meanwhile. The
+    caller holds the store's lock (:class:`~.fs.StoreLock`): any temporary folder of this
+    store still there is a dead writer's, and is removed."""
     zarr = zarr_module()
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.creating")
-    shutil.rmtree(tmp, ignore_errors=True)
-    tmp.parent.mkdir(parents=True, exist_ok=True)
-    root = zarr.open_group(str(tmp), mode="w")
-    for name, spec in specs.items():
-        _create_group(root, name, spec)
-    if "" not in specs:
-        root.attrs.update({"format": FORMAT, "format_version": FORMAT_VERSION, **root_attrs})
-    else:
-        root.attrs.update(root_attrs)
-    tmp.rename(path)
+    with fs_errors(path):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        for stale in path.parent.glob(f".{escape(path.name)}.*.creating"):
+            shutil.rmtree(stale, ignore_errors=True)
+    tmp = temp_name(path, "creating")
+    try:
+        with fs_errors(path):
+            root = zarr.open_group(str(tmp), mode="w-")
+            for name, spec in specs.items():
+                _create_group(root, tmp, name, spec)
+            if "" not in specs:
+                base = {"format": FORMAT, "format_version": FORMAT_VERSION}
+                root.attrs.put(sealed({**base, **root_attrs}))
+            else:
+                root.attrs.put(sealed({**root.attrs.asdict(), **root_attrs}))
+            take(tmp, path)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def set_attrs(group, updates: dict, where: str | Path) -> None:
+    """Update a group's attributes and their digest in one atomic write of its zarr.json."""
+    with fs_errors(where):
+        group.attrs.put(sealed({**group.attrs.asdict(), **updates}))
+
+
+def read_checksums(arr, where: str) -> tuple[np.ndarray, dict[int, str]]:
+    """The ``checksum`` array's values (0: absent) and ``{slide: damage}`` for chunks that
+    cannot be read (their value reads as 0)."""
+    try:
+        return np.asarray(arr[:], dtype=np.uint64), {}
+    except Exception:  # a damaged chunk: read them one at a time to say which
+        pass
+    n = arr.shape[0]
+    out, bad = np.zeros(n, np.uint64), {}
+    for i in range(n):
+        try:
+            out[i] = arr[i]
+        except Exception as exc:
+            bad[i] = f"its checksum chunk cannot be read ({type(exc).__name__})"
+    return out, bad
 
 
 class SlideWriter:
-    """Writes slides into a data set's group (one process writes; workers only simulate)."""
+    """Writes slides into a data set's group (one process writes; workers only simulate).
+    ``where``: the store's path as the user named it, ``hint``: what to do when the file
+    system refuses a write (for messages)."""
 
-    def __init__(self, group) -> None:
+    def __init__(
+        self, group, where: str | Path, lengths: np.ndarray | None = None, hint: str = ""
+    ) -> None:
         self.group = group
+        self.where = str(where)
+        self.hint = hint
+        self.key = str(group.attrs["config_hash"])
         self.data = group["data"]
         self.checksum = group["checksum"]
-        self.lengths = group["lengths"][:]
+        self.lengths = group["lengths"][:] if lengths is None else lengths
         self.n_time, self.n_channels = self.data.shape[1:]
 
     def write(self, i: int, x: np.ndarray) -> None:
@@ -219,54 +294,112 @@ class SlideWriter:
         if want[0] < self.n_time:  # pad a shorter slide with the fill value
             row = np.full((self.n_time, self.n_channels), np.nan, np.float32)
             row[: want[0]] = x
-        self.data[i] = row  # the data chunk first...
-        self.checksum[i] = np.uint64(slide_digest(x))  # ...then the mark that it is whole
+        with fs_errors(self.where, self.hint):
+            self.data[i] = row  # the data chunk first...
+            self.checksum[i] = np.uint64(slide_digest(x, i, self.key))  # ...then its mark
 
     def clear(self, i: int) -> None:
         """Mark slide ``i`` absent (before it is written again)."""
-        self.checksum[i] = np.uint64(0)
+        with fs_errors(self.where, self.hint):
+            self.checksum[i] = np.uint64(0)
 
-    def done(self) -> np.ndarray:
-        """Boolean mask of the slides whose checksum is written."""
-        return self.checksum[:] != 0
+    def done(self) -> tuple[np.ndarray, dict[int, str]]:
+        """Boolean mask of the slides whose checksum is written, and the slides whose
+        checksum chunk cannot be read (``{slide: damage}``; not in the mask)."""
+        sums, bad = read_checksums(self.checksum, self.where)
+        return sums != 0, bad
 
-    def check(self, i: int, expected: int | None = None) -> str | None:
+    def check(self, i: int) -> str | None:
         """None if slide ``i`` reads back with its checksum, else why not."""
-        return check_slide(self.data, self.lengths, i, expected or int(self.checksum[i]))
+        try:
+            expected = int(self.checksum[i])
+        except Exception as exc:
+            return f"its checksum chunk cannot be read ({type(exc).__name__})"
+        return check_slide(self.data, self.lengths, i, expected, self.key)
 
 
-def check_slide(data, lengths, i: int, expected: int) -> str | None:
+def check_slide(data, lengths, i: int, expected: int, key: str) -> str | None:
+    """None if slide ``i`` of ``data`` matches ``expected`` (its checksum), else why not."""
     if expected == 0:
         return "not written"
     try:
         row = np.asarray(data[i])
     except Exception as exc:  # a truncated or garbled chunk fails to decode
-        return f"chunk unreadable ({type(exc).__name__}: {str(exc)[:120]})"
-    x = row[: int(lengths[i])]
-    if slide_digest(x) != expected:
-        return "checksum mismatch (the chunk was altered or truncated)"
+        return f"chunk unreadable ({type(exc).__name__}: {' '.join(str(exc).split())[:120]})"
+    bad = rows_damage(row[None], lengths[i : i + 1], [expected], i, key)
+    return None if bad is None else bad[1]
+
+
+def rows_damage(
+    rows: np.ndarray, lengths, expected, start: int, key: str
+) -> tuple[int, str] | None:
+    """None if every row of ``rows`` (slides ``start...``) matches its checksum in
+    ``expected``, else ``(slide, why not)`` of the first that does not."""
+    for k in range(rows.shape[0]):
+        want = int(expected[k])
+        if want == 0:
+            return start + k, "not written"
+        if slide_digest(rows[k, : int(lengths[k])], start + k, key) != want:
+            return start + k, "checksum mismatch (the chunk was altered, truncated or moved)"
     return None
 
 
 def open_root(path: str | Path, mode: str = "r"):
     """The store's root group at ``path``, checked to be a sim_tactile data set of this
-    format version."""
+    format version whose attributes match their digest."""
     zarr = zarr_module()
     path = Path(path)
-    if not (path / "zarr.json").is_file():
+    if not path.is_dir() or not (path / "zarr.json").is_file():
         raise StoreError(f"{str(path)!r} is not a Zarr store (no zarr.json)")
-    root = zarr.open_group(str(path), mode=mode)
-    if root.attrs.get("format") != FORMAT:
-        raise StoreError(f"{str(path)!r} is a Zarr store but not a sim_tactile data set")
-    v = root.attrs.get("format_version")
-    if v != FORMAT_VERSION:
-        raise StoreError(f"{str(path)!r} has format version {v}; this code reads {FORMAT_VERSION}")
+    where = repr(str(path))
+    with reading(where, "its zarr.json"):
+        root = zarr.open_group(str(path), mode=mode)
+        attrs = root.attrs.asdict()
+    check_root_attrs(attrs, where)
     return root
 
 
-def plate_maps(group) -> dict[str, np.ndarray]:
-    """The height-map plates' samples a data set's group holds, by SHA-256."""
-    if "plate_maps" not in group:
-        return {}
-    maps = group["plate_maps"]
-    return {name: maps[name][...] for name in sorted(maps.array_keys())}
+@dataclass
+class DataGroup:
+    """A data set's group, checked: attributes, arrays, index values (and what of those is
+    damaged: ``{array: damage}``)."""
+
+    group: object
+    attrs: dict
+    arrays: dict
+    index: dict
+    damage: dict
+
+
+def open_data(group, folder: Path, where: str) -> DataGroup:
+    """Check a data set's group (in the folder ``folder``): its attributes against their
+    digest, types and ranges, its arrays' metadata files and layout, and its index arrays'
+    values (damage there is reported in ``damage``, not raised: ``--resume`` writes them
+    again)."""
+    with reading(where, "its zarr.json"):
+        attrs = group.attrs.asdict()
+    if attrs.get("format") != FORMAT:
+        raise StoreError(f"{where} holds no sim_tactile data set")
+    check_data_attrs(attrs, where)
+    damage = check_files(folder, attrs, where)
+    arrays = check_arrays(group, attrs, where)
+    index, bad_values = index_values(arrays, attrs, where)
+    return DataGroup(group, attrs, arrays, index, {**damage, **bad_values})
+
+
+def plate_maps(group, attrs: dict | None = None, where: str = "the store") -> dict[str, np.ndarray]:
+    """The height-map plates' samples a data set's group holds, by SHA-256, each checked
+    against the digest the store recorded."""
+    with reading(where, "its plate maps"):
+        if "plate_maps" not in group:
+            return {}
+        maps = group["plate_maps"]
+        out = {name: maps[name][...] for name in sorted(maps.array_keys())}
+    digests = (attrs or group.attrs.asdict())["integrity"]["values"]
+    for name, z in out.items():
+        if digests.get(f"plate_maps/{name}") != values_digest(z):
+            raise StoreError(
+                f"{where}: the plate map {name} does not match its digest (altered or "
+                f"damaged); {REMAKE_HINT}"
+            )
+    return out

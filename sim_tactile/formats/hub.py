@@ -17,13 +17,13 @@ task the store was generated for (repeat 0 of its protocol, with the store's see
 The columns' types are ``datasets.Features`` (its Arrow schema, written with pyarrow), so
 ``datasets.load_dataset("parquet", data_dir=...)`` or ``load_dataset(DIR)`` restores the class
 names; the Croissant file is built with ``mlcroissant``. Everything is written into a
-temporary folder beside ``DIR`` and renamed at the end: a failure leaves nothing behind.
+temporary folder beside ``DIR`` and renamed at the end (as the numpy export is): a
+failure leaves nothing behind.
 """
 
 from __future__ import annotations
 
 import json
-import shutil
 from collections.abc import Callable
 from pathlib import Path
 
@@ -32,7 +32,8 @@ import numpy as np
 from .. import __version__
 from ..datasets import SlideStore, open_store, parts_of
 from ..datasets.store import PARAM_NAMES
-from ..errors import OutputError, StoreError, os_error_message, require
+from ..datasets.fs import building
+from ..errors import StoreError, require
 from ._source import Source
 from .card import card_text, croissant_metadata
 
@@ -59,15 +60,6 @@ def _features(n_channels: int, class_names) -> object:
 def _check_out(out: Path) -> None:
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise StoreError(f"--out {str(out)!r} exists and is not an empty folder")
-
-
-def _complete(st: SlideStore) -> None:
-    missing = int((st.checksums() == 0).sum())
-    if missing:
-        raise StoreError(
-            f"{str(st.path)!r} is incomplete ({missing} of {len(st)} slides missing); finish it "
-            "with 'sim-tactile generate ... --resume' before exporting"
-        )
 
 
 def _splits(st: SlideStore) -> dict[str, np.ndarray]:
@@ -101,7 +93,6 @@ def _table(st: SlideStore, features, idx: np.ndarray):
 def _write_config(st: SlideStore, root: Path, config: str, rows: int | None, log) -> dict:
     """One configuration's shards; returns what the card and the Croissant file need."""
     pq = require("pyarrow.parquet", EXTRA)
-    _complete(st)
     features = _features(len(st.channel_names), st.class_names)
     t_max = int(st.lengths.max()) if len(st) else 0
     per_shard = rows or max(1, SHARD_BYTES // max(1, 4 * t_max * len(st.channel_names)))
@@ -145,23 +136,13 @@ def export_parquet(
     parts = parts_of(path)
     names = [part] if part is not None else (parts or [None])
     stores = [(p or "default", open_store(path, p)) for p in names]
-    tmp = out.parent / f".{out.name}.partial"
-    if tmp.exists():
-        shutil.rmtree(tmp)
-    try:
-        tmp.mkdir(parents=True)
+    for _, st in stores:
+        st.require_complete(" before exporting")
+    with building(out) as tmp:  # renamed to ``out`` when whole; removed on any failure
         infos = [_write_config(st, tmp, name, rows_per_shard, log) for name, st in stores]
         (tmp / "README.md").write_text(card_text(infos, __version__))
         doc = croissant_metadata(infos, tmp, __version__)
         (tmp / "croissant.json").write_text(json.dumps(doc, indent=1) + "\n")
-        if out.exists():
-            out.rmdir()  # the empty folder the user named
-        tmp.rename(out)
-    except BaseException as exc:  # Ctrl-C too: nothing is left behind
-        shutil.rmtree(tmp, ignore_errors=True)
-        if isinstance(exc, OSError):
-            raise OutputError(os_error_message(exc, out)) from exc
-        raise
     files = [f for i in infos for s in i["splits"].values() for f in s["files"]]
     return {
         "out": str(out),

@@ -20,6 +20,7 @@ from sklearn.pipeline import Pipeline
 
 from .. import __version__
 from .._validate import integer
+from ..datasets.fs import no_empty_folders_left, write_faults
 from ..datasets.reader import open_store, parts_of
 from ..errors import ConfigError, StoreError, require
 from ..hashing import derive_seed
@@ -29,7 +30,7 @@ from ..learn.protocols import EvalResult, evaluate
 from ..records import TactileDataset
 from ..sensors.calibration import load_calibration
 from ..slides import SlideSet
-from ..slides.plan import task_slide_config
+from ..slides.plan import slide_plan, task_slide_config
 from .config_task import PREFIX as CONFIG_PREFIX
 from .config_task import config_task, is_config_path
 from .figures import write_figures
@@ -103,13 +104,14 @@ def _run_context(ctx: LearnContext, run: Run, cols, ds) -> LearnContext:
 def task_data(spec: TaskSpec, req: DataRequest) -> TactileDataset:
     """The task's data set: ``spec.get_data(req)``, or, with ``req.store``, the store's data
     set after checking that it was generated for this task with the same quick flag and seed
-    (and, for simulated tasks, the same configuration and slide code)."""
+    (and, for simulated tasks, the same configuration and slide code, and the labels, slide
+    numbers, seeds and drawn parameters that configuration gives, derived again here)."""
     if req.store is None:
         return spec.get_data(req)
     path = req.store
     st = open_store(path, spec.id if spec.id in parts_of(path) else None)
     cfg = st.config
-    task = None if spec.id.startswith(CONFIG_PREFIX) else spec.id
+    task = None if spec.id.startswith(CONFIG_PREFIX) else spec.id  # a file's: no task
     if cfg.get("task") != task or bool(cfg.get("quick")) != req.quick:
         raise StoreError(
             f"{st.path} holds {cfg.get('task') or 'a configuration file'}'s "
@@ -118,7 +120,6 @@ def task_data(spec: TaskSpec, req: DataRequest) -> TactileDataset:
             f"{spec.id}{' --quick' if req.quick else ''} --out DIR.zarr'"
         )
     if isinstance(spec.get_data, SlideSet):
-        task = None if spec.id.startswith(CONFIG_PREFIX) else spec.id  # a file's: no task
         want, code = task_slide_config(spec.get_data, task, req.quick, req.seed)
         if st.config_hash != want:
             raise StoreError(
@@ -130,6 +131,8 @@ def task_data(spec: TaskSpec, req: DataRequest) -> TactileDataset:
                 f"{st.path} was simulated by another version of the simulating code "
                 f"({st.meta.get('code_version')}, now {code}); generate it again"
             )
+        plan = slide_plan(spec.get_data, quick=req.quick, seed=req.seed, task=task, name=spec.id)
+        st.check_against(plan.spec.index())
     req.log(f"{spec.id}: reading {len(st)} slides from {st.path} ({st.config_hash})")
     return st.to_tactile()
 
@@ -210,6 +213,26 @@ def run_task(
         methods: the user's methods, name -> estimator or (encoder, estimator)
             (:mod:`.methods`), scored beside the built-in rows.
     """
+    # a failed run leaves no empty --out behind; a full or read-only disk is one line
+    with no_empty_folders_left(Path(out_dir)), write_faults(Path(out_dir)):
+        return _run_task(
+            task_id,
+            out_dir,
+            quick,
+            data,
+            classifiers,
+            repeats,
+            seed,
+            log,
+            store,
+            sensor_config,
+            methods,
+        )
+
+
+def _run_task(
+    task_id, out_dir, quick, data, classifiers, repeats, seed, log, store, sensor_config, methods
+) -> dict:
     t_start = time.perf_counter()
     log = log or stderr_log
     if is_config_path(task_id):

@@ -1,0 +1,229 @@
+"""The file system under a store: one writer at a time (:class:`StoreLock`), folders built
+under a temporary name and renamed when whole (:func:`building`, :func:`take`), no empty
+folder left by a failed command (:func:`no_empty_folders_left`), and the operating system's
+faults as one line each (:func:`io_error`, :func:`fs_errors`, :func:`write_faults`).
+
+The lock is an advisory ``flock`` on a file beside the store (``.NAME.lock`` in the store's
+parent folder, holding the writer's pid, host and start time): it exists before the store
+does, so one lock covers creating, resuming and finishing a store. The kernel drops it when
+its holder dies, however it dies, so a lock file left behind by ``kill -9`` is no lock. A
+second writer is refused at once, told who holds it.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import shutil
+import socket
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from datetime import UTC, datetime
+from pathlib import Path
+
+from ..errors import StoreError
+
+_NO_SPACE = (errno.ENOSPC, errno.EDQUOT)
+_READ_ONLY = (errno.EROFS, errno.EACCES, errno.EPERM)
+
+
+def io_error(exc: OSError, path: str | Path, hint: str = "") -> StoreError:
+    """``exc`` (raised writing under ``path``) as one line naming ``path`` (and ``hint``)."""
+    if exc.errno in _NO_SPACE:
+        msg = f"no space left on device writing {path}"
+    elif exc.errno in _READ_ONLY:
+        msg = f"{path} is read-only (cannot write there)"
+    else:
+        msg = f"cannot write {path}: {exc.strerror or exc}"
+    return StoreError(f"{msg}; {hint}" if hint else msg)
+
+
+@contextmanager
+def fs_errors(path: str | Path, hint: str = "") -> Iterator[None]:
+    """Turn an :class:`OSError` from the file system into a :class:`StoreError` naming
+    ``path`` (the user's name for the store or folder being written)."""
+    try:
+        yield
+    except OSError as exc:
+        raise io_error(exc, path, hint) from None
+
+
+@contextmanager
+def write_faults(folder: Path) -> Iterator[None]:
+    """A full disk or a read-only file system met writing under ``folder`` as one
+    :class:`StoreError` naming ``folder``; every other error passes unchanged."""
+    try:
+        yield
+    except OSError as exc:
+        name = exc.filename
+        inside = name is None or Path(os.path.abspath(name)).is_relative_to(folder.absolute())
+        if exc.errno in _NO_SPACE + _READ_ONLY and inside:
+            raise io_error(exc, folder) from None
+        raise
+
+
+def temp_name(path: Path, what: str) -> Path:
+    """A fresh hidden name beside ``path`` (same folder, so a rename is atomic)."""
+    return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.{what}")
+
+
+def take(tmp: Path, out: Path) -> None:
+    """Rename the folder ``tmp`` to ``out`` (atomic; ``out`` may be an empty folder, which
+    it replaces); refused if ``out`` appeared meanwhile as anything else."""
+    try:
+        os.rename(tmp, out)
+    except OSError as exc:
+        if exc.errno in (errno.ENOTEMPTY, errno.EEXIST, errno.ENOTDIR, errno.EISDIR):
+            raise StoreError(
+                f"{out} appeared while this was written (another process?); it was left as "
+                "it is: choose another path"
+            ) from None
+        raise
+
+
+@contextmanager
+def no_empty_folders_left(path: Path) -> Iterator[None]:
+    """On any failure inside the block, remove ``path`` and its parents that the block made,
+    where they are empty (innermost first): a failed command leaves no empty folder it
+    created. Folders holding files are kept."""
+    made = [p for p in (path, *path.parents) if not p.exists()]
+    try:
+        yield
+    except BaseException:
+        for p in made:
+            try:
+                p.rmdir()
+            except FileNotFoundError:
+                continue
+            except OSError:  # not empty: it, and every folder above it, is kept
+                break
+        raise
+
+
+@contextmanager
+def building(out: Path) -> Iterator[Path]:
+    """A temporary folder beside ``out`` to write into; renamed to ``out`` when the block
+    ends without an error (``out`` may exist only as an empty folder). On any failure the
+    temporary folder, and every parent folder this call made, is removed: nothing is left
+    behind. OS faults become one-line :class:`StoreError` naming ``out``."""
+    tmp = temp_name(out, "partial")
+    with no_empty_folders_left(out.parent):
+        try:
+            with fs_errors(out):
+                out.parent.mkdir(parents=True, exist_ok=True)
+                tmp.mkdir()
+                yield tmp
+                take(tmp, out)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+
+
+def lock_path(store: Path) -> Path:
+    return store.with_name(f".{store.name}.lock")
+
+
+def _holder(fd: int) -> str:
+    try:
+        doc = json.loads(os.pread(fd, 4096, 0) or b"{}")
+        return f"pid {doc['pid']} on {doc['host']}, since {doc['since']}"
+    except (OSError, ValueError, KeyError, TypeError):
+        return "another process"
+
+
+def _refused(store: Path, fd: int) -> StoreError:
+    return StoreError(
+        f"{store} is being written by another process ({_holder(fd)}); one writer at a time: "
+        "wait for it to finish (or stop it), then run again"
+    )
+
+
+class StoreLock:
+    """The lock of the store at ``store`` (a context manager): held for a whole write."""
+
+    def __init__(self, store: str | Path) -> None:
+        self.store = Path(store)
+        self.path = lock_path(self.store)
+        self.fd: int | None = None
+
+    @staticmethod
+    def probe(store: str | Path) -> None:
+        """Raise if another process holds the lock of ``store`` now (a quick early check
+        before slow set-up; :meth:`acquire` is what counts)."""
+        import fcntl
+
+        store = Path(store)
+        try:
+            fd = os.open(lock_path(store), os.O_RDONLY | os.O_CLOEXEC)
+        except OSError:
+            return  # no lock file: nobody holds it
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise _refused(store, fd) from None
+        except OSError:
+            pass  # a file system without locks: acquire() says so
+        finally:
+            os.close(fd)
+
+    def acquire(self) -> StoreLock:
+        import fcntl
+
+        with fs_errors(self.store):
+            self.store.parent.mkdir(parents=True, exist_ok=True)
+        while True:
+            with fs_errors(self.store):
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                err = _refused(self.store, fd)
+                os.close(fd)
+                raise err from None
+            except OSError as exc:
+                os.close(fd)
+                raise StoreError(
+                    f"cannot lock {self.store} ({exc.strerror}): its file system does not "
+                    "support file locks; write the store on a local disk"
+                ) from None
+            # the file may have been removed by the holder we waited on: lock the new one
+            try:
+                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            os.close(fd)
+        self.fd = fd
+        doc = {
+            "pid": os.getpid(),
+            "host": socket.gethostname(),
+            "since": datetime.now(UTC).isoformat(timespec="seconds"),
+        }
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, json.dumps(doc).encode(), 0)
+        except OSError:
+            pass  # who holds it is a courtesy: the lock itself is taken
+        return self
+
+    def release(self) -> None:
+        if self.fd is None:
+            return
+        import fcntl
+
+        try:
+            os.unlink(self.path)  # while still held: a waiter then finds it gone
+        except OSError:
+            pass
+        fcntl.flock(self.fd, fcntl.LOCK_UN)
+        os.close(self.fd)
+        self.fd = None
+
+    def __enter__(self) -> StoreLock:
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
