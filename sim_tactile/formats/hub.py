@@ -31,8 +31,8 @@ import numpy as np
 
 from .. import __version__
 from ..datasets import SlideStore, open_store, parts_of
-from ..datasets.store import PARAM_NAMES
 from ..datasets.fs import building
+from ..datasets.store import PARAM_NAMES
 from ..errors import StoreError, require
 from ._source import Source
 from .card import card_text, croissant_metadata
