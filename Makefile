@@ -21,7 +21,11 @@ $(STAMP_RUN): pyproject.toml | $(BIN)/python
 
 $(STAMP_TEST): pyproject.toml | $(BIN)/python
 	$(BIN)/pip install -q $(TORCH_PIN)
-	$(BIN)/pip install -q -e '.[test,learn,ray,docs]'
+	$(BIN)/pip install -q -e '.[test,learn,ray,docs,tonic,hub,nir,neurobench]'
+	# neurobench and norse (the tests' NIR consumer) declare torchaudio / torchvision, which
+	# have no wheel for the pinned torch: installed without their declared dependencies; the
+	# [neurobench] and [nir] extras above name what they import
+	$(BIN)/pip install -q --no-deps neurobench==2.3.0 norse==1.1.0
 	touch $@ $(STAMP_RUN)
 
 # the main job: the soft-finger paper's task in simulation, quick (about a minute here)

@@ -110,7 +110,9 @@ def package_table(package: str) -> list[str]:
     out.append("")
     for name in data:
         home, doc = data_doc(package, name)
-        out += [f".. py:data:: {package}.{name}", ""]
+        # the name relative to the package that automodule made current (a dotted name
+        # would be taken as relative to it too, and registered twice over)
+        out += [f".. py:data:: {name}", f"   :module: {package}", ""]
         out += [f"   {line}" if line else "" for line in doc]
         out += ["", f"   Defined in :py:mod:`{home}`.", ""]
     return out

@@ -4,6 +4,7 @@ tutorials run in their quick forms."""
 from __future__ import annotations
 
 import importlib
+import re
 import runpy
 import subprocess
 import sys
@@ -19,6 +20,82 @@ import _docstrings  # noqa: E402
 import _gen  # noqa: E402
 
 TUTORIALS = sorted((DOCS / "tutorials").glob("*.py"))
+#: the pages generated at build time (from the code), not written by hand
+GENERATED = (DOCS / "reference" / "api", DOCS / "reference" / "tasks")
+RESULTS = DOCS / "results"
+
+#: a commit: 7 to 12 hex digits in backticks, or bare with both letters and digits
+COMMIT = re.compile(r"`[0-9a-f]{7,12}`|\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,12}\b")
+#: a command a reader can run, and the machine it ran on
+COMMAND = re.compile(r"`(?:sim-tactile|python) [^`]+`")
+MACHINE = re.compile(r"\b\d+ cores?\b")
+
+
+def _pages() -> list[Path]:
+    return sorted(p for p in DOCS.rglob("*.md") if not any(p.is_relative_to(g) for g in GENERATED))
+
+
+def _tables(lines: list[str]) -> list[tuple[int, int]]:
+    """The (first, end) line indices of each Markdown table outside code fences."""
+    tables, start, fenced = [], None, False
+    for i, line in enumerate([*lines, ""]):
+        if line.lstrip().startswith("```"):
+            fenced = not fenced
+        is_row = not fenced and line.startswith("|")
+        if is_row and start is None:
+            start = i
+        elif not is_row and start is not None:
+            tables.append((start, i))
+            start = None
+    return tables
+
+
+def _header(lines: list[str], first: int) -> tuple[int, int]:
+    """The (first, end) line indices of the paragraph just above the line ``first``."""
+    end = first
+    while end > 0 and not lines[end - 1].strip():
+        end -= 1
+    start = end
+    while start > 0 and lines[start - 1].strip() and not lines[start - 1].startswith("#"):
+        start -= 1
+    return start, end
+
+
+def _cells(row: str) -> list[str]:
+    return [c.strip() for c in row.strip().strip("|").split("|")]
+
+
+def history_in_results_page(page: Path) -> list[str]:
+    """What breaks the results pages' rule: a table without a header paragraph that names
+    a command, a machine and a commit (its own, or a commit column's), and a commit named
+    anywhere but in such a header or a commit column."""
+    lines = page.read_text().splitlines()
+    allowed, faults = set(), []
+    for first, end in _tables(lines):
+        h0, h1 = _header(lines, first)
+        header = " ".join(lines[h0:h1])
+        columns = [i for i, c in enumerate(_cells(lines[first])) if "commit" in c.lower()]
+        if not (COMMAND.search(header) and MACHINE.search(header)):
+            faults.append(f"{page.name}:{first + 1}: no command and machine above the table")
+        if not (COMMIT.search(header) or columns):
+            faults.append(f"{page.name}:{first + 1}: no commit above the table or in a column")
+        allowed.update(range(h0, h1))
+        for i in range(first + 2, end):
+            cells = _cells(lines[i])
+            rest = [c for j, c in enumerate(cells) if j not in columns]
+            if any(COMMIT.search(c) for c in rest):
+                faults.append(f"{page.name}:{i + 1}: a commit outside the commit column")
+            if columns and not any(COMMIT.search(cells[j]) for j in columns if j < len(cells)):
+                faults.append(f"{page.name}:{i + 1}: a row without its commit")
+            allowed.add(i)
+    faults += [
+        f"{page.name}:{i + 1}: {m.group()}"
+        for i, line in enumerate(lines)
+        if i not in allowed
+        for m in [COMMIT.search(line)]
+        if m
+    ]
+    return faults
 
 
 @pytest.fixture(scope="module")
@@ -65,6 +142,45 @@ def test_the_manual_builds_and_documents_every_public_name(built):
     assert missing == []
     assert (built / "reference" / "tasks" / "finger7-v1.html").is_file()
     assert "ablate" in (built / "reference" / "cli.html").read_text()
+
+
+def test_no_page_outside_the_results_names_a_commit():
+    """History is in CHANGELOG.md and the commit messages, not in the manual."""
+    found = [
+        f"{p.relative_to(DOCS)}:{i}: {m.group()}"
+        for p in _pages()
+        if not p.is_relative_to(RESULTS)
+        for i, line in enumerate(p.read_text().splitlines(), 1)
+        for m in [COMMIT.search(line)]
+        if m
+    ]
+    assert found == []
+
+
+def test_each_results_table_says_its_command_machine_and_commit_once_above_it():
+    pages = sorted(RESULTS.glob("*.md"))
+    assert len(pages) >= 5
+    assert [f for p in pages for f in history_in_results_page(p)] == []
+
+
+def test_the_results_rule_finds_what_breaks_it(tmp_path):
+    table = ["| a | b |", "|---|---|", "| 1 | 2 |"]
+    good = ["Measured with `sim-tactile run x` on 2 cores at `abc1234`:", "", *table]
+    column = ["Measured with `python b.py` on 2 cores:", "", "| a | commit |", "|---|---|"]
+    cases = {
+        "good": (good, 0),
+        "column": ([*column, "| 1 | `abc1234` |"], 0),
+        "no header": (["# Title", "", *table], 2),
+        "no commit": (["With `python b.py` on 2 cores:", *table], 1),
+        "prose": ([*good, "", "It moved since `abc1234`."], 1),
+        "inline": ([*good[:2], *table[:2], "| 1 at 9f3e2d1 | 2 |"], 1),
+        "row without": ([*column, "| 1 | |"], 1),
+        "column title": ([*good[:2], "| at `abc1234` | b |", *table[1:]], 1),
+    }
+    for name, (text, faults) in cases.items():
+        page = tmp_path / f"{name}.md"
+        page.write_text("\n".join(text) + "\n")
+        assert len(history_in_results_page(page)) == faults, (name, history_in_results_page(page))
 
 
 def test_public_packages_are_found():

@@ -92,6 +92,31 @@ def test_a_kernel_follows_an_edit_of_a_jitted_callee_in_another_file(tmp_path):
     assert run() == {"value": 6.0, "hits": 1, "misses": 0}  # the new code is cached in turn
 
 
+_COUNT = """
+from sim_tactile.cli._common import kernels_to_compile
+print(kernels_to_compile(("sim_tactile._probe_caller",)))
+"""
+
+
+def test_the_first_run_notice_counts_a_stale_kernel_as_one_to_compile(tmp_path):
+    """The notice's count agrees with the versioned cache: a kernel whose cached copy numba
+    would not load (its callee in another file edited) is still to compile, although its
+    cache index exists."""
+    pkg = _copy_package(tmp_path, with_caches=False)
+    (pkg / "_probe_caller.py").write_text(_CALLER)
+    (pkg / "_probe_callee.py").write_text(_CALLEE.format(shift=1.0))
+    env = _env(pkg, tmp_path)
+
+    def count() -> int:
+        return int(_python(_COUNT, env, tmp_path))
+
+    fresh = count()  # nothing of the copy compiled yet (the package's other kernels too)
+    _python(_RUN, env, tmp_path)
+    assert count() == fresh - 2  # the caller and its callee, now on disk
+    (pkg / "_probe_callee.py").write_text(_CALLEE.format(shift=2.0))
+    assert count() == fresh  # both indexes are still on disk, and both are stale
+
+
 def test_the_stamp_follows_the_modules_a_kernel_imports():
     held = hashing.import_closure("sim_tactile.sim.step.held")
     assert "sim_tactile.sim.collide.shapes" in held  # through the collider

@@ -79,16 +79,19 @@ def test_the_wheel_runs_a_quick_task_in_a_fresh_environment(wheel, tmp_path):
             [str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"], text=True
         ).strip()
     )
-    # the dependencies: this interpreter's (a .pth file); the package: only the wheel's
+    # the dependencies: this interpreter's (a .pth file); the package: only the wheel's,
+    # installed into the new environment as its own pip would (pip --python), so that the
+    # console script runs the new interpreter; `pip install --target` would write this
+    # interpreter into its first line, and the command would import this checkout instead
+    # (--ignore-installed: a checkout that the .pth file or PYTHONPATH shows is not this one)
     (site / "deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
+    pip = [sys.executable, "-m", "pip", "--python", str(py), "install", "--no-deps"]
     subprocess.run(
-        [sys.executable, "-m", "pip", "install", "--no-deps", "--target", str(site), str(path)],
-        check=True,
-        capture_output=True,
+        [*pip, "--ignore-installed", str(path)], check=True, capture_output=True, env=env
     )
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
     env.update(
         SIM_TACTILE_CACHE=str(tmp_path / "cache"),
         MPLBACKEND="Agg",
@@ -101,10 +104,10 @@ def test_the_wheel_runs_a_quick_task_in_a_fresh_environment(wheel, tmp_path):
         text=True,
     )
     assert str(ROOT) not in where and str(site) in where
-    exe = site / "bin" / "sim-tactile"
-    cmd = [str(exe)] if exe.exists() else [str(py), "-m", "sim_tactile.cli"]
+    exe = venv / "bin" / "sim-tactile"
+    assert str(py) in exe.read_text()[:400]  # its first line: this environment's python
     proc = subprocess.run(
-        [*cmd, "run", "finger7-v1", "--quick", "--out", "out", "--json"],
+        [str(exe), "run", "finger7-v1", "--quick", "--out", "out", "--json"],
         cwd=elsewhere,
         env=env,
         capture_output=True,
@@ -114,4 +117,5 @@ def test_the_wheel_runs_a_quick_task_in_a_fresh_environment(wheel, tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     report = json.loads(proc.stdout)
     assert report["task"] == "finger7-v1" and report["results"]
+    assert "compiling the simulator's kernels once" in proc.stderr
     assert (elsewhere / "out" / "report.md").is_file()

@@ -35,13 +35,19 @@ def test_every_link_to_a_file_points_at_one():
             assert (root / target).exists(), target
 
 
-def test_every_number_of_the_task_table_is_on_the_results_page():
-    page = (README.parent / "docs" / "results" / "task-runs.md").read_text()
+def test_every_number_of_the_task_table_is_on_the_results_page_with_its_commit():
+    """Each README row's numbers stand in a row of the task results page for the same task,
+    and that row names its commit (its command is the page's, with the row's options)."""
+    page = (README.parent / "docs" / "results" / "task-runs.md").read_text().splitlines()
+    commit = re.compile(r"`[0-9a-f]{7,12}`")
     table = [line for line in LINES if line.startswith("| `")]
     assert len(table) >= 10
     for line in table:
+        task = line.split("|")[1].strip()  # `finger7-v1`
+        rows = [r for r in page if r.startswith(f"| {task}") and commit.search(r)]
+        assert rows, f"no row of {task} with its commit on the results page"
         for number in re.findall(r"\b0\.\d{3}\b", line):
-            assert number in page, (number, line)
+            assert any(number in r for r in rows), (number, line)
 
 
 @pytest.mark.slow

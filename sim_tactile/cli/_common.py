@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
+import pickle  # only for its error: numba reads its own cache index with it
 import sys
 from collections.abc import Callable, Sequence
 
@@ -77,8 +77,10 @@ COMPILE_NOTICE = (
 
 
 def kernels_to_compile(modules: Sequence[str] = ("sim_tactile.sim.slide",)) -> int | None:
-    """How many of the compiled kernels that ``modules`` load have no compiled copy on disk
-    yet (numba's cache index), or None where that cannot be told (a numba without the cache
+    """How many of the compiled kernels that ``modules`` load have no usable compiled copy
+    on disk: no cache index yet, or one that numba would not load (another numba, or a stamp
+    other than the kernel's :func:`~sim_tactile._jit.kernel_stamp`: an edited, upgraded or
+    freshly installed package). None where that cannot be told (a numba without the cache
     API read here). Imports ``modules``."""
     import importlib
 
@@ -88,20 +90,27 @@ def kernels_to_compile(modules: Sequence[str] = ("sim_tactile.sim.slide",)) -> i
         from numba.core.registry import CPUDispatcher
     except ImportError:
         return None
-    missing = 0
-    for name, mod in list(sys.modules.items()):
-        if not name.startswith("sim_tactile.") or mod is None:
-            continue
-        for obj in list(vars(mod).values()):
-            if not isinstance(obj, CPUDispatcher):
-                continue
-            try:
-                index = obj._cache._cache_file._index_path
-            except AttributeError:
-                continue  # not cached to disk (cache=False), or another numba
-            if not os.path.exists(index):
-                missing += 1
-    return missing
+    kernels = {
+        id(obj): obj
+        for name, mod in list(sys.modules.items())
+        if name.startswith("sim_tactile.") and mod is not None
+        for obj in list(vars(mod).values())
+        if isinstance(obj, CPUDispatcher)  # once each, also where other modules import it
+    }
+    return sum(not _cached_on_disk(k) for k in kernels.values())
+
+
+def _cached_on_disk(dispatcher) -> bool:
+    """Whether numba would load ``dispatcher`` from its disk cache: its index exists and was
+    written by this numba under the stamp that the kernel's cache (sim_tactile/_jit.py's
+    versioned locator) expects now. Reads the index as numba's own loader does."""
+    cache_file = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
+    if cache_file is None:
+        return True  # not cached to disk (cache=False), or another numba: nothing to say
+    try:
+        return bool(cache_file._load_index())  # {} when absent, stale or another version
+    except (OSError, EOFError, ValueError, pickle.UnpicklingError):  # numba compiles afresh
+        return False
 
 
 def announce_compile(modules: Sequence[str] = ("sim_tactile.sim.slide",)) -> None:

@@ -42,11 +42,21 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    """Write a data set's arrays as plain files (``--format``; numpy: .npy files and its
-    metadata as JSON), built beside ``--out`` and renamed when whole."""
-    from ..datasets import export
+    """Write a data set as plain files (``--format``: numpy, .npy files and its metadata as
+    JSON; parquet, Parquet shards of the task's splits, a dataset card and Croissant
+    metadata), built beside ``--out`` and renamed when whole."""
+    from .._validate import one_of
+    from ..datasets.export import FORMATS
 
-    res = export(args.store, args.out, part=args.part, format=args.format)
+    fmt = one_of("--format", args.format, (*FORMATS, "parquet"))
+    if fmt == "parquet":  # it needs the task's splits: a layer above the data sets
+        from ..formats.hub import export_parquet
+
+        res = export_parquet(args.store, args.out, part=args.part, log=log)
+    else:
+        from ..datasets import export
+
+        res = export(args.store, args.out, part=args.part, format=fmt)
     emit(args, res, lambda: f"{res['slides']} slides -> {res['out']}/")
     return 0
 
@@ -160,7 +170,11 @@ def add_parsers(sub) -> None:
         help="The folder of the real data set (the real-data tasks need it).",
     )
     ex = add_command(
-        sub, "export", cmd_export, "Write a data set as plain numpy files (.npy and JSON)."
+        sub,
+        "export",
+        cmd_export,
+        "Write a data set as plain numpy files (.npy and JSON), or as Parquet shards with a "
+        "dataset card and Croissant metadata for data hubs.",
     )
     ex.add_argument("store", help="A store that 'sim-tactile generate' wrote.")
     ex.add_argument("--out", required=True, help="The folder to write (new or empty).")
@@ -170,6 +184,7 @@ def add_parsers(sub) -> None:
     ex.add_argument(
         "--format",
         default="numpy",
-        help="The files to write: numpy (the default: .npy arrays and meta.json); an unknown "
-        "format writes nothing.",
+        help="The files to write: numpy (the default: .npy arrays and meta.json) or parquet "
+        "(Parquet shards of the task's splits, a README.md dataset card and croissant.json; "
+        "the [hub] extra); an unknown format writes nothing.",
     )

@@ -29,6 +29,7 @@ from sklearn.model_selection import StratifiedShuffleSplit
 
 from .._validate import check_labels, integer, positive
 from ..errors import ConfigError
+from .neurobench import neuromorphic_figures
 
 _RATIO = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*:\s*(\d+(?:\.\d+)?)\s*$")
 _COUNTS = re.compile(r"^\s*(\d+)\s*/\s*(\d+)\s*$")
@@ -130,6 +131,9 @@ class EvalResult:
     predict_s: list[float]
     over_time: dict[float, list[float]] = field(default_factory=dict)  # t [s] -> accuracies
     epoch_s: list[float] = field(default_factory=list)  # per-epoch times of torch models
+    #: the first repeat's neuromorphic figures on its test samples (the encoder's spike rate,
+    #: a spiking model's NeuroBench metrics: :mod:`.neurobench`), None where it has none
+    neuromorphic: dict | None = None
 
     @property
     def mean(self) -> float:
@@ -158,6 +162,7 @@ class EvalResult:
                 for t, a in sorted(self.over_time.items())
             },
             "epoch_s_median": float(np.median(self.epoch_s)) if self.epoch_s else None,
+            **({"neuromorphic": self.neuromorphic} if self.neuromorphic else {}),
         }
 
 
@@ -227,6 +232,8 @@ def evaluate(
         res.accuracies.append(acc)
         res.confusion += confusion_matrix(labels[te], pred, labels=classes)
         res.epoch_s += _epoch_times(est)
+        if r == 0 and x.ndim == 3:
+            res.neuromorphic = neuromorphic_figures(est, x[te])
         if log and (len(splits) <= 20 or (r + 1) % max(1, len(splits) // 5) == 0):
             log(f"{name} repeat {r + 1}/{len(splits)}: accuracy {acc:.3f} (fit {t1 - t0:.1f} s)")
         if r >= n_curve:

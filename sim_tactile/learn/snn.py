@@ -78,13 +78,18 @@ def _build_net(torch, n_in: int, n_hidden: int, n_out: int, cfg: dict, gen):
             v = u + r
             return spike_fn.apply(v, s, theta, cfg["tau_rho"] * theta, cfg["scale_rho"]), v
 
-        def forward(self, xf):
-            """``xf``: PSP-filtered input ``(B, C, T)`` -> output spikes and potentials."""
+        def layers(self, xf):
+            """``xf``: PSP-filtered input ``(B, C, T)`` -> the hidden spikes ``(B, H, T)``,
+            the output spikes and the output potentials ``(B, K, T)``."""
             u1 = torch.einsum("hc,bct->bht", self.fc1.weight, xf)
             s1, _ = self.spikes(u1)
             a2 = torch.einsum("kh,bht->bkt", self.fc2.weight, s1)
             u2 = causal_filter(torch, a2, self.eps)
-            return self.spikes(u2)
+            return (s1, *self.spikes(u2))
+
+        def forward(self, xf):
+            """``xf``: PSP-filtered input ``(B, C, T)`` -> output spikes and potentials."""
+            return self.layers(xf)[1:]
 
     return SRMNet()
 
@@ -226,3 +231,17 @@ class SNNClassifier(TorchClassifier):
     def output_counts(self, X: object) -> np.ndarray:
         """Output spike counts per class, shape ``(samples, classes)``."""
         return np.floor(self.decision_function(X))
+
+    def neuromorphic_metrics(self, X: object) -> dict:
+        """NeuroBench's figures of the fitted network on the rasters ``X`` (footprint,
+        parameters, connection and activation sparsity, synaptic operations per sample):
+        :func:`~sim_tactile.learn.neurobench.snn_metrics`."""
+        from .neurobench import snn_metrics
+
+        return snn_metrics(self, X)
+
+    def to_nir(self):
+        """The fitted network as a NIR graph (:func:`~sim_tactile.learn.nir.snn_to_nir`)."""
+        from .nir import snn_to_nir
+
+        return snn_to_nir(self)

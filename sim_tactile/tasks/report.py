@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ..tables import markdown_table, text_table
 from .registry import PaperCell
+from .report_neuro import neuromorphic_table
 
 #: A cell reproduces the paper when it lies within this many of the paper's standard
 #: deviations, or above.
@@ -165,6 +166,7 @@ class Report:
         lines += markdown_table(head, [_cells(r) for r in self.results])
         lines += ["", _timing(self.timing)]
         lines += _over_time_table(self.results)
+        lines += neuromorphic_table(self.results)
         users = [r for r in self.results if r.extra.get("user_method")]
         if users:
             lines += ["", "Your methods (run from your code; their splits are the task's):", ""]

@@ -1,0 +1,12 @@
+"""Bridges to the formats of the libraries the package's users stand on.
+
+- :mod:`.events`: spikes as Tonic events (``x``, ``y``, ``t`` in us, ``p``) and
+  :class:`~.events.TactileEvents`, a data set of ``(events, target)`` (extra ``[tonic]``);
+- :mod:`.torch_data`: :class:`~.torch_data.TactileTorchDataset`, a PyTorch ``Dataset`` that
+  reads a store lazily, raw or encoded, with a task's splits (extra ``[learn]``);
+- :mod:`.hub`: ``sim-tactile export --format parquet``: Parquet shards of a task's splits, a
+  dataset card and Croissant metadata (extra ``[hub]``).
+
+The spiking network's NIR graph and the NeuroBench figures live with the network:
+:mod:`sim_tactile.learn.nir`, :mod:`sim_tactile.learn.neurobench`.
+"""
