@@ -57,7 +57,7 @@ def wheel(tmp_path_factory) -> tuple[Path, str]:
 def test_the_wheel_carries_the_assets_and_builds_without_warnings(wheel):
     path, log = wheel
     names = set(zipfile.ZipFile(path).namelist())
-    assert "sim_tactile/sim/measured_errors.json" in names
+    assert "sim_tactile/sim/plan/measured_errors.json" in names
     assert "sim_tactile/assets/plates/finger7/ridges-4.toml" in names
     assert "sim_tactile/assets/sensors/grid3x3.toml" in names
     assert "sim_tactile/sensors/calibrations/biotac19.toml" in names
