@@ -38,7 +38,7 @@ from pathlib import Path
 
 from sim_tactile.bench import physics
 from sim_tactile.cache import default_root
-from sim_tactile.plates import get_plate, surface
+from sim_tactile.plates import get_plate, surface_of
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim.plan import measured_errors
 from sim_tactile.sim.plan.fidelity import choose_fidelity
@@ -70,7 +70,7 @@ def measure(
         if plates and name not in plates:
             continue
         plate = get_plate(name)
-        if clipped and not surface(plate).has_walls:
+        if clipped and not surface_of(plate).has_walls:
             continue
         if anchored and anchor_refusals(plate, sensor.layout, "L1", sensor.finger):
             continue

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import sim_tactile
-from sim_tactile.plates import Plate, get_plate, surface
+from sim_tactile.plates import Plate, get_plate, surface_of
 from sim_tactile.plates.features import features, height_at
 from sim_tactile.plates.spec import Grating
 from sim_tactile.plates.surface import (
@@ -62,7 +62,7 @@ def test_the_switch_finder_finds_each_form(tmp_path):
         "if isinstance(plate.texture, Roughness):",
         "ok = isinstance(t, HeightMap)",
         'if params["kind"] != "heightmap":',
-        "z = surface(plate).height(x, y)  # texture.kind no longer read",
+        "z = surface_of(plate).height(x, y)  # texture.kind no longer read",
     ]
     (tmp_path / "sim").mkdir()
     (tmp_path / "sim" / "m.py").write_text("\n".join(lines) + "\n")
@@ -80,7 +80,7 @@ def test_the_switch_finder_finds_each_form(tmp_path):
     ],
 )
 def test_each_kind_has_its_surface_and_margin(name, kind, margin):
-    s = surface(get_plate(name))
+    s = surface_of(get_plate(name))
     assert type(s) is kind and s.margin_m == margin
     assert (s.arrays is None) == (kind is FeatureSurface)
     assert isinstance(s.arrays, ProfileArrays) == (kind is ProfileSurface)
@@ -100,7 +100,7 @@ def _map_plate() -> Plate:
 
 def test_a_height_map_has_its_samples_arrays_and_scales():
     plate = _map_plate()
-    s = surface(plate)
+    s = surface_of(plate)
     assert type(s) is MapSurface and isinstance(s.arrays, MapArrays)
     assert s.margin_m == QS_MARGIN_M and s.features == () and not s.has_walls
     assert s.feature_scale_m == pytest.approx(1e-3) and s.period_m == pytest.approx(2e-3)
@@ -114,7 +114,7 @@ def test_the_height_near_the_pad_is_the_whole_height(name):
     """A plate of features looks at the features within reach of the pad only: the same
     numbers as over all of them, where the points lie within the reach."""
     plate = _map_plate() if name == "map" else get_plate(name)
-    s = surface(plate)
+    s = surface_of(plate)
     rng = np.random.default_rng(5)
     for x_c in rng.uniform(-0.06, 0.06, 20):
         x = x_c + rng.uniform(-8e-3, 8e-3, 400)
@@ -130,10 +130,10 @@ def test_the_period_has_one_formula():
     are the surface's: the features' smallest column spacing."""
     ridges = get_plate("finger7/ridges-4")
     xs = sorted({round(f.x, 9) for f in features(ridges)})
-    assert surface(ridges).period_m == pytest.approx(min(np.diff(xs))) == period_of(ridges)
+    assert surface_of(ridges).period_m == pytest.approx(min(np.diff(xs))) == period_of(ridges)
     one = Plate(texture=Grating(period_m=30e-3, height_m=0.5e-3), area_length_m=0.036)
-    assert surface(one).period_m is None and period_of(one) == SOLO_PERIOD_M
-    assert surface(get_plate("roughness8/ra-50")).period_m is None
+    assert surface_of(one).period_m is None and period_of(one) == SOLO_PERIOD_M
+    assert surface_of(get_plate("roughness8/ra-50")).period_m is None
 
 
 def test_the_features_are_computed_once_a_plate():
@@ -155,5 +155,5 @@ def test_the_features_are_computed_once_a_plate():
     p = Plate(texture=counted, area_length_m=plate.area_length_m, area_width_m=plate.area_width_m)
     n = len(calls)  # the plate's own validation expands them once
     a, b = features(p), features(p)
-    surface(p).walls, surface(p).feature_scale_m, surface(p).period_m  # noqa: B018
+    surface_of(p).walls, surface_of(p).feature_scale_m, surface_of(p).period_m  # noqa: B018
     assert len(calls) == n + 1 and a == b and a is not b and len(a) == 36

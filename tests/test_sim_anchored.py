@@ -9,7 +9,7 @@ import pytest
 
 from sim_tactile.bench import physics
 from sim_tactile.errors import ConfigError
-from sim_tactile.plates import get_plate, surface
+from sim_tactile.plates import get_plate, surface_of
 from sim_tactile.sensors import Finger, get_sensor
 from sim_tactile.sim.plan import measured_errors as me
 from sim_tactile.sim.plan.fidelity import choose_fidelity
@@ -39,7 +39,7 @@ def _lattice(plate="finger7/ridges-4", wall=0.5e-3, px=2e-3, py=2e-3, y0=0.0):
 def test_every_wall_lies_on_a_line_and_the_cells_grade_from_the_walls(name):
     plate = get_plate(name)
     anchor, P, base = period_lines(plate, 0.25e-3, 2e-3)
-    xs, _ = surface(plate).walls
+    xs, _ = surface_of(plate).walls
     res = np.mod(xs - anchor, P)
     for r in res:  # each wall, modulo the period, is a line (or the period's end)
         assert np.min(np.abs(np.append(base, P) - r)) < 1e-9, (r, base)

@@ -10,7 +10,7 @@ from scipy.signal import find_peaks
 
 from sim_tactile.bench import physics
 from sim_tactile.errors import ConfigError
-from sim_tactile.plates import get_plate, height_at, surface
+from sim_tactile.plates import get_plate, height_at, surface_of
 from sim_tactile.scene.elastic import compliance_matrix
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, Sensor, get_sensor
@@ -100,13 +100,13 @@ def test_no_patch_straddles_a_wall_or_a_taxel_edge(x_pad):
 
 
 def test_wall_lines_are_the_box_faces():
-    xs, ys = surface(get_plate("finger7/bumps-4x4")).walls
+    xs, ys = surface_of(get_plate("finger7/bumps-4x4")).walls
     assert xs.size == 8 and ys.size == 8
     np.testing.assert_allclose(np.diff(xs)[::2], 2.5e-3)  # each bump 2.5 mm wide
     np.testing.assert_allclose(np.diff(xs)[1::2], 9e-3 - 2.5e-3)  # 9 mm pitch
-    assert surface(get_plate("finger7/flat")).walls[0].size == 0
+    assert surface_of(get_plate("finger7/flat")).walls[0].size == 0
     # hemispheres have no walls
-    assert surface(get_plate("multilayer3/hemispheres-6x6")).walls[0].size == 0
+    assert surface_of(get_plate("multilayer3/hemispheres-6x6")).walls[0].size == 0
 
 
 def _aligned_sensor() -> Sensor:

@@ -15,7 +15,7 @@ from _scenes import scene_of
 from sim_tactile.bench.closed_forms import pulse_period
 from sim_tactile.plates import HeightMap, Plate, height_at
 from sim_tactile.plates.features import map_height
-from sim_tactile.plates.surface import QS_MARGIN_M, MapArrays, surface
+from sim_tactile.plates.surface import QS_MARGIN_M, MapArrays, surface_of
 from sim_tactile.sensors import Finger, get_sensor
 from sim_tactile.sim.collide.choose import make_collider, probe_depths
 from sim_tactile.sim.collide.height import (
@@ -137,7 +137,7 @@ def _same_bits(a: np.ndarray, b: np.ndarray) -> None:
 def test_the_compiled_height_is_height_at_bit_for_bit(make):
     plate = make()
     t = plate.texture
-    s = surface(plate).arrays
+    s = surface_of(plate).arrays
     rng = np.random.default_rng(7)
     x, y = _points(plate, rng)
     want = height_at(plate, x, y)
@@ -159,7 +159,7 @@ def _bound(plate: Plate, n=400, seed=0) -> SurfaceCollider:
         [rng.uniform(-5 * MM, 5 * MM, n), rng.uniform(-4 * MM, 4 * MM, n), rng.uniform(0, 1e-4, n)]
     )
     r, m = rng.uniform(0.05, 0.2, n) * MM, rng.uniform(0.0, 0.5, n) * MM
-    c = SurfaceCollider(local, r, m, surface(plate))
+    c = SurfaceCollider(local, r, m, surface_of(plate))
     c.bind([0.0, rng.uniform(-1 * MM, 1 * MM), 0.0], 0, 1)
     return c
 
@@ -201,14 +201,14 @@ def test_the_compiled_loop_is_its_numpy_reference_and_height_at(make):
 
 def test_a_height_map_takes_the_map_collider_and_the_wide_margin(cache):
     plate = _grating()
-    assert surface(plate).margin_m == QS_MARGIN_M
+    assert surface_of(plate).margin_m == QS_MARGIN_M
     sc = scene_of(plate, QS_MARGIN_M, cache, x0_m=-0.01)
     c = make_collider(sc)
     assert isinstance(c, SurfaceCollider) and isinstance(c.probe.surface, MapArrays)
     assert c.compiled
     assert isinstance(make_collider(sc, primitive=False), MujocoCollider)  # the reference
-    assert surface(plate).feature_scale_m == pytest.approx(PERIOD_M / 2)
-    assert surface(plate).period_m == pytest.approx(PERIOD_M)
+    assert surface_of(plate).feature_scale_m == pytest.approx(PERIOD_M / 2)
+    assert surface_of(plate).period_m == pytest.approx(PERIOD_M)
 
 
 def test_the_map_collider_agrees_with_mujocos_on_a_smooth_map(cache):

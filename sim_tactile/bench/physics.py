@@ -40,7 +40,7 @@ import numpy as np
 
 from ..cache import atomic_write
 from ..hashing import code_version, content_hash, file_digest
-from ..plates import Plate, height_at, surface
+from ..plates import Plate, height_at, surface_of
 from ..scene.elastic import subsurface_weights
 from ..scene.nodes import skin_grid
 from ..sensors import Sensor
@@ -84,7 +84,7 @@ def offsets_m(plate: Plate, n: int) -> tuple[float, ...]:
     other one a step further, so that the walls meet a node grid's centres and its faces
     alike (a period that is a multiple of the node pitch would otherwise put every wall at
     the same place on the nodes, and a slide passes them all)."""
-    period = surface(plate).period_m or 4e-3
+    period = surface_of(plate).period_m or 4e-3
     step = OFFSET_STEP_M
     return tuple(
         round((round(period * (k + 0.137) / n / step) + k % 2) * step + OFFSET_NUDGE_M, 10)

@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SimTactileError
-from ..plates import Plate, get_plate, surface
+from ..plates import Plate, get_plate, surface_of
 from ..records import Recording
 from ..scene.nodes import skin_grid
 from ..sensors import Finger, get_sensor
@@ -169,7 +169,7 @@ def _slide_rows(scene: SlideScene, sweep: Sweep, cache, log) -> list[dict]:
     sensor = get_sensor(scene.sensor)
     layout, finger = sensor.layout, sensor.finger
     taxel = probe_taxel(layout)
-    spacing = surface(plate).period_m  # the texture's one period
+    spacing = surface_of(plate).period_m  # the texture's one period
     duration = sweep.duration_s
     if duration is None and sweep.periods:
         duration = quick_duration(plate, finger, scene.speed_m_s, spacing, sweep.periods)

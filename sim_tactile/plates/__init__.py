@@ -10,7 +10,7 @@ from .features import features, height_at, roughness_profile
 from .geometry import Feature
 from .presets import get_plate, is_plate_file, preset_names
 from .spec import Bumps, Flat, Grating, HeightMap, Plate, Ridges, Roughness
-from .surface import Surface, surface
+from .surface import Surface, surface_of
 from .user import load_user_plate
 
 __all__ = [
@@ -34,5 +34,5 @@ __all__ = [
     "preset_names",
     "roughness_profile",
     "Surface",
-    "surface",
+    "surface_of",
 ]

@@ -14,7 +14,7 @@ against); the arrays the compiled depth kernels read (:attr:`Surface.arrays`, a 
 whose class is the kernel's kind: :class:`ProfileArrays`, :class:`MapArrays`; a plate of
 features is read from its MuJoCo geoms instead); its scales (the feature scale, the period
 along the slide and the walls, one formula each in :mod:`.scales`); and the skin nodes'
-collider margin under a held force (:attr:`Surface.margin_m`). :func:`surface` is the one
+collider margin under a held force (:attr:`Surface.margin_m`). :func:`surface_of` is the one
 place that tells the kinds apart; the simulator asks the surface, and never the texture's
 kind. A surface is kept per plate in the process (the feature list, the profile and the
 scales are computed once a plate).
@@ -253,7 +253,7 @@ class MapSurface(Surface):
 
 
 @memoized("plate surfaces", maxsize=128)
-def surface(plate: Plate) -> Surface:
+def surface_of(plate: Plate) -> Surface:
     """The surface of ``plate``, kept in the process per plate geometry: the one place that
     tells the kinds of texture apart."""
     if isinstance(plate.texture, Roughness):

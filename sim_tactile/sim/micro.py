@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plates import Plate, roughness_profile, surface
+from ..plates import Plate, roughness_profile, surface_of
 
 
 def micro_pressure_profile(
@@ -59,7 +59,7 @@ def micro_loads(
     """
     T, N = in_contact.shape
     out = np.zeros((T, N))
-    if surface(plate).profile is None or T < 2:
+    if surface_of(plate).profile is None or T < 2:
         return out
     travel = float(np.median(np.abs(np.diff(x_pad))))
     for i in range(N):

@@ -34,7 +34,7 @@ import numpy as np
 from .._jit import njit
 from ..cache import memoized
 from ..errors import ConfigError, PhysicsError
-from ..plates import Plate, get_plate, height_at, surface
+from ..plates import Plate, get_plate, height_at, surface_of
 from ..records import Recording
 from ..scene.elastic import subsurface_weights
 from ..scene.layered import layered_subsurface_weights
@@ -328,7 +328,7 @@ def _check_rig_inputs(plate: Plate, sensor: Sensor, finger: Finger, protocol: Pr
         )
     if protocol.duration_s is None:
         raise ConfigError("the probe rig needs the window: give duration_s")
-    if surface(plate).profile is not None:
+    if surface_of(plate).profile is not None:
         raise ConfigError(
             f"plate {plate.name or plate.hash}: the probe rig does not model micro-roughness; "
             "valid: plates of ridges, gratings, bumps, height maps or flat"

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import PhysicsError
-from ..plates import Plate, get_plate, height_at, surface
+from ..plates import Plate, get_plate, height_at, surface_of
 from ..records import Recording
 from ..scene.model import build_scene
 from ..scene.nodes import SkinGrid, skin_grid
@@ -244,7 +244,7 @@ def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
         y0_m=proto.offset_y_m,
         z0_m=z0,
         z_damping=2.0 * omega_guess * finger.bone_mass_kg,  # critical at the flat pad
-        node_margin_m=surface(plate).margin_m if quasi_static else 0.0,
+        node_margin_m=surface_of(plate).margin_m if quasi_static else 0.0,
         cache=cache,
     )
     skin = make_skin(

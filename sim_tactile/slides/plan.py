@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..datasets.store import PARAM_NAMES, StoreSpec, config_hash
-from ..plates.surface import surface
+from ..plates.surface import surface_of
 from ..records import TactileDataset
 from .jobs import SlideJob, slide_code_version
 from .slide_set import SlideSet, class_name
@@ -76,7 +76,7 @@ def slide_plan(
         taxel_positions=np.asarray(sensor.layout.positions),
         dataset_meta=meta,
         code_version=slide_code_version(),
-        plate_maps={k: z for j in jobs for k, z in surface(j.plate).map_samples().items()},
+        plate_maps={k: z for j in jobs for k, z in surface_of(j.plate).map_samples().items()},
     )
     return Plan("", spec, jobs=jobs)
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 from numba.extending import overload
 
 from ..._jit import njit
-from ...plates.surface import surface
+from ...plates.surface import surface_of
 from .height import SurfaceCollider, SurfaceProbe, surface_depths
 from .primitive import PrimitiveCollider, PrimitiveProbe, depths_kernel
 from .reference import MujocoCollider
@@ -22,7 +22,7 @@ def make_collider(scene, primitive: bool = True):
     the plate, MuJoCo's (:class:`~.reference.MujocoCollider`, the reference). The bone must
     be at its starting pose (its world position is read here)."""
     if primitive:
-        sampled = surface(scene.plate).arrays is not None
+        sampled = surface_of(scene.plate).arrays is not None
         c = (SurfaceCollider if sampled else PrimitiveCollider).from_scene(scene)
         if c is not None:
             return c

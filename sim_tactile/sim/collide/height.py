@@ -27,7 +27,7 @@ import numpy as np
 from numba.extending import overload
 
 from ..._jit import njit
-from ...plates.surface import MapArrays, ProfileArrays, Surface, surface
+from ...plates.surface import MapArrays, ProfileArrays, Surface, surface_of
 
 
 class SurfaceProbe(NamedTuple):
@@ -65,7 +65,7 @@ class SurfaceCollider:
     def from_scene(cls, scene) -> SurfaceCollider | None:
         """The collider of a scene whose plate's surface is sampled, bound to the finger's
         joints, or None (a plate of features; skin nodes rotated on the bone)."""
-        surf = surface(scene.plate)
+        surf = surface_of(scene.plate)
         if surf.arrays is None:
             return None
         m = scene.m_col

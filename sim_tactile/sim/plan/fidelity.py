@@ -41,7 +41,7 @@ from dataclasses import asdict, dataclass, field
 
 from ... import _validate as v
 from ...plates.spec import Plate
-from ...plates.surface import surface
+from ...plates.surface import surface_of
 from ...scene.nodes import skin_grid
 from .lattices import anchor_refusals, anchored_cells, skin_refusals, static_cells
 from .measured_errors import (
@@ -168,7 +168,7 @@ def choose_fidelity(
         return fidelity
     protocol = protocol.at_rate(layout.rate_hz)
     v.one_of("fidelity", fidelity, FIDELITIES)
-    scale = surface(plate).feature_scale_m
+    scale = surface_of(plate).feature_scale_m
     taxel = float(layout.sizes.min())
     taxel_x, taxel_y = (float(layout.sizes[:, k].min()) for k in (0, 1))
     need = min([taxel / 2] + ([scale / 2.5] if scale else []))
@@ -340,7 +340,7 @@ def _clippable(plate, finger, protocol, level) -> bool:
     """Whether clipped patches serve this scene: a plate with box walls, the held force, and
     a skin they serve (:func:`~.lattices.skin_refusals`)."""
     quasi_static = protocol.force_control == "quasi-static"
-    return surface(plate).has_walls and not skin_refusals(level, finger, quasi_static)
+    return surface_of(plate).has_walls and not skin_refusals(level, finger, quasi_static)
 
 
 def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnings):
@@ -405,7 +405,7 @@ def _texture_warnings(plate: Plate, layout, scale: float | None, pitch: float) -
             f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
             f"({pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes"
         )
-    surf = surface(plate)
+    surf = surface_of(plate)
     if surf.ra_m is not None:
         warnings.append(
             f"micro-roughness (Ra {surf.ra_m * 1e6:.3g} um) is below the node grid: the finger simulation sees "
@@ -441,7 +441,7 @@ def _varies_along_x_only(plate: Plate, finger) -> bool:
     and their measured errors are of square grids."""
     if getattr(finger, "shape", None) != "flat":
         return False
-    fs = surface(plate).features
+    fs = surface_of(plate).features
     return bool(fs) and all(f.kind == "box" and 2 * f.hy >= plate.area_width_m - 1e-9 for f in fs)
 
 

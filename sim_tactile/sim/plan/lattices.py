@@ -15,7 +15,7 @@ import numpy as np
 
 from ...errors import ConfigError
 from ...plates.spec import Plate
-from ...plates.surface import surface
+from ...plates.surface import surface_of
 from ...scene.nodes import SkinGrid
 
 #: Lines closer than this to one already there are not added [m]: a patch thinner than it
@@ -58,7 +58,7 @@ def static_lines(grid: SkinGrid, layout, plate: Plate, y0_m: float):
     pos, size = layout.positions[:, :2], layout.sizes
     tx = np.concatenate([pos[:, 0] - size[:, 0] / 2, pos[:, 0] + size[:, 0] / 2])
     ty = np.concatenate([pos[:, 1] - size[:, 1] / 2, pos[:, 1] + size[:, 1] / 2])
-    _, walls_y = surface(plate).walls
+    _, walls_y = surface_of(plate).walls
     return merge_lines(bx, tx, bx[0], bx[-1]), merge_lines(
         by, np.concatenate([ty, walls_y - y0_m]), by[0], by[-1]
     )
@@ -104,7 +104,7 @@ def period_of(plate: Plate) -> float:
     """The period [m] along the slide over which the lattice repeats: the texture's
     (:attr:`~sim_tactile.plates.surface.Surface.period_m`), or :data:`SOLO_PERIOD_M` for a
     single column."""
-    return surface(plate).period_m or SOLO_PERIOD_M
+    return surface_of(plate).period_m or SOLO_PERIOD_M
 
 
 def graded(length: float, wall_m: float, pitch_m: float) -> list[float]:
@@ -127,7 +127,7 @@ def period_lines(plate: Plate, wall_m: float, pitch_m: float) -> tuple[float, fl
     """``(anchor, P, base)``: the lattice along the slide. Its lines lie at ``anchor + k P +
     base`` (plate frame) for every integer k; ``base`` (ascending, from 0, below ``P``) holds
     every wall across the slide modulo ``P`` and the graded lines between them."""
-    xs, _ = surface(plate).walls
+    xs, _ = surface_of(plate).walls
     if xs.size == 0:
         raise ConfigError(f"plate {plate.name or plate.hash} has no walls to anchor a lattice to")
     P = period_of(plate)
@@ -149,7 +149,7 @@ def row_lines(finger, layout, plate: Plate, y0_m: float, pitch_y_m: float) -> np
     ny = 2 * math.ceil(ey / pitch_y_m / 2 - 1e-9) + 1
     by = (np.arange(ny + 1) - ny / 2) * pitch_y_m
     pos, size = layout.positions[:, 1], layout.sizes[:, 1]
-    _, ys = surface(plate).walls
+    _, ys = surface_of(plate).walls
     extra = np.concatenate([pos - size / 2, pos + size / 2, ys - y0_m])
     return merge_lines(by, extra, by[0], by[-1])
 
@@ -166,7 +166,7 @@ def anchor_refusals(plate: Plate, layout, level="L1", finger=None, quasi_static=
     plate that is not all boxes, taxels below the surface, a pad shape the depth kernel does
     not know, and the skin's refusals (:func:`skin_refusals`)."""
     why = []
-    if not surface(plate).all_boxes:
+    if not surface_of(plate).all_boxes:
         why.append("a plate that is not all boxes (valid: ridges, bumps and bars of boxes)")
     if (layout.depth_m > 0).any():
         why.append(f"taxels below the surface (depth up to {layout.depth_m.max():g} m; valid: 0)")

@@ -50,7 +50,7 @@ import numpy as np
 from ..._jit import njit
 from ...errors import PhysicsError
 from ...plates.spec import Plate
-from ...plates.surface import surface
+from ...plates.surface import surface_of
 from ..plan.lattices import PAD_SHAPE_CODES, check_anchorable, period_lines, row_lines
 from .clipped import rect_entry
 from .contact import MAX_ITER, REFRESH, TOL_REL
@@ -194,7 +194,7 @@ class AnchoredLattice:
         self.C = lattice_compliance(
             cxb, wxb, self.P, self.n_periods, self.cy, self.wy, finger.e_star_pa
         )
-        self.boxes = surface(plate).boxes
+        self.boxes = surface_of(plate).boxes
         self.plate_half = np.array([plate.length_m / 2, plate.width_m / 2])
         self.pad = self.pad_of(finger)
         self.y0 = y0_m

@@ -43,7 +43,7 @@ from scipy.linalg import lu_factor, lu_solve
 from ..._jit import njit
 from ...errors import PhysicsError
 from ...plates.spec import Plate
-from ...plates.surface import surface
+from ...plates.surface import surface_of
 from ...scene.elastic import subsurface_weights
 from ...scene.nodes import SkinGrid
 from ..plan.lattices import merge_lines, static_lines
@@ -170,7 +170,7 @@ class ClippedPatches:
 
     def __init__(self, grid: SkinGrid, finger, layout, plate: Plate, y0_m: float):
         self.sx, self.sy = static_lines(grid, layout, plate, y0_m)
-        self.surface = surface(plate)
+        self.surface = surface_of(plate)
         self.walls_x, _ = self.surface.walls
         pos, size = layout.positions[:, :2], layout.sizes
         bx = self.sx
