@@ -4,15 +4,16 @@ real data set (skipped without it)."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import _find_dataset as find_dataset
 
 from sim_tactile.bench.sim_real import separability, slide_stats
 from sim_tactile.cli import main
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "datasets" / "biotac_slide_20_50"
+#: The real data set (conftest: $SIM_TACTILE_DATASETS, ../shared, /work/shared).
+DATA = find_dataset()
 
 
 def test_the_statistics_of_known_streams():

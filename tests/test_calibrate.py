@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import json
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import _find_dataset as find_dataset
 
 from sim_tactile.calibrate import calibrate, from_fit
 from sim_tactile.calibrate.fit import RECTIFIED_DIFF, fit_readout, fit_unforced
@@ -19,7 +19,8 @@ from sim_tactile.sensors import get_sensor
 from sim_tactile.sensors.calibration import Calibration, calibrated, load_calibration
 from sim_tactile.sensors.transducers import Imperfections
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "datasets" / "biotac_slide_20_50"
+#: The real data set (conftest: $SIM_TACTILE_DATASETS, ../shared, /work/shared).
+DATA = find_dataset()
 #: The issue's bar for recovering known parameters from synthetic recordings.
 RECOVERY_RTOL = 0.05
 RATE = 100.0

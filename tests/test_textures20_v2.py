@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import json
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import _find_dataset as find_dataset
 
 from sim_tactile.calibrate.motion import biotac_force, clip_level_variation
 from sim_tactile.errors import ConfigError
@@ -19,7 +19,8 @@ from sim_tactile.slides.config import _protocol
 from sim_tactile.tasks import get_task
 from sim_tactile.tasks.defs import textures20 as t20
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "datasets" / "biotac_slide_20_50"
+#: The real data set (conftest: $SIM_TACTILE_DATASETS, ../shared, /work/shared).
+DATA = find_dataset()
 LONG = [n for n in preset_names() if n.startswith(LONG_FAMILY)]
 #: the long plates the fast lane checks; the others run in ``make test``
 FAST = (LONG_FAMILY + "grating-3.0mm", LONG_FAMILY + "boxes-3.0mm")
