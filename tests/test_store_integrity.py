@@ -430,7 +430,7 @@ def test_run_and_export_on_a_damaged_store_say_one_line_and_leave_no_folder(
         err = capsys.readouterr().err.strip()
         assert "\n" not in err and err.startswith("sim-tactile: error: ") and "labels" in err
     assert main(["export", str(store), "--out", str(tmp_path / "x"), "--format", "hdf5"]) == 2
-    assert "--format 'hdf5' is not valid; valid: numpy" in capsys.readouterr().err
+    assert "--format = 'hdf5' is not valid; valid: numpy, parquet" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr", "tiny.json"]
 
 
