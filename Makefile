@@ -32,14 +32,15 @@ $(STAMP_TEST): pyproject.toml | $(BIN)/python
 demo: $(STAMP_RUN)
 	$(BIN)/sim-tactile run finger7-v1 --quick --out demo-out
 
-# the whole suite, on both cores (the tests are deterministic under pytest-xdist); it builds
+# the whole suite, on both cores (the tests are deterministic under pytest-xdist; the tests
+# that read one data set share a worker, --dist loadgroup, so that one simulates it); it builds
 # the manual too (tests/test_docs.py), so a broken cross-reference fails it
 test: lint $(STAMP_TEST)
-	$(BIN)/python -m pytest -q -n 2
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
 # the fast lane (under two minutes): everything but the tests marked slow
 check: lint $(STAMP_TEST)
-	$(BIN)/python -m pytest -q -n 2 -m "not slow"
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m "not slow"
 
 # the manual (docs/, Sphinx) into build/docs, warnings as errors
 docs: $(STAMP_TEST)

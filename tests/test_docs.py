@@ -202,8 +202,20 @@ def test_markdown_tables_in_docstrings_become_list_tables():
     assert ".. list-table::" in rest and "   * - 1" in rest and "\\|x\\| is a norm" in rest
 
 
+#: the tutorials that load finger7-v1's quick data share a worker with the other tests that
+#: do (test_tasks_sim, test_user_methods, test_readme), so that one of them simulates it
+_F7 = {"your_method"}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("script", TUTORIALS, ids=[p.stem for p in TUTORIALS])
+@pytest.mark.parametrize(
+    "script",
+    [
+        pytest.param(p, marks=pytest.mark.xdist_group("finger7-v1-quick")) if p.stem in _F7 else p
+        for p in TUTORIALS
+    ],
+    ids=[p.stem for p in TUTORIALS],
+)
 def test_tutorial_runs_in_its_quick_form(script, tmp_path, monkeypatch, cache_dir):
     monkeypatch.setenv("SIM_TACTILE_CACHE", str(cache_dir))
     monkeypatch.setenv("MPLBACKEND", "Agg")

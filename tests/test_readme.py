@@ -51,6 +51,7 @@ def test_every_number_of_the_task_table_is_on_the_results_page_with_its_commit()
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("finger7-v1-quick")  # one worker: the first simulates, the rest read
 def test_every_python_block_runs_as_written(tmp_path, monkeypatch, cache_dir):
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("SIM_TACTILE_CACHE", str(cache_dir))

@@ -72,6 +72,7 @@ def _check_report(doc: dict, out: Path, task: str) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("finger7-v1-quick")  # one worker: the first simulates, the rest read
 def test_run_finger7_quick_and_rerun_is_exact(tmp_path, cli):
     out1, out2 = tmp_path / "a", tmp_path / "b"
     p = cli(["run", "finger7-v1", "--quick", "--out", str(out1), "--json"], check=False)

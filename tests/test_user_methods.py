@@ -170,6 +170,7 @@ def shared_cache(cache_dir, monkeypatch):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("finger7-v1-quick")  # one worker: the first simulates, the rest read
 def test_the_builtin_svm_given_as_a_users_method_scores_exactly_the_builtin_row(shared_cache):
     rep = evaluate(
         "finger7-v1", {"svm-again": builtin_svm_again()}, quick=True, classifiers="svm", seed=0
@@ -183,6 +184,7 @@ def test_the_builtin_svm_given_as_a_users_method_scores_exactly_the_builtin_row(
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("finger7-v1-quick")  # one worker: the first simulates, the rest read
 def test_loaded_splits_are_repeatable_and_the_ones_the_builtin_run_used(shared_cache, tmp_path):
     a, b = load("finger7-v1", quick=True), load("finger7-v1", quick=True)
     assert a.X.shape == (56, a.X.shape[1], 9) and a.y.shape == (56,) and a.rate_hz == 100.0
@@ -211,6 +213,7 @@ def test_loaded_splits_are_repeatable_and_the_ones_the_builtin_run_used(shared_c
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("finger7-v1-quick")  # one worker: the first simulates, the rest read
 def test_run_with_methods_and_the_ci_mode(tmp_path, cli):
     ex = f"delta={EXAMPLE}:delta_nearest_mean"
 
@@ -303,6 +306,7 @@ def test_user_methods_run_on_a_real_data_task(tmp_path, fake_icub):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("finger7-v1-quick")  # one worker: the first simulates, the rest read
 def test_user_methods_run_on_a_store(tmp_path, cli, shared_cache):
     store = tmp_path / "f7.zarr"
     cli(["generate", "finger7-v1", "--quick", "--out", store, "--workers", "1"])
@@ -313,6 +317,7 @@ def test_user_methods_run_on_a_store(tmp_path, cli, shared_cache):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("finger7-v1-quick")  # one worker: the first simulates, the rest read
 def test_the_worked_example_scores_on_finger7_and_roughness8(tmp_path, cli):
     for task in ("finger7-v1", "roughness8-v1"):
         p = cli(
