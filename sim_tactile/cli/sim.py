@@ -16,6 +16,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from ..sim.plan.protocol import Protocol
     from ..sim.plots import plot_heatmap, plot_traces
     from ..sim.slide import simulate
+    from ..sim.step.runner import StepOptions
 
     out = Path(args.out)
     if out.suffix != ".npz":
@@ -42,6 +43,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         fidelity=args.fidelity,
         seed=args.seed,
         ideal=args.ideal,
+        options=StepOptions(solve_every=args.solve_every),
     )
     for w in res.warnings:
         log(f"warning: {w}")
@@ -223,6 +225,13 @@ def _add_simulate(sub) -> None:
         "--ideal",
         action="store_true",
         help="Record the noise-free normal load on each taxel [N] instead of the sensor's output.",
+    )
+    sm.add_argument(
+        "--solve-every",
+        type=int,
+        default=1,
+        help="Solve the skin at every n-th step of a slide held at its force, reading the loads "
+        "between off a line (1, the default: every step).",
     )
     sm.add_argument("--out", required=True, help="The recording to write (.npz).")
 

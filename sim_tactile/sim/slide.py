@@ -179,7 +179,12 @@ def _simulate(
     nominal, proto, fid = pressed.nominal, pressed.protocol, pressed.fidelity
     window, runner, warnings = pressed.window, pressed.runner, pressed.warnings
     layout = sensor.layout
-    slide = _slide(runner, window, proto, fid.steps_per_sample)
+    every = (options or StepOptions()).solve_every
+    if every > 1 and runner.hold is not None and proto.force_control != "position":
+        slide = _slide_sampled(runner, window, proto, fid.steps_per_sample, every)
+    else:
+        every = 1
+        slide = _slide(runner, window, proto, fid.steps_per_sample)
     sim_s = window.n_samples / proto.rate_hz
     if slide.stopped_at_s is not None:
         warnings.append(
@@ -202,6 +207,7 @@ def _simulate(
         **window_meta(plate, sensor, finger, proto, nominal, seed),
         "fidelity": fid.to_json(),
         "skin_problem": runner.describe(),
+        "solve_every": every,
         "rate_hz": proto.rate_hz,
         "dt_s": fid.dt_s,
         "transducer": transducer,
@@ -386,6 +392,55 @@ def _slide(runner: Runner, window: SlideWindow, proto: Protocol, n_sub: int) -> 
         x_pad[s] = x0 + runner.x_m - 0.5 * strokes.v / proto.rate_hz
         runner.check_warnings()
     avg.finish(now, step())  # the last period's end point
+    return _Slide(avg.loads, avg.forces, x_pad, strokes.stopped_at_s, time.perf_counter() - t0)
+
+
+def _slide_sampled(
+    runner: Runner, window: SlideWindow, proto: Protocol, n_sub: int, every: int
+) -> _Slide:
+    """:func:`_slide` with the skin solved at every ``every``-th step only: the finger's
+    dynamics steps at every step (:meth:`~.step.runner.Runner.coast` between solves, the
+    bone holding the height the last solve found), and the taxel loads and the force of the
+    steps between two solves lie on the line between them (in the step's index: the pad's
+    travel, which the arm's servo keeps even). The samples average the same steps as
+    :func:`_slide`'s; the error of the line against the per-step solve is measured per task
+    scene (``perf/bench_response.py``)."""
+    n = window.n_samples
+    n_tax = runner.s.layout.n
+    total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
+    loads = np.empty((total, n_tax))
+    forces = np.empty(total)
+    x_after = np.empty(total)  # the pad's x on the plate after each step
+    v_after = np.empty(total)  # the stroke's speed command of each step
+    strokes = _Strokes(window, proto.speed_m_s, runner.dt)
+    F, x0 = proto.force_n, window.x_start_m
+    t0 = time.perf_counter()
+    g = -1  # the last step solved
+    while g < total - 1:
+        m = 1 if g < 0 else min(every, total - 1 - g)
+        for i in range(g + 1, g + m):  # the dynamics alone
+            runner.coast(strokes.command(x0 + runner.x_m))
+            x_after[i], v_after[i] = x0 + runner.x_m, strokes.v
+        j = g + m
+        forces[j] = runner.step(
+            force_cmd=F, slide_v=strokes.command(x0 + runner.x_m), taxel_out=loads[j]
+        )
+        x_after[j], v_after[j] = x0 + runner.x_m, strokes.v
+        if g >= 0 and m > 1:  # the steps between on the line from g to j
+            w = (np.arange(1, m) / m)[:, None]
+            loads[g + 1 : j] = (1.0 - w) * loads[g] + w * loads[j]
+            forces[g + 1 : j] = (1.0 - w[:, 0]) * forces[g] + w[:, 0] * forces[j]
+        runner.check_warnings()
+        g = j
+    avg = SampleAverager(n, n_tax, n_sub)
+    for i in range(total - 1):  # the samples as _slide averages them
+        s, k = divmod(i, n_sub)
+        avg.add(s, k, loads[i], forces[i])
+        if k == n_sub - 1:
+            avg.end_sample()
+    avg.finish(loads[total - 1], forces[total - 1])
+    last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
+    x_pad = x_after[last] - 0.5 * v_after[last] / proto.rate_hz
     return _Slide(avg.loads, avg.forces, x_pad, strokes.stopped_at_s, time.perf_counter() - t0)
 
 

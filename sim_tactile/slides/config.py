@@ -15,6 +15,9 @@
     quick_slides_per_plate = 2   # optional: the slides per plate under --quick
     fidelity = "auto"            # auto, L0, L1, L2
     ideal = false                # record the noise-free normal loads [N]
+    solve_every = 1              # the skin solved at every n-th step of a slide held at its
+                                 # force, the loads between read off a line (1: every step;
+                                 # its error per task scene: the manual's results)
 
     [protocol]                   # sim.protocol.Protocol: speed_m_s, force_n, duration_s,
     speed_m_s = 0.06             # rate_hz, press_s, settle_s, passes, return_stroke,
@@ -54,7 +57,7 @@ from ..plates import get_plate, preset_names
 from ..plates.user import is_user_plate, parse_ref
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
 from ..sensors.files import load_sensor_file
-from ..sim.plan.fidelity import FIDELITIES
+from ..sim.plan.fidelity import FIDELITIES, MAX_SOLVE_EVERY
 from ..sim.plan.protocol import Protocol
 from ..sim.plan.rig import ProbeRig
 from ..toml_text import check_text_size
@@ -79,6 +82,7 @@ TOP_KEYS = {
     "quick_slides_per_plate": "integer in [2, slides_per_plate]",
     "fidelity": ", ".join(FIDELITIES),
     "ideal": "true or false",
+    "solve_every": f"integer in [1, {MAX_SOLVE_EVERY}]: the skin solved at every n-th step",
     "protocol": "table",
     "randomise": "table",
     "finger": "table",
@@ -158,6 +162,7 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         )
     quick = v.integer("quick_slides_per_plate", cfg.get("quick_slides_per_plate", 2), 2, slides)
     fidelity = v.one_of("fidelity", cfg.get("fidelity", "auto"), FIDELITIES)
+    solve_every = v.integer("solve_every", cfg.get("solve_every", 1), 1, MAX_SOLVE_EVERY)
     ideal = cfg.get("ideal", False)
     if not isinstance(ideal, bool):
         raise ConfigError(f"ideal must be true or false, got {ideal!r}")
@@ -192,6 +197,7 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         finger=finger,
         rig=rig,
         sensor_spec=spec,
+        solve_every=solve_every,
     )
     return ss, seed, name
 

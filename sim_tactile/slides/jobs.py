@@ -61,6 +61,9 @@ class SlideJob:
     finger: Finger | None = None
     #: the node pitch along the slide [m] when the set fixes it (None: the fidelity's)
     pitch_m: float | None = None
+    #: the skin solved at every n-th step of the slide (:class:`~sim_tactile.sim.StepOptions`;
+    #: 1: every step)
+    solve_every: int = 1
     #: the probe rig that makes the slide (:mod:`~sim_tactile.sim.plan.rig`), else the finger scene
     rig: ProbeRig | None = None
     #: what the job is called in messages (its plate's name and place in a set)
@@ -96,6 +99,8 @@ class SlideJob:
             d["rig"] = self.rig.to_json()
         if self.pitch_m is not None:
             d["pitch_m"] = self.pitch_m
+        if self.solve_every != 1:
+            d["solve_every"] = int(self.solve_every)
         return d
 
     def key(self) -> str:
@@ -106,6 +111,7 @@ class SlideJob:
         """Simulate the slide; a :class:`~sim_tactile.sim.slide.SimResult`. An error names
         the plate and the seed."""
         from ..sim.slide import simulate
+        from ..sim.step.runner import StepOptions
 
         try:
             if self.rig is not None:
@@ -129,6 +135,7 @@ class SlideJob:
                 seed=self.seed,
                 ideal=self.ideal,
                 pitch_m=self.pitch_m,
+                options=StepOptions(solve_every=self.solve_every),
                 cache=cache,
             )
         except SimTactileError as exc:

@@ -95,6 +95,9 @@ RIDGE_NODES_PER_FEATURE = 10
 #: mm is 2.9-9.7% from the physics at 28-63x real time in the slide loop, 0.25 / 2 / 2 mm
 #: 0.8-8.4% at 16-36x (bench_clipped at d9cbe58) (see :mod:`~sim_tactile.sim.skin.anchored`).
 ANCHORED_GRIDS = ((0.5e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 1e-3))
+#: Most steps one held solve may stand for (``StepOptions.solve_every``): a sample of the
+#: slowest sensors spans about 20 steps.
+MAX_SOLVE_EVERY = 64
 #: Steps to cross the smallest feature, at least.
 STEPS_PER_FEATURE = 20
 #: Longest time step auto may pick [s].

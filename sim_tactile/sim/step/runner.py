@@ -23,7 +23,7 @@ from ...errors import PhysicsError
 from ...plates import Plate
 from ...scene.model import Scene
 from ...sensors.pad import Finger
-from ..plan.fidelity import MAX_OMEGA_DT, Fidelity
+from ..plan.fidelity import MAX_OMEGA_DT, MAX_SOLVE_EVERY, Fidelity
 from ..skin.models import SkinModel
 from .held import HeldStep
 
@@ -73,12 +73,23 @@ class StepOptions:
     skin_solver: the coupled skin's contact solve, ``auto`` (spectral above
         :data:`~sim_tactile.sim.plan.fidelity.DENSE_MAX_NODES` nodes), ``dense`` or ``spectral``
         (:func:`~sim_tactile.sim.skin.models.make_skin`).
+    solve_every: under quasi-static force control, the held step solves the skin at every
+        ``solve_every``-th step of the slide and the taxel loads of the steps between are
+        read off the line between the two solves on either side (1: every step, the
+        reference). The finger's MuJoCo dynamics steps at every step as before; only the
+        skin's answer is read between solves (:mod:`~sim_tactile.sim.slide`).
     """
 
     primitive_collider: bool = True
     compiled_hold: bool = True
     reduce_skin: bool = True
     skin_solver: str = "auto"
+    solve_every: int = 1
+
+    def __post_init__(self) -> None:
+        from ... import _validate as v
+
+        v.integer("solve_every", self.solve_every, 1, MAX_SOLVE_EVERY)
 
 
 class Runner:
@@ -205,6 +216,16 @@ class Runner:
         if self.z0 + z < -self.max_depth or not (math.isfinite(z) and abs(z) < 0.05):
             self._check_depth(force_cmd, Fs)
         return Fs
+
+    def coast(self, slide_v: float) -> None:
+        """One step of the finger's dynamics without a skin solve, under quasi-static force
+        control: the bone keeps its height (the held step set it) while MuJoCo slides it at
+        ``slide_v``; the skin's answer for this step is read elsewhere (``solve_every``)."""
+        self._qvel[self._jz] = 0.0
+        self._qfrc[self._jz] = 0.0
+        self._qfrc[self._jx] = 0.0
+        self._ctrl[0] = slide_v
+        mujoco.mj_step(self._m_dyn, self.d_dyn)
 
     def _after_skin(self, Fs: float, top: float, force_cmd: float, slide_v: float) -> float:
         """Check the skin's load and depth; returns the friction drag on the bone [N]. The
