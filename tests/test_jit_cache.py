@@ -21,7 +21,7 @@ import pytest
 
 import sim_tactile
 from sim_tactile import hashing
-from sim_tactile._jit import kernel_stamp, njit
+from sim_tactile._jit import kernel_root, kernel_stamp, njit
 
 _CALLEE = """
 from ._jit import njit
@@ -57,11 +57,15 @@ def _copy_package(tmp_path: Path, *, with_caches: bool) -> Path:
     return pkg
 
 
-def _env(pkg: Path, tmp_path: Path, numba_cache: Path | None = None) -> dict:
+def _env(pkg: Path, tmp_path: Path, kernels: Path | None = None) -> dict:
+    """The copy's environment: its own kernel folder (``kernels``, default a new one), so
+    that nothing it compiles reaches the machine's."""
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-    env.update(PYTHONPATH=str(pkg.parent), SIM_TACTILE_CACHE=str(tmp_path / "cache"))
-    if numba_cache is not None:
-        env["NUMBA_CACHE_DIR"] = str(numba_cache)
+    env.update(
+        PYTHONPATH=str(pkg.parent),
+        SIM_TACTILE_CACHE=str(tmp_path / "cache"),
+        SIM_TACTILE_KERNELS=str(kernels or tmp_path / "kernels"),
+    )
     return env
 
 
@@ -167,23 +171,26 @@ def test_a_slide_moves_when_a_collider_shape_in_another_file_is_edited(tmp_path)
     """The tracker's case: raise the cylinders' tops (sim/collide/shapes.py::cylinder_distance,
     which the compiled collider in sim/collide/primitive.py calls) by 0.2 mm in place. The next
     slide moves (it was the old slide bit for bit), the kernels of the modules that import the
-    shapes are compiled again, and a kernel that does not (the contact solve's) is served from
-    its cache as it was. (That a recompiled kernel computes the edited code is the fast test
-    above: a fresh compile of a whole slide here would cost a minute of the suite.)"""
-    pkg = _copy_package(tmp_path, with_caches=True)
-    env = _env(pkg, tmp_path)
+    shapes are compiled again under their new stamp, and a kernel that does not (the contact
+    solve's) is served as it was. (That a recompiled kernel computes the edited code is the
+    fast test above: a fresh compile of a whole slide here would cost a minute of the suite.)
+    The copy starts from the machine's compiled kernels, copied."""
+    pkg = _copy_package(tmp_path, with_caches=False)
+    kernels = tmp_path / "kernels"
+    if kernel_root().is_dir():
+        shutil.copytree(kernel_root(), kernels)
+    env = _env(pkg, tmp_path, kernels)
 
     def slide(name: str) -> np.ndarray:
         out = tmp_path / f"{name}.npy"
         subprocess.run([sys.executable, "-c", _SLIDE, str(out)], env=env, check=True, cwd=tmp_path)
         return np.load(out)
 
-    def indexes() -> dict[str, bytes]:
-        found = (pkg / "sim").rglob("__pycache__/*.nbi")
-        return {str(f.relative_to(pkg)): f.read_bytes() for f in found}
+    def stamps() -> dict[str, set[str]]:
+        return {d.name: {s.name for s in d.iterdir()} for d in kernels.iterdir() if d.is_dir()}
 
     before = slide("before")
-    kept = indexes()
+    kept = stamps()
     shapes = pkg / "sim" / "collide" / "shapes.py"
     text = shapes.read_text()
     old = "    if qr <= 0.0 and upright:\n        return lz - hz\n"
@@ -191,9 +198,25 @@ def test_a_slide_moves_when_a_collider_shape_in_another_file_is_edited(tmp_path)
     shapes.write_text(text.replace(old, old.replace("lz - hz", "lz - hz - 0.0002")))
     after = slide("after")
     assert not np.array_equal(after, before), "the cached collider kept the old shapes"
-    now = indexes()
-    redone = {k for k in kept if now.get(k) != kept[k]}
-    assert any("collide/__pycache__/primitive.depths_kernel" in k for k in redone), redone
-    assert any("step/__pycache__/held._held_kernel" in k for k in redone), redone
-    contact = [k for k in kept if "skin/contact/__pycache__/kernels." in k]
-    assert contact and not set(contact) & redone, redone
+    now = stamps()
+    renewed = {m for m in now if now[m] - kept.get(m, set())}
+    assert {"sim_tactile.sim.collide.primitive", "sim_tactile.sim.step.held"} <= renewed
+    assert "sim_tactile.sim.skin.contact.kernels" in kept
+    assert "sim_tactile.sim.skin.contact.kernels" not in renewed
+
+
+def test_a_module_keeps_its_most_recent_code_versions(tmp_path):
+    """The kernel folder keeps the newest versions of a module beside the one in use."""
+    import os
+
+    from sim_tactile._jit import KEEP_VERSIONS, _prune
+
+    module = tmp_path / "sim_tactile.x"
+    for k in range(KEEP_VERSIONS + 3):
+        d = module / f"v{k}"
+        d.mkdir(parents=True)
+        os.utime(d, (1000 + k, 1000 + k))
+    _prune(module / "v0")  # the oldest, used again now
+    kept = {d.name for d in module.iterdir()}
+    assert len(kept) == KEEP_VERSIONS and "v0" in kept
+    assert kept == {"v0", *(f"v{k}" for k in range(4, KEEP_VERSIONS + 3))}
