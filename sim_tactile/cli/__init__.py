@@ -57,6 +57,21 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def documented_parser() -> argparse.ArgumentParser:
+    """:func:`build_parser` with every help text written out (some are computed only when a
+    help is printed), for the manual's command-line page."""
+    p = build_parser()
+    stack = [p]
+    while stack:
+        parser = stack.pop()
+        for action in parser._actions:
+            if callable(action.help):
+                action.help = action.help()
+            if isinstance(action, argparse._SubParsersAction):
+                stack.extend(action.choices.values())
+    return p
+
+
 def _raise_terminated(signum, frame) -> None:
     raise Terminated(signum)
 

@@ -262,6 +262,6 @@ def add_parsers(sub) -> None:
         action="append",
         required=True,
         metavar="PARAM=v1,v2",
-        help=_set_help(),
+        help=_set_help,  # called when the help is printed
     )
     _add_task_options(ab, "Use the task's quick data and repeats.")
