@@ -12,10 +12,12 @@ from sim_tactile.sim import Protocol, StepOptions, prepare, simulate
 from sim_tactile.sim.slide import _slide, _slide_sampled
 
 PROTO = Protocol(speed_m_s=0.06, force_n=1.0, duration_s=0.3, start="texture", rate_hz=100.0)
-#: The loads of a 2.5 mm ridge plate under a 2 mm taxel change by a few per cent a step at
-#: 60 mm/s (0.12 mm of travel); read off a line over 4 steps they stay within this of the
-#: per-step solve (measured 0.3% rel L2 on finger7/ridges-4 at L0; perf/bench_response.py).
-REL_L2_EVERY_4 = 0.02
+#: On a 2.5 mm ridge plate under 2 mm taxels at L0 (1 mm nodes: the per-step loads jump
+#: as node rows cross the walls, 0.12 mm of travel a step) the line between solves misses
+#: those jumps: 3.3% rel L2 over 0.3 s on the texture at 2 steps, 3.6% at 4. Over whole slides
+#: of smooth scenes it does far better (perf/bench_response.py: the BioTac's 1.0% and the
+#: iCub's 1.1% at 4 steps); this only bounds the jumpy case and its growth.
+REL_L2_JUMPY = 0.06
 
 
 def _pressed(fidelity: str = "L0"):
@@ -33,21 +35,19 @@ def test_one_solve_every_step_is_the_per_step_slide_bit_for_bit():
 
 
 def test_fewer_solves_stay_close_to_the_per_step_solve():
-    ref = simulate("finger7/ridges-4", "grid3x3", protocol=PROTO, fidelity="L0", seed=2, ideal=True)
-    res = simulate(
-        "finger7/ridges-4",
-        "grid3x3",
-        protocol=PROTO,
-        fidelity="L0",
-        seed=2,
-        ideal=True,
-        options=StepOptions(solve_every=4),
-    )
-    a, b = res.recording.data.astype(float), ref.recording.data.astype(float)
-    assert res.recording.meta["solve_every"] == 4 and ref.recording.meta["solve_every"] == 1
-    assert not np.array_equal(a, b)  # it did solve less often
-    assert np.linalg.norm(a - b) / np.linalg.norm(b) < REL_L2_EVERY_4
-    assert res.recording.meta["x_pad_m"] == ref.recording.meta["x_pad_m"]  # the same dynamics
+    kw = dict(protocol=PROTO, fidelity="L0", seed=2, ideal=True)
+    ref = simulate("finger7/ridges-4", "grid3x3", **kw)
+    b = ref.recording.data.astype(float)
+    err = {}
+    for n in (2, 4):
+        res = simulate("finger7/ridges-4", "grid3x3", options=StepOptions(solve_every=n), **kw)
+        a = res.recording.data.astype(float)
+        assert res.recording.meta["solve_every"] == n
+        assert res.recording.meta["x_pad_m"] == ref.recording.meta["x_pad_m"]  # same dynamics
+        assert not np.array_equal(a, b)  # it did solve less often
+        err[n] = np.linalg.norm(a - b) / np.linalg.norm(b)
+    assert ref.recording.meta["solve_every"] == 1
+    assert err[2] <= err[4] < REL_L2_JUMPY, err
 
 
 def test_position_control_solves_every_step_whatever_is_asked():
