@@ -1,14 +1,18 @@
-"""The skin solved at fewer steps than the dynamics (``StepOptions.solve_every``): its error
-against the per-step solve and its speed, for every task scene whose force is held
-quasi-statically.
+"""The skin solved at fewer steps than the dynamics (``StepOptions.solve_every``) or to a
+looser tolerance (``StepOptions.solve_tol``, the spectral solve's): its error against the
+per-step solve at the reference tolerance and its speed, for every task scene whose force is
+held quasi-statically.
 
-    python perf/bench_response.py [--scenes finger7-v1,...] [--slides 3] [--every 1,2,4,8]
-        [--json]
+    python perf/bench_response.py [--scenes finger7-v1,...] [--slides 3]
+        [--settings 1,2,4,8,1:1e-4,4:1e-4] [--json]
+
+A setting is ``n`` (``solve_every``) or ``n:tol`` (with ``solve_tol``); the reference, ``1``,
+is always measured.
 
 For each scene, one process simulates ``--slides`` of the task's slides (the first slide of
 plates spread over the task's list; the same slides for every setting), after one warm-up
 slide of each plate that is not counted, with one artefact cache (a data set's steady
-state). Each slide records the noise-free taxel loads (``ideal``); for each ``solve_every``:
+state). Each slide records the noise-free taxel loads (``ideal``); for each setting:
 
 - ``rel_l2``: the relative L2 of the taxel loads over the whole slides against the per-step
   solve, ``||a - b|| / ||b||`` over every sample and taxel of all the slides;
@@ -55,7 +59,7 @@ def jobs_of(task_id: str, n: int):
     return [jobs[p * per + 1] for p in picks], [jobs[p * per] for p in picks]
 
 
-def run(job, every: int, cache) -> tuple[np.ndarray, float, float]:
+def run(job, every: int, cache, tol: float | None = None) -> tuple[np.ndarray, float, float]:
     """The slide's ideal loads, its CPU seconds and its simulated seconds."""
     from sim_tactile.sim import StepOptions, simulate
 
@@ -69,13 +73,24 @@ def run(job, every: int, cache) -> tuple[np.ndarray, float, float]:
         seed=job.seed,
         ideal=True,
         pitch_m=job.pitch_m,
-        options=StepOptions(solve_every=every),
+        options=StepOptions(solve_every=every, solve_tol=tol),
         cache=cache,
     )
     return np.asarray(res.recording.data, np.float64), time.process_time() - t0, res.sim_s
 
 
-def measure(task_id: str, n: int, everies: list[int], rounds: int) -> list[dict]:
+def parse_settings(text: str) -> list[tuple[int, float | None]]:
+    """``"1,4,1:1e-4"`` -> ``[(1, None), (4, None), (1, 1e-4)]``, the reference first."""
+    out = [(1, None)]
+    for part in text.split(","):
+        every, _, tol = part.partition(":")
+        s = (int(every), float(tol) if tol else None)
+        if s not in out:
+            out.append(s)
+    return out
+
+
+def measure(task_id: str, n: int, everies: list, rounds: int) -> list[dict]:
     from sim_tactile.cache import ArtefactCache
 
     cache = ArtefactCache(tempfile.mkdtemp(prefix="bench-response-"))
@@ -83,16 +98,16 @@ def measure(task_id: str, n: int, everies: list[int], rounds: int) -> list[dict]
     for job in warm:
         run(replace(job, ideal=True), 1, cache)
     ref = {}
-    cpu = {e: [] for e in everies}
+    cpu = {s: [] for s in everies}
     sim = 0.0
     loads = {}
     for _ in range(rounds):
         for e in everies:
             total = 0.0
             for i, job in enumerate(jobs):
-                x, c, s = run(job, e, cache)
+                x, c, s = run(job, e[0], cache, e[1])
                 total += c
-                if e == 1:
+                if e == (1, None):
                     ref[i] = x
                     sim += s / rounds
                 loads[e, i] = x
@@ -104,12 +119,15 @@ def measure(task_id: str, n: int, everies: list[int], rounds: int) -> list[dict]
         rows.append(
             {
                 "scene": task_id,
-                "solve_every": e,
+                "solve_every": e[0],
+                "solve_tol": e[1],
                 "slides": len(jobs),
                 "rel_l2": float(np.linalg.norm(a - b) / np.linalg.norm(b)),
                 "max_taxel": float(np.abs(a - b).max() / np.abs(b).max()),
                 "rtf": sim / statistics.median(cpu[e]),
-                "speedup": statistics.median(r / x for r, x in zip(cpu[1], cpu[e], strict=True)),
+                "speedup": statistics.median(
+                    r / x for r, x in zip(cpu[1, None], cpu[e], strict=True)
+                ),
             }
         )
     return rows
@@ -119,11 +137,16 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", default=None, help="comma-separated task ids (default: all)")
     ap.add_argument("--slides", type=int, default=3, help="slides per scene (one per plate)")
-    ap.add_argument("--every", default="1,2,4,8", help="the solve_every values (1 first)")
+    ap.add_argument(
+        "--settings",
+        "--every",
+        default="1,2,4,8",
+        help="solve_every values, each optionally :solve_tol",
+    )
     ap.add_argument("--rounds", type=int, default=1, help="alternating runs of the settings")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
-    everies = sorted({1, *(int(e) for e in args.every.split(","))})
+    everies = parse_settings(args.settings)
     scenes = args.scenes.split(",") if args.scenes else scene_ids()
     out = []
     for scene in scenes:
@@ -131,7 +154,8 @@ def main() -> int:
             out.append(row)
             if not args.json:
                 print(
-                    f"{row['scene']:28s} every {row['solve_every']:2d}: rel L2 "
+                    f"{row['scene']:28s} every {row['solve_every']:2d} tol "
+                    f"{row['solve_tol'] or 1e-10:5.0e}: rel L2 "
                     f"{100 * row['rel_l2']:6.3f}%  max taxel {100 * row['max_taxel']:6.3f}%  "
                     f"RTF {row['rtf']:7.2f}  x{row['speedup']:.2f}",
                     flush=True,

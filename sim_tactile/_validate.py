@@ -37,20 +37,23 @@ def in_range(
     hi_open: bool = False,
     unit: str = "",
 ) -> float:
-    """Return ``float(value)`` if it lies in the interval, else raise a ConfigError."""
-    v = finite(name, value)
+    """Return ``float(value)`` if it lies in the interval, else raise a ConfigError that
+    names the interval (also for a non-finite value)."""
+    left = "(" if lo_open else "["
+    right = ")" if hi_open else "]"
+    lo_s = "-inf" if lo is None else f"{lo:g}"
+    hi_s = "inf" if hi is None else f"{hi:g}"
+    u = f" {unit}" if unit else ""
+    valid = f"valid: {left}{lo_s}, {hi_s}{right}{u}"
+    try:
+        v = finite(name, value)
+    except ConfigError as exc:
+        raise ConfigError(f"{exc}; {valid}") from None
     bad = (lo is not None and (v <= lo if lo_open else v < lo)) or (
         hi is not None and (v >= hi if hi_open else v > hi)
     )
     if bad:
-        left = "(" if lo_open else "["
-        right = ")" if hi_open else "]"
-        lo_s = "-inf" if lo is None else f"{lo:g}"
-        hi_s = "inf" if hi is None else f"{hi:g}"
-        u = f" {unit}" if unit else ""
-        raise ConfigError(
-            f"{name} = {v:g}{u} is out of range; valid: {left}{lo_s}, {hi_s}{right}{u}"
-        )
+        raise ConfigError(f"{name} = {v:g}{u} is out of range; {valid}")
     return v
 
 

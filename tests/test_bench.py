@@ -189,6 +189,7 @@ def test_pulse_period_of_a_known_pulse_train():
     assert m["periods"] > 2
 
 
+@pytest.mark.slow
 def test_speed_error_tiny_sweep(tmp_path, cache):
     sweep = Sweep(
         scenes=("finger7",),

@@ -99,6 +99,7 @@ def test_simulate_bad_sensor_is_one_line(cli, tmp_path):
     assert len(res.stderr.strip().splitlines()) == 1 and "nope" in res.stderr
 
 
+@pytest.mark.slow
 def test_simulate_force_control_flag(cli, tmp_path):
     args = ["simulate", "--plate", "finger7/ridges-4", "--sensor", "grid3x3", "--speed", "0.06"]
     # L1 at the grid that resolves the ridges (auto refines ridges-4 to 2193 nodes)
@@ -115,6 +116,7 @@ def test_simulate_force_control_flag(cli, tmp_path):
     assert np.ptp(forces["dynamic"]) > 1e-3  # the damped bone's force moves
 
 
+@pytest.mark.slow
 def test_press_a_layered_skin_and_read_the_stress_at_depth(cli):
     layers = '[{"thickness_m": 0.001, "young_pa": 6e5, "poisson": 0.45}, {"thickness_m": 0.003, "young_pa": 3e5}]'
     common = ["press", "--force", "1", "--pitch", "0.0005", "--json"]

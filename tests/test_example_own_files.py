@@ -43,6 +43,7 @@ def test_the_example_generates_and_runs(cli, tmp_path):
     assert p.returncode == 2 and "another configuration" in p.stderr
 
 
+@pytest.mark.slow
 def test_a_bad_evaluate_table_is_refused_before_anything_runs(tmp_path):
     from sim_tactile.errors import ConfigError
     from sim_tactile.tasks.config_task import config_task

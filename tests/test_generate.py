@@ -448,6 +448,7 @@ def tiny_task():
     unregister(spec.id)
 
 
+@pytest.mark.slow
 def test_tasks_read_their_data_from_a_store(tiny_task, tmp_path):
     from sim_tactile.tasks import DataRequest, run_task
     from sim_tactile.tasks.runner import task_data
@@ -516,6 +517,7 @@ def test_a_suite_gets_one_group_per_part(tmp_path):
     assert datasets.open(out, part="textures20-icub60-v1").verify() == []
 
 
+@pytest.mark.slow
 def test_a_configuration_on_the_probe_rig_writes_its_slides(tmp_path):
     """``[rig]`` and ``paper_stack``: the multilayer paper's rig from a user's file, whole
     windows of both plates written, each slide the rig's (its meta says so)."""

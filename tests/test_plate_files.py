@@ -85,6 +85,7 @@ def test_a_bad_plate_file_is_refused_naming_the_key(what, text, words, tmp_path)
         assert w in msg, (what, msg)
 
 
+@pytest.mark.slow
 def test_a_plate_file_through_simulate_and_generate(cli, tmp_path, cache_dir, monkeypatch):
     """A user's grating of 2.2 mm period: simulate obeys the grating law (period = spacing /
     speed within 2%), and a configuration naming two plate files beside it makes a store

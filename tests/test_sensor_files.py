@@ -246,6 +246,7 @@ def test_the_data_form_of_a_sensor_is_what_the_file_holds():
     assert content_hash(again.to_json()) == content_hash(get_sensor("grid3x3").to_json())
 
 
+@pytest.mark.slow
 def test_a_4x4_sensor_file_through_simulate_and_generate(cli, tmp_path, cache_dir, monkeypatch):
     """16 channels from simulate (the console script) and from generate (a configuration
     naming the file beside it); the store records the sensor whole, and it re-creates the

@@ -312,6 +312,7 @@ def test_a_slide_over_a_height_map_grating_obeys_the_grating_law(grating, cache)
     assert m["period_s"] == pytest.approx(PERIOD_M / 0.04, rel=PERIOD_RTOL)
 
 
+@pytest.mark.slow
 def test_the_probe_rig_slides_a_height_map_grating(grating):
     """The probe rig on the map (its face the map's samples at the rig's nodes): the centre
     element's dominant period over the cruise is the spacing over the speed."""

@@ -542,6 +542,7 @@ def _punch_fem(h, nu, a, mu, n_per_h=16, far=10.0, delta=1e-5):
     return P.sum() / delta, P[x < 0].sum() / P.sum(), P[x > 0].sum() / P.sum()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("nu", [0.49, 0.3])
 def test_friction_shifts_a_punch_on_a_layer_as_plane_strain_fem(nu):
     """A flat pad 8 mm wide (80 mm long: plane strain at its middle) pressed on a 4 mm layer
@@ -581,6 +582,7 @@ RIDGE_DEFAULT_RTOL = 0.04
 RIDGE_FINEST_RTOL = 0.02
 
 
+@pytest.mark.slow
 def test_a_flat_ridge_pressed_into_a_layered_pad_matches_fem_at_default_and_finest_pitch():
     a = 4e-3
     st = Stack((Layer(H, E, 0.49),))

@@ -56,6 +56,7 @@ def test_uncoupled_winkler_misses_hertz_as_documented(hertz_ref, cache):
 THIN_RTOL = 0.01
 
 
+@pytest.mark.slow
 def test_a_thin_compressible_layer_is_an_oedometric_bed(cache):
     """A 0.1 mm layer (nu 0.3) bonded to the bone under the sphere: each point compresses
     the layer alone, p = M delta / h with M the oedometric modulus, so the contact follows in

@@ -60,7 +60,14 @@ def test_a_task_has_data_or_parts():
 SIMULATED = [t for t in task_ids() if isinstance(get_task(t).get_data, SlideSet)]
 
 
-@pytest.mark.parametrize("task_id", SIMULATED)
+#: the iCub's spectral slides take 5-15 s each: in the full suite only
+SLOW_TASKS = {"textures20-icub60-v1", "textures20-icub60-v2"}
+
+
+@pytest.mark.parametrize(
+    "task_id",
+    [pytest.param(t, marks=pytest.mark.slow) if t in SLOW_TASKS else t for t in SIMULATED],
+)
 def test_every_simulated_task_is_deterministic(task_id, cache):
     """One short slide of each task, simulated twice from the same seed: the same bits (on
     the probe rig, its whole window: a pass takes a second, and it is computed in about one)."""

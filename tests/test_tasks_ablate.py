@@ -77,6 +77,7 @@ def test_ablate_roughness_reuses_the_slides(tmp_path, cache_dir, monkeypatch):
     assert not any(line.startswith("simulating") for line in lines)
 
 
+@pytest.mark.slow
 def test_cli_ablate_names_a_bad_parameter_and_writes_nothing(tmp_path, cli):
     bad = cli(["ablate", "roughness8-v1", "--set", "gian=3", "--out", tmp_path], check=False)
     assert bad.returncode == 2 and "--set gian: unknown parameter; valid: gain" in bad.stderr

@@ -40,6 +40,7 @@ def test_compare_to_the_paper():
     assert compare(0.5, None, None, quick=False)["status"] == "no paper value"
 
 
+@pytest.mark.slow
 def test_run_task_writes_report_and_figures(fake_icub, tmp_path):
     pytest.importorskip("torch")
     report = run_task(
@@ -77,6 +78,7 @@ def test_run_task_input_errors(fake_icub, tmp_path):
         run_task("icub20-real", tmp_path, repeats=0, data=fake_icub)
 
 
+@pytest.mark.slow
 def test_cli_run_json_and_errors(fake_icub, tmp_path, cli):
     out = cli(
         [

@@ -72,6 +72,7 @@ def assets():
     return Path(sim_tactile.assets.__path__[0])
 
 
+@pytest.mark.slow
 def test_a_copied_folder_resumes_and_runs_from_its_new_place(tmp_path, assets, cli, monkeypatch):
     monkeypatch.setenv("SIM_TACTILE_CACHE", str(tmp_path / "cache"))
     here = tmp_path / "here"

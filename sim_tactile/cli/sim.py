@@ -43,7 +43,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         fidelity=args.fidelity,
         seed=args.seed,
         ideal=args.ideal,
-        options=StepOptions(solve_every=args.solve_every),
+        options=StepOptions(solve_every=args.solve_every, solve_tol=args.solve_tol),
     )
     for w in res.warnings:
         log(f"warning: {w}")
@@ -232,6 +232,13 @@ def _add_simulate(sub) -> None:
         default=1,
         help="Solve the skin at every n-th step of a slide held at its force, reading the loads "
         "between off a line (1, the default: every step).",
+    )
+    sm.add_argument(
+        "--solve-tol",
+        type=float,
+        default=None,
+        help="The spectral contact solve's tolerance, in [1e-12, 1e-3] (default: 1e-10, the "
+        "reference); a looser one takes fewer iterations.",
     )
     sm.add_argument("--out", required=True, help="The recording to write (.npz).")
 

@@ -218,6 +218,9 @@ def _simulate(
         "drag_factor": drag_factor(proto.speed_m_s),
         "drag_regularised": drag_warning(proto.speed_m_s) is not None,
         "versions": versions(),
+        # the spectral solve's tolerance where it is not its reference (older recordings' meta
+        # is unchanged)
+        **({"solve_tol": tol} if (tol := (options or StepOptions()).solve_tol) is not None else {}),
         "warnings": warnings,
         "sim_s": sim_s,
         "wall_s": wall,
@@ -259,6 +262,7 @@ def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
         finger,
         winkler_k_pa_per_m=fid.winkler_k_pa_per_m,
         solver=options.skin_solver,
+        tol=options.solve_tol,
         cache=cache,
     )
     collider = make_collider(scene, options.primitive_collider)

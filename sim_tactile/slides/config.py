@@ -18,6 +18,8 @@
     solve_every = 1              # the skin solved at every n-th step of a slide held at its
                                  # force, the loads between read off a line (1: every step;
                                  # its error per task scene: the manual's results)
+    # solve_tol = 1e-4           # optional: the spectral contact solve's tolerance, in
+                                 # [1e-12, 1e-3] (absent: 1e-10, the reference)
 
     [protocol]                   # sim.protocol.Protocol: speed_m_s, force_n, duration_s,
     speed_m_s = 0.06             # rate_hz, press_s, settle_s, passes, return_stroke,
@@ -57,7 +59,7 @@ from ..plates import get_plate, preset_names
 from ..plates.user import is_user_plate, parse_ref
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
 from ..sensors.files import load_sensor_file
-from ..sim.plan.fidelity import FIDELITIES, MAX_SOLVE_EVERY
+from ..sim.plan.fidelity import FIDELITIES, MAX_SOLVE_EVERY, SOLVE_TOL_RANGE
 from ..sim.plan.protocol import Protocol
 from ..sim.plan.rig import ProbeRig
 from ..toml_text import check_text_size
@@ -83,6 +85,8 @@ TOP_KEYS = {
     "fidelity": ", ".join(FIDELITIES),
     "ideal": "true or false",
     "solve_every": f"integer in [1, {MAX_SOLVE_EVERY}]: the skin solved at every n-th step",
+    "solve_tol": f"number in [{SOLVE_TOL_RANGE[0]:g}, {SOLVE_TOL_RANGE[1]:g}]: the spectral "
+    "contact solve's tolerance",
     "protocol": "table",
     "randomise": "table",
     "finger": "table",
@@ -163,6 +167,9 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
     quick = v.integer("quick_slides_per_plate", cfg.get("quick_slides_per_plate", 2), 2, slides)
     fidelity = v.one_of("fidelity", cfg.get("fidelity", "auto"), FIDELITIES)
     solve_every = v.integer("solve_every", cfg.get("solve_every", 1), 1, MAX_SOLVE_EVERY)
+    solve_tol = cfg.get("solve_tol")
+    if solve_tol is not None:
+        solve_tol = v.in_range("solve_tol", solve_tol, *SOLVE_TOL_RANGE)
     ideal = cfg.get("ideal", False)
     if not isinstance(ideal, bool):
         raise ConfigError(f"ideal must be true or false, got {ideal!r}")
@@ -198,6 +205,7 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         rig=rig,
         sensor_spec=spec,
         solve_every=solve_every,
+        solve_tol=solve_tol,
     )
     return ss, seed, name
 

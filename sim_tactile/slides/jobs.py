@@ -64,6 +64,9 @@ class SlideJob:
     #: the skin solved at every n-th step of the slide (:class:`~sim_tactile.sim.StepOptions`;
     #: 1: every step)
     solve_every: int = 1
+    #: the spectral solve's tolerance (:class:`~sim_tactile.sim.StepOptions`; None: its
+    #: reference)
+    solve_tol: float | None = None
     #: the probe rig that makes the slide (:mod:`~sim_tactile.sim.plan.rig`), else the finger scene
     rig: ProbeRig | None = None
     #: what the job is called in messages (its plate's name and place in a set)
@@ -101,6 +104,8 @@ class SlideJob:
             d["pitch_m"] = self.pitch_m
         if self.solve_every != 1:
             d["solve_every"] = int(self.solve_every)
+        if self.solve_tol is not None:
+            d["solve_tol"] = float(self.solve_tol)
         return d
 
     def key(self) -> str:
@@ -135,7 +140,7 @@ class SlideJob:
                 seed=self.seed,
                 ideal=self.ideal,
                 pitch_m=self.pitch_m,
-                options=StepOptions(solve_every=self.solve_every),
+                options=StepOptions(solve_every=self.solve_every, solve_tol=self.solve_tol),
                 cache=cache,
             )
         except SimTactileError as exc:

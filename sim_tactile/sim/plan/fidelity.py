@@ -98,6 +98,9 @@ ANCHORED_GRIDS = ((0.5e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 1
 #: Most steps one held solve may stand for (``StepOptions.solve_every``): a sample of the
 #: slowest sensors spans about 20 steps.
 MAX_SOLVE_EVERY = 64
+#: The range a spectral contact solve's tolerance may be set in (``StepOptions.solve_tol``;
+#: its default, the reference, is :data:`~sim_tactile.sim.skin.contact.spectral.TOL`).
+SOLVE_TOL_RANGE = (1e-12, 1e-3)
 #: Steps to cross the smallest feature, at least.
 STEPS_PER_FEATURE = 20
 #: Longest time step auto may pick [s].

@@ -178,13 +178,14 @@ class SpectralSkin(_SolvedSkin):
 
     symmetric = True
 
-    def __init__(self, table: np.ndarray, what: str = "") -> None:
-        self.solver = Spectral(table)
+    def __init__(self, table: np.ndarray, what: str = "", tol: float | None = None) -> None:
+        self.solver = Spectral(table) if tol is None else Spectral(table, tol=tol)
         self.what = what
 
     @classmethod
-    def of(cls, grid: SkinGrid, finger: Finger) -> SpectralSkin:
-        """The finger's skin (its stack, else the half-space) on ``grid``'s lattice."""
+    def of(cls, grid: SkinGrid, finger: Finger, tol: float | None = None) -> SpectralSkin:
+        """The finger's skin (its stack, else the half-space) on ``grid``'s lattice; ``tol``:
+        its solve's tolerance (None: the reference, :data:`~.contact.spectral.TOL`)."""
         nx, ny = grid.lattice
         st = finger.stack
         if st is None:
@@ -195,6 +196,8 @@ class SpectralSkin(_SolvedSkin):
         (table,) = setup_memo(
             "spectral compliance table", parts, lambda: (_table(grid, finger),), SKIN_MODULES
         )
+        if tol is not None:
+            return cls(table, f"{what}; spectral solve on {nx} x {ny} nodes to {tol:g}", tol)
         return cls(table, f"{what}; spectral solve on {nx} x {ny} nodes")
 
     def stiffness(self, p: np.ndarray, area_m2: float) -> float:
@@ -337,6 +340,7 @@ def make_skin(
     inverse: bool = True,
     slide_dir: tuple[float, float] = (1.0, 0.0),
     solver: str = "auto",
+    tol: float | None = None,
     cache=None,
 ) -> SkinModel:
     """The skin model of a fidelity level: L0 the Winkler bed, L1 and L2 the coupled
@@ -347,7 +351,8 @@ def make_skin(
     whose friction enters the normal problem is always dense). ``cache``: an
     :class:`~sim_tactile.cache.ArtefactCache` that keeps a dense skin's arrays from one slide
     to the next (from :data:`CACHE_MIN_NODES` nodes; a smaller skin's arrays are kept in the
-    process only, by the same key, as computing them is as quick as reading them)."""
+    process only, by the same key, as computing them is as quick as reading them). ``tol``:
+    the spectral solve's tolerance (None: its reference, :data:`~.contact.spectral.TOL`)."""
     if solver not in SOLVERS:
         raise ConfigError(f"solver = {solver!r}; valid: {', '.join(SOLVERS)}")
     if level == "L0":
@@ -361,7 +366,7 @@ def make_skin(
             )
         spectral = False
     if spectral:
-        return SpectralSkin.of(grid, finger)
+        return SpectralSkin.of(grid, finger, tol=tol)
     if grid.n < CACHE_MIN_NODES:
         return _memo_dense(grid, finger, slide_dir, inverse)
     if cache is not None:

@@ -23,7 +23,7 @@ from ...errors import PhysicsError
 from ...plates import Plate
 from ...scene.model import Scene
 from ...sensors.pad import Finger
-from ..plan.fidelity import MAX_OMEGA_DT, MAX_SOLVE_EVERY, Fidelity
+from ..plan.fidelity import MAX_OMEGA_DT, MAX_SOLVE_EVERY, SOLVE_TOL_RANGE, Fidelity
 from ..skin.models import SkinModel
 from .held import HeldStep
 
@@ -78,6 +78,10 @@ class StepOptions:
         read off the line between the two solves on either side (1: every step, the
         reference). The finger's MuJoCo dynamics steps at every step as before; only the
         skin's answer is read between solves (:mod:`~sim_tactile.sim.slide`).
+    solve_tol: the spectral contact solve's tolerance (the pressures' relative change in one
+        iteration at which it stops), in :data:`~sim_tactile.sim.plan.fidelity.SOLVE_TOL_RANGE`;
+        None: :data:`~sim_tactile.sim.skin.contact.spectral.TOL`, the reference. A looser one
+        takes fewer iterations; a dense solve is exact to rounding and does not read it.
     """
 
     primitive_collider: bool = True
@@ -85,11 +89,14 @@ class StepOptions:
     reduce_skin: bool = True
     skin_solver: str = "auto"
     solve_every: int = 1
+    solve_tol: float | None = None
 
     def __post_init__(self) -> None:
         from ... import _validate as v
 
         v.integer("solve_every", self.solve_every, 1, MAX_SOLVE_EVERY)
+        if self.solve_tol is not None:
+            v.in_range("solve_tol", self.solve_tol, *SOLVE_TOL_RANGE)
 
 
 class Runner:
