@@ -11,7 +11,8 @@ it, which holds the key the entry was stored under and the SHA-256 and size of i
 :meth:`ArtefactCache.get` serves an entry only when both agree with the key asked for and with
 the bytes on disk; an entry that was altered, truncated, moved under another key or cannot be
 read is discarded with a :class:`~sim_tactile.errors.CacheWarning` naming the file, and made
-again. A cache that cannot be written (a full disk, a read-only folder) raises
+again. An entry whose checksum is not there yet is a miss and is left alone: another process
+may be between its two writes. A cache that cannot be written (a full disk, a read-only folder) raises
 :class:`~sim_tactile.errors.CacheError` in one line; a read-only cache whose entries are all
 there is read as usual.
 
@@ -85,8 +86,13 @@ class ArtefactCache:
         bad = _check_entry(p, key)
         if bad is None:
             return p
-        if bad != _NO_SUM:  # an entry cut short before its checksum is quietly made again
-            warnings.warn(f"cache entry {p}: {bad}; it is made again", CacheWarning, stacklevel=2)
+        if bad == _NO_SUM:
+            # a writer between its two writes (another worker filling the same fresh cache),
+            # or one that died there: a miss, left in place; the next put replaces it whole.
+            # Deleting it here pulled a finished entry from under the worker that had just
+            # written it.
+            return None
+        warnings.warn(f"cache entry {p}: {bad}; it is made again", CacheWarning, stacklevel=2)
         self.discard(key, ext)
         return None
 

@@ -58,7 +58,7 @@ def test_an_entry_moved_under_another_key_is_refused(tmp_path):
     (pa, sa), (pb, sb) = _entry(cache, KEY_A), _entry(cache, KEY_B)
     pb.parent.mkdir(parents=True, exist_ok=True)
     shutil.copy(pa, pb)  # the bytes alone: no checksum for b
-    assert cache.get(KEY_B, "bin") is None and not pb.exists()
+    assert cache.get(KEY_B, "bin") is None
     shutil.copy(pa, pb)
     shutil.copy(sa, sb)  # with a's checksum file: it names a's key
     with pytest.warns(CacheWarning, match="another key"):
@@ -160,3 +160,35 @@ def test_a_tampered_skin_is_computed_again(tmp_path):
     with pytest.warns(CacheWarning, match=str(f)):
         s = make_skin("L1", grid, finger, winkler_k_pa_per_m=1.0, cache=cache)
     assert s.C.tobytes() == plain.C.tobytes()
+
+
+def test_a_reader_leaves_a_writers_entry_between_its_two_writes_in_place(tmp_path, monkeypatch):
+    """Two workers filling one fresh cache: the reader must not delete the entry whose bytes
+    the writer has renamed into place but whose checksum it has not written yet (it did, and
+    the writer's next read of its own entry failed: MuJoCo could not open a plate's MJCF)."""
+    writer, reader = ArtefactCache(tmp_path), ArtefactCache(tmp_path)
+    real = cache_module.atomic_write
+    seen = {}
+
+    def write_then_read(path, data):
+        real(path, data)
+        if not path.name.endswith(cache_module.SUM_SUFFIX):
+            seen["reader"] = reader.get(KEY_A, "bin")  # the other worker looks now
+            seen["there"] = path.exists()
+
+    monkeypatch.setattr(cache_module, "atomic_write", write_then_read)
+    p = writer.put(KEY_A, "bin", b"the plate's bytes")
+    monkeypatch.setattr(cache_module, "atomic_write", real)
+    assert seen == {"reader": None, "there": True}
+    assert p.read_bytes() == b"the plate's bytes"
+    assert reader.get(KEY_A, "bin") == p
+
+
+def test_an_entry_left_without_its_checksum_is_made_again(tmp_path):
+    cache = ArtefactCache(tmp_path)
+    p, s = _entry(cache, KEY_A)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    p.write_bytes(b"cut short")  # a writer that died between its two writes
+    assert cache.get(KEY_A, "bin") is None
+    assert cache.put(KEY_A, "bin", b"whole") == p
+    assert cache.get(KEY_A, "bin") == p and p.read_bytes() == b"whole"
