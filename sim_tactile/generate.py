@@ -47,6 +47,7 @@ from .datasets.store import (
     open_data,
     open_root,
     read_checksums,
+    remove_partial_chunks,
     set_attrs,
     versions,
 )
@@ -223,6 +224,7 @@ def _open_or_create(out: Path, plans: list[Plan], root_attrs: dict, resume: bool
         raise StoreError(f"{out} exists and is not a data set; choose a new --out")
     if out.exists():
         root = open_root(out, "r+")
+        remove_partial_chunks(out)  # a killed writer's half-written chunk files
         if (root.attrs.get("parts") or []) != (root_attrs.get("parts") or []):
             raise StoreError(
                 f"{out} holds {root.attrs.get('parts') or 'one data set'}, this target "

@@ -212,6 +212,19 @@ def _create_group(root, folder: Path, path: str, spec: StoreSpec) -> None:
     g.attrs.put(sealed({**spec.attrs(), "integrity": integrity}))
 
 
+def remove_partial_chunks(path: str | Path) -> int:
+    """Remove the chunk files a killed writer left half written (Zarr writes each chunk to
+    ``<chunk>.<hex>.partial`` and renames it; ``kill -9`` between the two leaves the
+    temporary file, which no read uses). The caller holds the store's lock, so no writer is
+    between the two now. Returns how many were removed."""
+    n = 0
+    with fs_errors(Path(path)):
+        for stale in Path(path).rglob("*.partial"):
+            stale.unlink(missing_ok=True)
+            n += 1
+    return n
+
+
 def create_store(path: str | Path, specs: dict[str, StoreSpec], root_attrs: dict) -> None:
     """Create the store at ``path`` (which must not exist) with a group per spec (key ``""``:
     the root itself). Built under a fresh temporary name beside it and renamed: a store
