@@ -65,6 +65,14 @@ def test_a_bad_tolerance_names_its_range(bad):
         StepOptions(solve_tol=bad)
 
 
+def test_a_tolerance_is_kept_as_the_float_it_reads_as():
+    assert StepOptions(solve_tol="1e-4").solve_tol == 1e-4
+    ss = get_task("finger7-v1").get_data
+    from dataclasses import replace
+
+    assert type(replace(ss, solve_tol="1e-5").solve_tol) is float
+
+
 def test_a_configuration_file_takes_the_tolerance_and_refuses_a_bad_one():
     cfg = {
         "plates": ["finger7/flat", "finger7/ridges-4"],

@@ -179,7 +179,8 @@ def _simulate(
     nominal, proto, fid = pressed.nominal, pressed.protocol, pressed.fidelity
     window, runner, warnings = pressed.window, pressed.runner, pressed.warnings
     layout = sensor.layout
-    every = (options or StepOptions()).solve_every
+    opts = options or StepOptions()
+    every = opts.solve_every
     if every > 1 and runner.hold is not None and proto.force_control != "position":
         slide = _slide_sampled(runner, window, proto, fid.steps_per_sample, every)
     else:
@@ -220,7 +221,7 @@ def _simulate(
         "versions": versions(),
         # the spectral solve's tolerance where it is not its reference (older recordings' meta
         # is unchanged)
-        **({"solve_tol": tol} if (tol := (options or StepOptions()).solve_tol) is not None else {}),
+        **({"solve_tol": opts.solve_tol} if opts.solve_tol is not None else {}),
         "warnings": warnings,
         "sim_s": sim_s,
         "wall_s": wall,

@@ -167,9 +167,6 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
     quick = v.integer("quick_slides_per_plate", cfg.get("quick_slides_per_plate", 2), 2, slides)
     fidelity = v.one_of("fidelity", cfg.get("fidelity", "auto"), FIDELITIES)
     solve_every = v.integer("solve_every", cfg.get("solve_every", 1), 1, MAX_SOLVE_EVERY)
-    solve_tol = cfg.get("solve_tol")
-    if solve_tol is not None:
-        solve_tol = v.in_range("solve_tol", solve_tol, *SOLVE_TOL_RANGE)
     ideal = cfg.get("ideal", False)
     if not isinstance(ideal, bool):
         raise ConfigError(f"ideal must be true or false, got {ideal!r}")
@@ -205,7 +202,7 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         rig=rig,
         sensor_spec=spec,
         solve_every=solve_every,
-        solve_tol=solve_tol,
+        solve_tol=cfg.get("solve_tol"),  # checked by SlideSet
     )
     return ss, seed, name
 

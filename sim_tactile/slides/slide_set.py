@@ -105,8 +105,9 @@ class SlideSet:
         if self.pitch_m is not None:
             v.in_range("pitch_m", self.pitch_m, 20e-6, 5e-3, unit="m")
         v.integer("solve_every", self.solve_every, 1, MAX_SOLVE_EVERY)
-        if self.solve_tol is not None:
-            v.in_range("solve_tol", self.solve_tol, *SOLVE_TOL_RANGE)
+        if self.solve_tol is not None:  # kept as the float it reads as
+            tol = v.in_range("solve_tol", self.solve_tol, *SOLVE_TOL_RANGE)
+            object.__setattr__(self, "solve_tol", tol)
         if self.rig is not None and self.protocol.duration_s is None:
             raise ConfigError("a slide set on the probe rig needs protocol.duration_s (its window)")
         if len(self.plates) < 2:

@@ -50,7 +50,7 @@ from ...scene.tractions import shear_normal_compliance
 from ...sensors.pad import Finger
 from ..plan.fidelity import DENSE_MAX_NODES
 from . import contact
-from .contact.spectral import Spectral
+from .contact.spectral import TOL, Spectral
 
 
 class WinklerSkin:
@@ -179,7 +179,7 @@ class SpectralSkin(_SolvedSkin):
     symmetric = True
 
     def __init__(self, table: np.ndarray, what: str = "", tol: float | None = None) -> None:
-        self.solver = Spectral(table) if tol is None else Spectral(table, tol=tol)
+        self.solver = Spectral(table, tol=TOL if tol is None else tol)
         self.what = what
 
     @classmethod
@@ -196,9 +196,8 @@ class SpectralSkin(_SolvedSkin):
         (table,) = setup_memo(
             "spectral compliance table", parts, lambda: (_table(grid, finger),), SKIN_MODULES
         )
-        if tol is not None:
-            return cls(table, f"{what}; spectral solve on {nx} x {ny} nodes to {tol:g}", tol)
-        return cls(table, f"{what}; spectral solve on {nx} x {ny} nodes")
+        to = "" if tol is None else f" to {tol:g}"
+        return cls(table, f"{what}; spectral solve on {nx} x {ny} nodes{to}", tol)
 
     def stiffness(self, p: np.ndarray, area_m2: float) -> float:
         """``area * 1' inv(C_SS) 1`` on the contact set of ``p`` [N/m]."""

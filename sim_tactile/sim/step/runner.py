@@ -95,8 +95,9 @@ class StepOptions:
         from ... import _validate as v
 
         v.integer("solve_every", self.solve_every, 1, MAX_SOLVE_EVERY)
-        if self.solve_tol is not None:
-            v.in_range("solve_tol", self.solve_tol, *SOLVE_TOL_RANGE)
+        if self.solve_tol is not None:  # kept as the float it reads as
+            tol = v.in_range("solve_tol", self.solve_tol, *SOLVE_TOL_RANGE)
+            object.__setattr__(self, "solve_tol", tol)
 
 
 class Runner:
