@@ -108,6 +108,7 @@ def _stopped_at_the_limit(ref: str) -> None:
     assert time.monotonic() - t0 < BOUND_S
 
 
+@pytest.mark.slow
 def test_a_script_with_a_child_is_stopped_at_its_limit_child_included(script):
     _stopped_at_the_limit(f"{script}:child_and_sleep")
     assert _gone(_pid(script.parent / "child.pid"))

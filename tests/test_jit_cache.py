@@ -77,6 +77,7 @@ def _python(code: str, env: dict, cwd: Path) -> str:
     return p.stdout
 
 
+@pytest.mark.slow
 def test_a_kernel_follows_an_edit_of_a_jitted_callee_in_another_file(tmp_path):
     pkg = _copy_package(tmp_path, with_caches=False)
     (pkg / "_probe_caller.py").write_text(_CALLER)
@@ -102,6 +103,7 @@ print(kernels_to_compile(("sim_tactile._probe_caller",)))
 """
 
 
+@pytest.mark.slow
 def test_the_first_run_notice_counts_a_stale_kernel_as_one_to_compile(tmp_path):
     """The notice's count agrees with the versioned cache: a kernel whose cached copy numba
     would not load (its callee in another file edited) is still to compile, although its

@@ -142,6 +142,7 @@ def test_a_slide_on_the_spectral_skin_records_what_the_dense_skin_records(cache)
     np.testing.assert_allclose(y, x, rtol=0, atol=1e-6 * x.max())
 
 
+@pytest.mark.slow
 def test_a_warm_start_that_cycles_gives_way_to_a_fresh_one():
     """A held step of finger7/bumps-6x6 at 0.333 mm (slide 5 of finger7-v1): from the last
     step's 45 loaded nodes the iteration cycled (the pressures changing by 41% of their sum
