@@ -30,7 +30,9 @@ from threadpoolctl import threadpool_limits
 
 from sim_tactile.bench.speed_error import run_speed_error
 from sim_tactile.bench.sweep import Sweep
+from sim_tactile.plates import get_plate
 from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.sim.plan.slide import Slide
 from sim_tactile.sim.slide import prepare
 
 V = 0.06
@@ -105,7 +107,8 @@ def loop_overhead(repeats: int = 5) -> dict:
 
     from sim_tactile.sim.step.held import CompiledHeldStep
 
-    pressed = prepare(PLATE, "grid3x3", protocol=Protocol(speed_m_s=V, duration_s=0.3))
+    slide = Slide(get_plate(PLATE), "grid3x3", Protocol(speed_m_s=V, duration_s=0.3))
+    pressed = prepare(slide)
     run = pressed.runner
     s = run.s
     n = 200

@@ -31,6 +31,7 @@ def main() -> int:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
 
+    from sim_tactile.sim import StepOptions
     from sim_tactile.tasks import get_task
     from sim_tactile.tasks.registry import register
     from sim_tactile.tasks.runner import run_task
@@ -38,7 +39,8 @@ def main() -> int:
     spec = get_task(args.task)
     task_id = args.task
     if args.solve_every != 1 or args.solve_tol is not None:
-        data = replace(spec.get_data, solve_every=args.solve_every, solve_tol=args.solve_tol)
+        opts = StepOptions(solve_every=args.solve_every, solve_tol=args.solve_tol)
+        data = replace(spec.get_data, options=opts)
         task_id = f"{args.task}+n{args.solve_every}+tol{args.solve_tol or 'ref'}"
         register(replace(spec, id=task_id, get_data=data))
     out = args.out or tempfile.mkdtemp(prefix="bench-task-solve-")

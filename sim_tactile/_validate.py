@@ -83,6 +83,26 @@ def one_of(name: str, value: object, allowed: Iterable[str]) -> str:
     return str(value)
 
 
+def known_keys(
+    where: str, table: object, valid: Iterable[str], *, prefix: str = "", describe=None
+) -> None:
+    """Refuse the keys of ``table`` (a mapping, or the keys themselves) that are not in
+    ``valid``, in the one message every reader gives: ``<where>: unknown key(s) a, b;
+    valid: ...``. ``where`` names the table (a file, a section; empty: none); ``prefix`` is
+    put before every key named (``pad.``); ``describe`` maps a valid key to its text in the
+    message (default: the prefixed key)."""
+    valid = list(valid)
+    bad = sorted(set(table) - set(valid), key=str)
+    if not bad:
+        return
+    text = describe or (lambda k: f"{prefix}{k}")
+    head = f"{where}: " if where else ""
+    raise ConfigError(
+        f"{head}unknown key(s) {', '.join(f'{prefix}{b}' for b in bad)}; valid: "
+        + ", ".join(text(k) for k in valid)
+    )
+
+
 def finite_array(name: str, arr: np.ndarray, hint: str = "") -> np.ndarray:
     """Return ``arr`` if every value is finite, else raise a ConfigError naming the first
     non-finite value, its index and how many there are (``hint``: what to do about it)."""

@@ -54,7 +54,7 @@ def test_a_bad_evaluate_table_is_refused_before_anything_runs(tmp_path):
     for change, words in [
         ('classifiers = ["svm-raw", "svm-spike"]', ["evaluate.classifiers", "svm-rbf", "knn"]),
         ("repeats = 5", ["evaluate.repeats", "0", "[1, 10000]"]),
-        ('split = "7:3"', ["unknown evaluate key", "folds"]),
+        ('split = "7:3"', ["unknown key(s) evaluate.folds", "valid: evaluate."]),
     ]:
         bad = {
             'classifiers = ["svm-raw", "svm-spike"]': 'classifiers = ["svm-rbf"]',

@@ -72,7 +72,7 @@ def test_bad_rig_input_names_the_parameter():
         ProbeRig(node_pitch_m=1e-6)
     with pytest.raises(ConfigError, match="rig direction"):
         ProbeRig(direction="up")
-    with pytest.raises(ConfigError, match="unknown keys"):
+    with pytest.raises(ConfigError, match=r"rig: unknown key\(s\) pitch; valid: node_pitch_m"):
         ProbeRig.from_json({"pitch": 1})
     with pytest.raises(ConfigError, match="duration_s >= "):
         ProbePass.of(ProbeRig(), 0.036, 6.5e-3, 2.5e-3, 0.065, 0.5, 1.0)

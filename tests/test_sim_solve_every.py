@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from sim_tactile.errors import ConfigError
-from sim_tactile.sim import Protocol, StepOptions, prepare, simulate
+from sim_tactile.plates import get_plate
+from sim_tactile.sim import Protocol, Slide, StepOptions, prepare, simulate
 from sim_tactile.sim.slide import _slide, _slide_sampled
 
 PROTO = Protocol(speed_m_s=0.06, force_n=1.0, duration_s=0.3, start="texture", rate_hz=100.0)
@@ -21,7 +22,7 @@ REL_L2_JUMPY = 0.06
 
 
 def _pressed(fidelity: str = "L0"):
-    return prepare("finger7/ridges-4", "grid3x3", protocol=PROTO, fidelity=fidelity, seed=2)
+    return prepare(Slide(get_plate("finger7/ridges-4"), "grid3x3", PROTO, 2, fidelity))
 
 
 def test_one_solve_every_step_is_the_per_step_slide_bit_for_bit():

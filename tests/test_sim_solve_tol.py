@@ -52,11 +52,14 @@ def test_the_tolerance_enters_a_slides_key_only_where_it_is_set():
     from dataclasses import replace
 
     assert "solve_tol" not in job.describe()
-    loose = replace(job, solve_tol=1e-4)
+    loose = replace(job, options=StepOptions(solve_tol=1e-4))
     assert loose.describe()["solve_tol"] == 1e-4
     assert loose.key() != job.key()
-    assert replace(ss, solve_tol=1e-4).jobs(seed=0, quick=True)[0].key() == loose.key()
-    assert replace(ss, solve_tol=1e-4).describe()["solve_tol"] == 1e-4
+    loose_set = replace(ss, options=StepOptions(solve_tol=1e-4))
+    assert loose_set.jobs(seed=0, quick=True)[0].key() == loose.key()
+    assert loose_set.describe()["solve_tol"] == 1e-4
+    # the keyword of one release ago builds the same slide
+    assert replace(job, solve_tol=1e-4) == loose
 
 
 @pytest.mark.parametrize("bad", [0.0, -1e-6, 1e-2, float("nan"), "tight"])
@@ -70,7 +73,7 @@ def test_a_tolerance_is_kept_as_the_float_it_reads_as():
     ss = get_task("finger7-v1").get_data
     from dataclasses import replace
 
-    assert type(replace(ss, solve_tol="1e-5").solve_tol) is float
+    assert type(replace(ss, options=StepOptions(solve_tol="1e-5")).options.solve_tol) is float
 
 
 def test_a_configuration_file_takes_the_tolerance_and_refuses_a_bad_one():
@@ -81,7 +84,7 @@ def test_a_configuration_file_takes_the_tolerance_and_refuses_a_bad_one():
         "solve_tol": 1e-5,
     }
     ss, _, _ = config_slide_set(cfg)
-    assert ss.solve_tol == 1e-5
-    assert all(j.solve_tol == 1e-5 for j in ss.jobs(seed=0))
+    assert ss.options.solve_tol == 1e-5
+    assert all(j.options.solve_tol == 1e-5 for j in ss.jobs(seed=0))
     with pytest.raises(ConfigError, match=r"solve_tol = 0.1 is out of range"):
         config_slide_set({**cfg, "solve_tol": 0.1})

@@ -213,3 +213,24 @@ def test_an_edited_preset_is_simulated_again(tmp_path):
     edited = run()
     assert edited["simulated"] == 2  # the ridges' two slides; flat's are kept
     assert edited["ridges"] != first["ridges"]  # and the lower ridges read differently
+
+
+def test_every_tasks_slides_keep_their_descriptions():
+    """A slide's description (its cache key's content) is the one it had before ``Slide``
+    described it once (tests/data/slide_descriptions.json, written from SlideJob.describe at
+    4c60226 by ``python tools/slide_descriptions.py``): key for key, on every simulated
+    task's quick and full slides."""
+    import json
+    from pathlib import Path
+
+    from sim_tactile.hashing import content_hash
+    from sim_tactile.tasks import get_task, task_ids
+
+    released = json.loads((Path(__file__).parent / "data" / "slide_descriptions.json").read_text())
+    for t, runs in released.items():
+        ss = get_task(t).get_data
+        for run, digest in runs.items():
+            jobs = ss.jobs(seed=0, quick=run == "quick")
+            assert content_hash([j.describe() for j in jobs]) == digest, (t, run)
+    simulated = {t for t in task_ids() if isinstance(get_task(t).get_data, SlideSet)}
+    assert set(released) == simulated, "a simulated task was added or removed"

@@ -24,18 +24,24 @@ def descriptions() -> dict:
     return {t: get_task(t).describe() for t in task_ids()}
 
 
-def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def write_or_check(out: Path, data: dict, doc: str) -> int:
+    """Write ``data`` as sorted JSON to ``out``, or with ``--check`` on the command line
+    compare and return 1 on a difference (the shared main of the description tools)."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--check", action="store_true")
     args = ap.parse_args()
-    text = json.dumps(descriptions(), indent=1, sort_keys=True) + "\n"
+    text = json.dumps(data, indent=1, sort_keys=True) + "\n"
     if args.check:
-        same = OUT.is_file() and OUT.read_text() == text
-        print("same" if same else f"{OUT} differs")
+        same = out.is_file() and out.read_text() == text
+        print("same" if same else f"{out} differs")
         return 0 if same else 1
-    OUT.write_text(text)
-    print(f"wrote {OUT} ({len(text)} bytes)", file=sys.stderr)
+    out.write_text(text)
+    print(f"wrote {out} ({len(text)} bytes)", file=sys.stderr)
     return 0
+
+
+def main() -> int:
+    return write_or_check(OUT, descriptions(), __doc__)
 
 
 if __name__ == "__main__":

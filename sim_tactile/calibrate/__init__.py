@@ -92,11 +92,13 @@ def read_biotac_forces(
 def force_share(sensor: Sensor, plate: str, force_n: float) -> np.ndarray:
     """Each taxel's load per newton of normal force when the simulated sensor rests on
     ``plate`` pressed with ``force_n`` (the ideal loads, before the transducer)."""
+    from ..plates import get_plate
     from ..sim.plan.protocol import Protocol
+    from ..sim.plan.slide import Slide
     from ..sim.slide import prepare
 
     proto = Protocol(force_n=force_n, force_jitter=0.0, offset_jitter_m=0.0, speed_jitter=0.0)
-    pressed = prepare(plate, sensor, protocol=proto)
+    pressed = prepare(Slide(get_plate(plate), sensor, proto))
     out = np.zeros(sensor.layout.n)
     for _ in range(5):
         pressed.runner.step(force_cmd=force_n, slide_v=0.0, taxel_out=out)

@@ -79,6 +79,34 @@ def add_command(parent, name: str, func, help: str) -> argparse.ArgumentParser:
     return sp
 
 
+def add_knob_args(parser: argparse.ArgumentParser) -> None:
+    """A flag for each public knob of how a slide is computed (``--solve-every``, ...), with
+    the help and range that :data:`~sim_tactile.sim.plan.options.KNOBS` declares; an
+    absent flag leaves its knob at its default."""
+    from ..sim.plan.options import KNOBS
+
+    types = {"int": int, "float": float, "choice": str}
+    for k in KNOBS:
+        if not k.public:
+            continue
+        parser.add_argument(
+            "--" + k.name.replace("_", "-"),
+            type=types[k.kind],
+            default=None,
+            choices=k.choices or None,
+            help=f"{k.help[0].upper()}{k.help[1:]}; {k.valid()}.",
+        )
+
+
+def options_of(args: argparse.Namespace):
+    """The :class:`~sim_tactile.sim.plan.options.StepOptions` of the knob flags that
+    :func:`add_knob_args` added (the absent ones at their defaults)."""
+    from ..sim.plan.options import KNOBS, StepOptions
+
+    given = {k.name: getattr(args, k.name, None) for k in KNOBS if k.public}
+    return StepOptions(**{n: x for n, x in given.items() if x is not None})
+
+
 #: About how long the simulator's numba kernels take to compile on a first run (measured on
 #: 2 cores: 80-110 s for `sim-tactile run finger7-v1 --quick` in a fresh installation).
 COMPILE_NOTICE = (

@@ -9,14 +9,13 @@ from pathlib import Path
 from ..errors import ConfigError
 from ..sim.plan.fidelity import FIDELITIES, PRESS_LEVELS
 from ..sim.plan.protocol import FORCE_CONTROLS, STARTS
-from ._common import add_command, add_plate_args, emit, log, plate_of
+from ._common import add_command, add_knob_args, add_plate_args, emit, log, options_of, plate_of
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     from ..sim.plan.protocol import Protocol
     from ..sim.plots import plot_heatmap, plot_traces
     from ..sim.slide import simulate
-    from ..sim.step.runner import StepOptions
 
     out = Path(args.out)
     if out.suffix != ".npz":
@@ -43,7 +42,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         fidelity=args.fidelity,
         seed=args.seed,
         ideal=args.ideal,
-        options=StepOptions(solve_every=args.solve_every, solve_tol=args.solve_tol),
+        options=options_of(args),
     )
     for w in res.warnings:
         log(f"warning: {w}")
@@ -226,20 +225,7 @@ def _add_simulate(sub) -> None:
         action="store_true",
         help="Record the noise-free normal load on each taxel [N] instead of the sensor's output.",
     )
-    sm.add_argument(
-        "--solve-every",
-        type=int,
-        default=1,
-        help="Solve the skin at every n-th step of a slide held at its force, reading the loads "
-        "between off a line (1, the default: every step).",
-    )
-    sm.add_argument(
-        "--solve-tol",
-        type=float,
-        default=None,
-        help="The spectral contact solve's tolerance, in [1e-12, 1e-3] (default: 1e-10, the "
-        "reference); a looser one takes fewer iterations.",
-    )
+    add_knob_args(sm)
     sm.add_argument("--out", required=True, help="The recording to write (.npz).")
 
 

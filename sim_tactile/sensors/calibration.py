@@ -180,11 +180,7 @@ def load_calibration(path: Path | str) -> Calibration:
     d.pop("noise_model", None)
     d.pop("drift_model", None)
     known = set(Calibration.__dataclass_fields__)
-    unknown = sorted(set(d) - known)
-    if unknown:
-        raise ConfigError(
-            f"sensor config {str(path)!r}: unknown key(s) {unknown}; valid: {sorted(known)}"
-        )
+    v.known_keys(f"sensor config {str(path)!r}", d, sorted(known))
     missing = sorted(
         k for k, f in Calibration.__dataclass_fields__.items() if k not in d and _required(f)
     )

@@ -373,12 +373,7 @@ def _checked(where: str, prefix: str, build):
 
 
 def _known(where: str, t: dict, names) -> None:
-    bad = sorted(set(t) - set(names))
-    if bad:
-        raise ConfigError(
-            f"unknown key(s) {', '.join(where + b for b in bad)}; valid: "
-            + ", ".join(where + n for n in names)
-        )
+    v.known_keys("", t, names, prefix=where)
 
 
 def _table(name: str, t) -> dict:

@@ -7,7 +7,8 @@
 - :mod:`.skin`: pressures from depths: the skin models and the contact solvers;
 - :mod:`.step`: one step: the held step (its interface declared once, chosen in
   :func:`~.step.choose.make_held_step`), the runner, the sample averaging;
-- the drivers on top: :mod:`.slide` (:func:`simulate`, :func:`prepare`),
+- the drivers on top: :mod:`.slide` (:func:`run` of a :class:`~.plan.slide.Slide`,
+  :func:`simulate`, :func:`prepare`),
   :mod:`.static_press` (:func:`press`) and :mod:`.rig_sim` (the probe rig's slide), beside
   :mod:`.micro` (micro-roughness through the contact patch) and :mod:`.plots`.
 
@@ -27,7 +28,9 @@ _EXPORTS = {
     "SlideWindow": ".plan.protocol",
     "Fidelity": ".plan.fidelity",
     "choose_fidelity": ".plan.fidelity",
-    "StepOptions": ".step.runner",
+    "StepOptions": ".plan.options",
+    "Slide": ".plan.slide",
+    "run": ".slide",
     "SimResult": ".step.sampling",
     "simulate": ".slide",
     "prepare": ".slide",

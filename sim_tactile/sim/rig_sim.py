@@ -40,12 +40,13 @@ from ..scene.elastic import subsurface_weights
 from ..scene.layered import layered_subsurface_weights
 from ..scene.model import add_velocity_servo
 from ..scene.nodes import SkinGrid
-from ..sensors import Finger, Sensor, resolve_sensor
+from ..sensors import Finger, Sensor
 from .collide.height import interp_at
 from .plan.protocol import Protocol
 from .plan.rig import ProbePass, ProbeRig
+from .plan.slide import Slide
 from .skin.models import SpectralSkin
-from .step.sampling import SampleAverager, SimResult, sensor_output, versions, window_meta
+from .step.sampling import SampleAverager, SimResult, sensor_output, versions
 
 #: Sub-positions per node pitch at which the reading lines are computed (linear between).
 LINE_SUBSTEPS = 4
@@ -223,19 +224,29 @@ def simulate_rig(
     seed: int = 0,
     ideal: bool = False,
 ) -> SimResult:
-    """One window of the probe rig (see the module docstring): the probe, pressed on the
-    sensor with the slide's force, rests, crosses the sensor along the slide's direction
-    (:meth:`ProbeRig.sign`), and rests again; the elements' outputs, or with ``ideal`` their
-    noise-free loads [N]. ``finger``: the sensor's skin (its stack on the bed), else the
-    sensor's own. ``protocol.duration_s`` is the window."""
-    t_wall = time.perf_counter()
+    """:func:`run_rig` of the :class:`~.plan.slide.Slide` of these arguments."""
     plate = get_plate(plate) if isinstance(plate, str) else plate
-    sensor = resolve_sensor(sensor)
-    finger = finger or sensor.finger
+    return run_rig(Slide(plate, sensor, protocol, seed, ideal=ideal, finger=finger, rig=rig))
+
+
+def run_rig(slide: Slide) -> SimResult:
+    """One window of the probe rig (see the module docstring) of ``slide`` (its ``rig``):
+    the probe, pressed on the sensor with the slide's force, rests, crosses the sensor along
+    the slide's direction (:meth:`ProbeRig.sign`), and rests again; the elements' outputs,
+    or with ``ideal`` their noise-free loads [N]. ``finger``: the sensor's skin (its stack
+    on the bed), else the sensor's own. ``protocol.duration_s`` is the window."""
+    t_wall = time.perf_counter()
+    plate, sensor, finger, rig, seed = (
+        slide.plate,
+        slide.sensor_def,
+        slide.pad,
+        slide.rig,
+        slide.seed,
+    )
+    protocol, ideal = slide.protocol, slide.ideal
     sheet = _check_rig_inputs(plate, sensor, finger, protocol)
     layout = sensor.layout
-    nominal = protocol.at_rate(sensor.rate_hz)
-    proto = nominal.drawn(seed)
+    proto = slide.drawn()
     sign = rig.sign(seed)
     reach = float(np.max(np.abs(layout.positions[:, 0]) + layout.sizes[:, 0] / 2))
     pas = ProbePass.of(
@@ -257,7 +268,7 @@ def simulate_rig(
     out, units, transducer = sensor_output(out, sensor, rate, seed, ideal)
     wall = time.perf_counter() - t_wall
     meta = {
-        **window_meta(plate, sensor, finger, proto, nominal, seed),
+        **slide.meta_head(),
         "scene": "probe rig",
         "rig": rig.to_json(),
         "direction": sign,

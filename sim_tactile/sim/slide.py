@@ -13,19 +13,21 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import PhysicsError
-from ..plates import Plate, get_plate, height_at, surface_of
+from ..errors import ConfigError, PhysicsError
+from ..plates import Plate, get_plate, height_at
 from ..records import Recording
 from ..scene.model import build_scene
 from ..scene.nodes import SkinGrid, skin_grid
-from ..sensors import Finger, Layout, Sensor, check_pad, resolve_sensor
+from ..sensors import Finger, Layout, Sensor, check_pad
 from .collide.choose import make_collider
 from .micro import micro_loads
 from .plan.fidelity import Fidelity, choose_fidelity, flat_stiffness
+from .plan.options import StepOptions
 from .plan.protocol import (
     APPROACH_CLEARANCE_M,
     APPROACH_SPEED,
@@ -33,10 +35,11 @@ from .plan.protocol import (
     Protocol,
     SlideWindow,
 )
+from .plan.slide import Slide
 from .skin.models import make_skin
 from .step.choose import make_held_step
-from .step.runner import Runner, StepOptions, drag_factor, drag_warning
-from .step.sampling import SampleAverager, SimResult, sensor_output, versions, window_meta
+from .step.runner import Runner, drag_factor, drag_warning
+from .step.sampling import SampleAverager, SimResult, sensor_output, versions
 
 #: A slide whose mean normal force strays further than this from the target is flagged.
 FORCE_TOLERANCE = 0.05
@@ -67,32 +70,48 @@ def simulate(
     cache=None,
 ) -> SimResult:
     """Run one press-and-slide of ``sensor`` (a sensor, a sensor name, or a bare layout: its
-    taxels, pad, transducer and rate) over ``plate`` and record each taxel.
+    taxels, pad, transducer and rate) over ``plate`` and record each taxel: the
+    :class:`~.plan.slide.Slide` of these arguments, :func:`run`.
 
     protocol: the slide (its rate defaults to the sensor's; jitters are drawn from ``seed``).
     finger: replaces the sensor's pad. fidelity: ``auto``, ``L0``-``L2`` or a Fidelity;
     ``pitch_m`` / ``dt_s`` force the node pitch and time step. ideal: record the noise-free
-    normal loads [N] instead of the sensor's output. options: which implementation of each
-    part of a step runs (:class:`~.step.runner.StepOptions`).
+    normal loads [N] instead of the sensor's output. options: how each part of a step is
+    computed (:class:`~.plan.options.StepOptions`).
+    """
+    return run(
+        Slide(
+            get_plate(plate) if isinstance(plate, str) else plate,
+            sensor,
+            protocol or Protocol(),
+            seed,
+            fidelity,
+            ideal,
+            finger,
+            pitch_m,
+            dt_s,
+            options=options or StepOptions(),
+        ),
+        cache=cache,
+    )
+
+
+def run(slide: Slide, cache=None) -> SimResult:
+    """Run the press-and-slide of ``slide`` on the finger scene and record each taxel (a
+    slide on the probe rig runs by :func:`~.rig_sim.run_rig`). ``cache``: where the plate's
+    artefacts and the skin's matrices are kept (an
+    :class:`~sim_tactile.cache.ArtefactCache`; None: the default).
 
     BLAS runs single-threaded inside: the skin's systems are small, and threads only contend.
     """
     from ..hashing import one_blas_thread
 
-    with one_blas_thread():
-        return _simulate(
-            plate,
-            sensor,
-            protocol=protocol,
-            finger=finger,
-            fidelity=fidelity,
-            seed=seed,
-            pitch_m=pitch_m,
-            dt_s=dt_s,
-            ideal=ideal,
-            options=options or StepOptions(),
-            cache=cache,
+    if slide.rig is not None:
+        raise ConfigError(
+            f"slide of {slide.named()} names a probe rig: run it with sim.rig_sim.run_rig"
         )
+    with one_blas_thread():
+        return _run(slide, cache)
 
 
 @dataclass
@@ -110,13 +129,9 @@ class _Slide:
 @dataclass
 class Pressed:
     """A slide's set-up after the approach and the press, ready to slide (:func:`prepare`):
-    the plate, sensor, pad, nominal and drawn protocols, fidelity, window, the runner and the
-    warnings so far."""
+    the slide, its drawn protocol, fidelity and window, the runner and the warnings so far."""
 
-    plate: Plate
-    sensor: Sensor
-    finger: Finger
-    nominal: Protocol
+    slide: Slide
     protocol: Protocol
     fidelity: Fidelity
     window: SlideWindow
@@ -124,88 +139,81 @@ class Pressed:
     warnings: list[str]
 
 
-def prepare(
-    plate: Plate | str,
-    sensor: Sensor | Layout | str = "grid3x3",
-    *,
-    protocol: Protocol | None = None,
-    finger: Finger | None = None,
-    fidelity: str | Fidelity = "auto",
-    seed: int = 0,
-    pitch_m: float | None = None,
-    dt_s: float | None = None,
-    options: StepOptions | None = None,
-    cache=None,
-) -> Pressed:
-    """The phases of :func:`simulate` before the slide (arguments as there): the scene, its
-    skin and runner, the approach, the press and the settling; the runner is left pressed at
-    the window's start. For benchmarks and scripts that drive the steps themselves."""
-    plate = get_plate(plate) if isinstance(plate, str) else plate
-    sensor = resolve_sensor(sensor)
-    layout = sensor.layout
-    finger = finger or sensor.finger
-    nominal = (protocol or Protocol()).at_rate(sensor.rate_hz)
-    proto = nominal.drawn(seed)
-    check_pad(layout, finger)
-    fid = choose_fidelity(plate, layout, finger, proto, fidelity, pitch_m=pitch_m, dt_s=dt_s)
-    window = SlideWindow.of(plate, finger.patch_m[0], proto)
-    runner = _setup(plate, layout, finger, proto, fid, window, options or StepOptions(), cache)
-    warnings = list(fid.warnings)
+def prepare(slide: Slide | Plate | str, *args, cache=None, **kwargs) -> Pressed:
+    """The phases of :func:`run` before the slide: the scene, its skin and runner, the
+    approach, the press and the settling; the runner is left pressed at the window's start.
+    For benchmarks and scripts that drive the steps themselves. ``prepare(plate, sensor,
+    **keywords)`` (as :func:`simulate` takes them) still works for one release, with a
+    DeprecationWarning."""
+    if not isinstance(slide, Slide):
+        warnings.warn(
+            "prepare(plate, sensor, ...) is deprecated; pass a Slide: "
+            "prepare(Slide(plate, sensor, protocol, ...))",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        opts = kwargs.pop("options", None) or StepOptions()
+        plate = get_plate(slide) if isinstance(slide, str) else slide
+        sensor = args[0] if args else kwargs.pop("sensor", "grid3x3")
+        protocol = kwargs.pop("protocol", None) or Protocol()
+        slide = Slide(plate, sensor, protocol, options=opts, **kwargs)
+    proto = slide.drawn()
+    finger = slide.pad
+    check_pad(slide.layout, finger)
+    fid = choose_fidelity(
+        slide.plate,
+        slide.layout,
+        finger,
+        proto,
+        slide.fidelity,
+        pitch_m=slide.pitch_m,
+        dt_s=slide.dt_s,
+    )
+    window = SlideWindow.of(slide.plate, finger.patch_m[0], proto)
+    runner = _setup(slide, proto, fid, window, cache)
+    warnings_ = list(fid.warnings)
     if proto.force_control == "position":
         _touch(runner, proto.force_n)  # then held at that height
     else:
         _approach(runner, proto.force_n)
-        warnings += _press_and_settle(runner, proto)
-    return Pressed(plate, sensor, finger, nominal, proto, fid, window, runner, warnings)
+        warnings_ += _press_and_settle(runner, proto)
+    return Pressed(slide, proto, fid, window, runner, warnings_)
 
 
-def _simulate(
-    plate, sensor, *, protocol, finger, fidelity, seed, pitch_m, dt_s, ideal, options, cache
-) -> SimResult:
+def _run(slide: Slide, cache) -> SimResult:
     t_wall = time.perf_counter()
-    pressed = prepare(
-        plate,
-        sensor,
-        protocol=protocol,
-        finger=finger,
-        fidelity=fidelity,
-        seed=seed,
-        pitch_m=pitch_m,
-        dt_s=dt_s,
-        options=options,
-        cache=cache,
-    )
-    plate, sensor, finger = pressed.plate, pressed.sensor, pressed.finger
-    nominal, proto, fid = pressed.nominal, pressed.protocol, pressed.fidelity
+    pressed = prepare(slide, cache=cache)
+    plate, sensor, finger = slide.plate, slide.sensor_def, slide.pad
+    proto, fid = pressed.protocol, pressed.fidelity
     window, runner, warnings = pressed.window, pressed.runner, pressed.warnings
     layout = sensor.layout
-    opts = options or StepOptions()
+    opts = slide.options
     every = opts.solve_every
     if every > 1 and runner.hold is not None and proto.force_control != "position":
-        slide = _slide_sampled(runner, window, proto, fid.steps_per_sample, every)
+        slide_rec = _slide_sampled(runner, window, proto, fid.steps_per_sample, every)
     else:
         every = 1
-        slide = _slide(runner, window, proto, fid.steps_per_sample)
+        slide_rec = _slide(runner, window, proto, fid.steps_per_sample)
     sim_s = window.n_samples / proto.rate_hz
-    if slide.stopped_at_s is not None:
+    if slide_rec.stopped_at_s is not None:
         warnings.append(
-            f"the stroke stopped at the plate's end after {slide.stopped_at_s:.3g} s of the "
+            f"the stroke stopped at the plate's end after {slide_rec.stopped_at_s:.3g} s of the "
             f"{sim_s:.3g} s window ({proto.speed_m_s * 1e3:.3g} mm/s): the pad rested on flat "
             "ground for the rest"
         )
     if proto.force_control != "position":  # there the load follows the texture
-        warnings += _force_warnings(slide.forces, proto.force_n, proto.speed_m_s)
+        warnings += _force_warnings(slide_rec.forces, proto.force_n, proto.speed_m_s)
     warnings += [w for w in (drag_warning(proto.speed_m_s),) if w]
-    out = slide.loads
+    out = slide_rec.loads
     # micro-roughness acts through the contact patch on top of the finger's simulation
-    micro = micro_loads(plate, layout, slide.x_pad, out > 1e-9, finger.e_star_pa, proto.rate_hz)
+    micro = micro_loads(plate, layout, slide_rec.x_pad, out > 1e-9, finger.e_star_pa, proto.rate_hz)
     if micro.any():
         out = np.maximum(out + micro, 0.0)
-    out, units, transducer = sensor_output(out, sensor, proto.rate_hz, seed, ideal)
+    out, units, transducer = sensor_output(out, sensor, proto.rate_hz, slide.seed, slide.ideal)
     times = (np.arange(window.n_samples) + 0.5) / proto.rate_hz
     wall = time.perf_counter() - t_wall
     meta = {
-        **window_meta(plate, sensor, finger, proto, nominal, seed),
+        **slide.meta_head(),
         "fidelity": fid.to_json(),
         "skin_problem": runner.describe(),
         "solve_every": every,
@@ -213,8 +221,8 @@ def _simulate(
         "dt_s": fid.dt_s,
         "transducer": transducer,
         "micro_roughness": bool(micro.any()),
-        "x_pad_m": slide.x_pad.tolist(),
-        "normal_force_n": slide.forces.tolist(),
+        "x_pad_m": slide_rec.x_pad.tolist(),
+        "normal_force_n": slide_rec.forces.tolist(),
         "mean_drag_n": runner.drag_sum / max(runner.n_slide_steps, 1),
         "drag_factor": drag_factor(proto.speed_m_s),
         "drag_regularised": drag_warning(proto.speed_m_s) is not None,
@@ -226,16 +234,17 @@ def _simulate(
         "sim_s": sim_s,
         "wall_s": wall,
         "x_start_m": window.x_start_m,
-        "slide_wall_s": slide.wall_s,
+        "slide_wall_s": slide_rec.wall_s,
         "steps": window.n_samples * fid.steps_per_sample,
     }
     rec = Recording(out.astype(np.float32), times, layout.positions, units=units, meta=meta)
     return SimResult(rec, fid, sim_s, wall, warnings)
 
 
-def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
+def _setup(slide: Slide, proto: Protocol, fid: Fidelity, window: SlideWindow, cache) -> Runner:
     """The scene at the slide's start (the pad above the plate's highest point under it), its
     skin model and the runner that steps it."""
+    plate, layout, finger, options = slide.plate, slide.layout, slide.pad, slide.options
     grid = skin_grid(finger, fid.pitch_m, fid.pitch_y_m)
     z0 = APPROACH_CLEARANCE_M + max(
         0.0, float(np.nanmax(_plate_heights(plate, grid, window.x_start_m, proto.offset_y_m)))
@@ -254,7 +263,7 @@ def _setup(plate, layout, finger, proto, fid, window, options, cache) -> Runner:
         y0_m=proto.offset_y_m,
         z0_m=z0,
         z_damping=2.0 * omega_guess * finger.bone_mass_kg,  # critical at the flat pad
-        node_margin_m=surface_of(plate).margin_m if quasi_static else 0.0,
+        node_margin_m=slide.surface.margin_m if quasi_static else 0.0,
         cache=cache,
     )
     skin = make_skin(

@@ -59,7 +59,8 @@ from ..plates import get_plate, preset_names
 from ..plates.user import is_user_plate, parse_ref
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
 from ..sensors.files import load_sensor_file
-from ..sim.plan.fidelity import FIDELITIES, MAX_SOLVE_EVERY, SOLVE_TOL_RANGE
+from ..sim.plan.fidelity import FIDELITIES
+from ..sim.plan.options import KNOBS, StepOptions
 from ..sim.plan.protocol import Protocol
 from ..sim.plan.rig import ProbeRig
 from ..toml_text import check_text_size
@@ -84,9 +85,8 @@ TOP_KEYS = {
     "quick_slides_per_plate": "integer in [2, slides_per_plate]",
     "fidelity": ", ".join(FIDELITIES),
     "ideal": "true or false",
-    "solve_every": f"integer in [1, {MAX_SOLVE_EVERY}]: the skin solved at every n-th step",
-    "solve_tol": f"number in [{SOLVE_TOL_RANGE[0]:g}, {SOLVE_TOL_RANGE[1]:g}]: the spectral "
-    "contact solve's tolerance",
+    # the public knobs of how a slide is computed, as sim.plan.options declares them
+    **{k.name: k.valid() for k in KNOBS if k.public},
     "protocol": "table",
     "randomise": "table",
     "finger": "table",
@@ -132,12 +132,7 @@ def config_slide_set(
 
 
 def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
-    unknown = sorted(set(cfg) - set(TOP_KEYS))
-    if unknown:
-        raise ConfigError(
-            f"unknown key(s) {', '.join(unknown)}; valid: "
-            + ", ".join(f"{k} ({d})" for k, d in TOP_KEYS.items())
-        )
+    v.known_keys("", cfg, TOP_KEYS, describe=lambda k: f"{k} ({TOP_KEYS[k]})")
     for key in ("plates", "sensor", "slides_per_plate"):
         if key not in cfg:
             raise ConfigError(f"{key} is missing ({TOP_KEYS[key]})")
@@ -166,7 +161,6 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         )
     quick = v.integer("quick_slides_per_plate", cfg.get("quick_slides_per_plate", 2), 2, slides)
     fidelity = v.one_of("fidelity", cfg.get("fidelity", "auto"), FIDELITIES)
-    solve_every = v.integer("solve_every", cfg.get("solve_every", 1), 1, MAX_SOLVE_EVERY)
     ideal = cfg.get("ideal", False)
     if not isinstance(ideal, bool):
         raise ConfigError(f"ideal must be true or false, got {ideal!r}")
@@ -201,8 +195,7 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         finger=finger,
         rig=rig,
         sensor_spec=spec,
-        solve_every=solve_every,
-        solve_tol=cfg.get("solve_tol"),  # checked by SlideSet
+        options=StepOptions.from_table({k.name: cfg[k.name] for k in KNOBS if k.name in cfg}),
     )
     return ss, seed, name
 
@@ -268,17 +261,11 @@ def _is_number(x: object) -> bool:
 
 def _protocol(proto_t: dict, rand_t: dict) -> Protocol:
     names = [f.name for f in fields(Protocol) if f.name not in RANDOMISE]
-    bad = sorted(set(proto_t) - set(names))
-    if bad:
-        hint = " (put the jitters under [randomise])" if set(bad) & set(RANDOMISE) else ""
-        raise ConfigError(
-            f"unknown protocol key(s) {', '.join(bad)}{hint}; valid: {', '.join(names)}"
-        )
-    bad = sorted(set(rand_t) - set(RANDOMISE))
-    if bad:
-        raise ConfigError(
-            f"unknown randomise key(s) {', '.join(bad)}; valid: {', '.join(RANDOMISE)}"
-        )
+    if set(proto_t) & set(RANDOMISE):
+        bad = ", ".join(sorted(set(proto_t) & set(RANDOMISE)))
+        raise ConfigError(f"protocol.{bad}: put the jitters under [randomise]")
+    v.known_keys("", proto_t, names, prefix="protocol.")
+    v.known_keys("", rand_t, RANDOMISE, prefix="randomise.")
     for sect, t in (("protocol", proto_t), ("randomise", rand_t)):
         for k, val in t.items():
             if k in ("force_control", "start"):
@@ -303,10 +290,7 @@ def _finger(finger_t: dict, base) -> Finger | None:
     """The sensor ``base``'s pad with the fields of ``[finger]`` changed (None: no change)."""
     if not finger_t:
         return None
-    names = [f.name for f in fields(base.finger)]
-    bad = sorted(set(finger_t) - set(names))
-    if bad:
-        raise ConfigError(f"unknown finger key(s) {', '.join(bad)}; valid: {', '.join(names)}")
+    v.known_keys("", finger_t, [f.name for f in fields(base.finger)], prefix="finger.")
     kw = {k: tuple(x) if isinstance(x, list) else x for k, x in finger_t.items()}
     try:
         f = replace(base.finger, **kw)

@@ -1,10 +1,11 @@
 """One slide to simulate, and its key: everything that determines its recording.
 
-A :class:`SlideJob` holds the plate itself (its parameters, not a name), the whole sensor, the
+A job is a :class:`~sim_tactile.sim.plan.slide.Slide` (the plate itself, the whole sensor, the
 nominal protocol with its jitters, the slide's own seed, the fidelity, whether to record the
-ideal loads, and the pad when it replaces the sensor's. Its :meth:`~SlideJob.key` is the
-content hash of all of that and of :func:`slide_code_version`, so a cached slide is never
-served after any of it, or any code that makes a slide, has changed.
+ideal loads, the pad when it replaces the sensor's, how it is computed). Its key
+(:func:`slide_key`) is the content hash of its description and of :func:`slide_code_version`,
+so a cached slide is never served after any of it, or any code that makes a slide, has
+changed. :class:`SlideJob` is a Slide with that key and :meth:`~SlideJob.simulate`.
 """
 
 from __future__ import annotations
@@ -12,19 +13,17 @@ from __future__ import annotations
 import time
 import warnings
 import zipfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..cache import ArtefactCache
 from ..errors import CacheWarning, SimTactileError
 from ..hashing import code_version, content_hash, file_digest
-from ..plates import Plate
 from ..records import Recording
-from ..sensors import Finger, Sensor
 from ..sim.plan import measured_errors
-from ..sim.plan.protocol import Protocol, SlideWindow
-from ..sim.plan.rig import ProbeRig
+from ..sim.plan.options import StepOptions
+from ..sim.plan.slide import Slide
 
 #: The module whose import closure makes a slide (with this one, which calls it), and the
 #: libraries whose versions change what it computes.
@@ -47,105 +46,48 @@ def slide_code_version() -> str:
     )[:16]
 
 
-@dataclass(frozen=True)
-class SlideJob:
-    """One slide (see the module docstring). ``protocol`` is nominal, its rate and window
-    set; :meth:`drawn` is the protocol the slide runs."""
+def slide_key(slide: Slide) -> str:
+    """A slide's cache key: the content hash of its description
+    (:meth:`~sim_tactile.sim.plan.slide.Slide.describe`) and the code version."""
+    return content_hash({**slide.describe(), "code": slide_code_version()})
 
-    plate: Plate
-    sensor: Sensor
-    protocol: Protocol
-    seed: int
-    fidelity: str = "auto"
-    ideal: bool = False
-    finger: Finger | None = None
-    #: the node pitch along the slide [m] when the set fixes it (None: the fidelity's)
-    pitch_m: float | None = None
-    #: the skin solved at every n-th step of the slide (:class:`~sim_tactile.sim.StepOptions`;
-    #: 1: every step)
-    solve_every: int = 1
-    #: the spectral solve's tolerance (:class:`~sim_tactile.sim.StepOptions`; None: its
-    #: reference)
-    solve_tol: float | None = None
-    #: the probe rig that makes the slide (:mod:`~sim_tactile.sim.plan.rig`), else the finger scene
-    rig: ProbeRig | None = None
-    #: what the job is called in messages (its plate's name and place in a set)
-    label: str = field(default="", compare=False)
 
-    def drawn(self) -> Protocol:
-        """The slide's own speed, force and offset, as the simulation draws them."""
-        return self.protocol.drawn(self.seed)
+def simulate_slide(slide: Slide, cache: ArtefactCache | None = None):
+    """Simulate ``slide`` on its scene (the finger's, or the probe rig's); a
+    :class:`~sim_tactile.sim.step.sampling.SimResult`. An error names the slide and its
+    seed."""
+    try:
+        if slide.rig is not None:
+            from ..sim.rig_sim import run_rig
 
-    def n_samples(self) -> int:
-        """Samples the slide records (its window, :class:`~sim_tactile.sim.plan.protocol.SlideWindow`;
-        on the rig, ``duration_s``)."""
-        if self.rig is not None:
-            proto = self.protocol.at_rate(self.sensor.rate_hz)
-            return max(1, round(proto.duration_s * proto.rate_hz))
-        pad = (self.finger or self.sensor.finger).patch_m[0]
-        return SlideWindow.of(self.plate, pad, self.protocol.at_rate(self.sensor.rate_hz)).n_samples
+            return run_rig(slide)
+        from ..sim.slide import run
 
-    def describe(self) -> dict:
-        """Everything that determines the slide, as JSON data (``rig`` and ``pitch_m`` only
-        where they are set, so the keys of the other slides are unchanged)."""
-        d = {
-            "kind": "slide",
-            "plate": self.plate.params(),
-            "sensor": self.sensor.to_json(),
-            "protocol": self.protocol.to_json(),
-            "seed": int(self.seed),
-            "fidelity": self.fidelity,
-            "ideal": bool(self.ideal),
-            "finger": None if self.finger is None else self.finger.to_json(),
-        }
-        if self.rig is not None:
-            d["rig"] = self.rig.to_json()
-        if self.pitch_m is not None:
-            d["pitch_m"] = self.pitch_m
-        if self.solve_every != 1:
-            d["solve_every"] = int(self.solve_every)
-        if self.solve_tol is not None:
-            d["solve_tol"] = float(self.solve_tol)
-        return d
+        return run(slide, cache)
+    except SimTactileError as exc:
+        raise type(exc)(f"slide of {slide.named()} (seed {slide.seed}): {exc}") from exc
+
+
+class SlideJob(Slide):
+    """A :class:`~sim_tactile.sim.plan.slide.Slide` with its cache key (:meth:`key`) and
+    :meth:`simulate`: what a data set's jobs are. It adds no field: a slide is described in
+    one place. ``solve_every`` and ``solve_tol`` as keywords are the knobs of its
+    ``options`` (one release; then pass ``options=StepOptions(...)``)."""
+
+    def __init__(self, *args, solve_every=None, solve_tol=None, **kwargs) -> None:
+        if solve_every is not None or solve_tol is not None:
+            base = kwargs.pop("options", None) or StepOptions()
+            knobs = {"solve_every": solve_every, "solve_tol": solve_tol}
+            kwargs["options"] = replace(base, **{k: x for k, x in knobs.items() if x is not None})
+        super().__init__(*args, **kwargs)
 
     def key(self) -> str:
-        """The slide's cache key: the content hash of :meth:`describe` and the code version."""
-        return content_hash({**self.describe(), "code": slide_code_version()})
+        """:func:`slide_key`."""
+        return slide_key(self)
 
     def simulate(self, cache: ArtefactCache | None = None):
-        """Simulate the slide; a :class:`~sim_tactile.sim.slide.SimResult`. An error names
-        the plate and the seed."""
-        from ..sim.slide import simulate
-        from ..sim.step.runner import StepOptions
-
-        try:
-            if self.rig is not None:
-                from ..sim.rig_sim import simulate_rig
-
-                return simulate_rig(
-                    self.plate,
-                    self.sensor,
-                    rig=self.rig,
-                    protocol=self.protocol,
-                    finger=self.finger,
-                    seed=self.seed,
-                    ideal=self.ideal,
-                )
-            return simulate(
-                self.plate,
-                self.sensor,
-                protocol=self.protocol,
-                finger=self.finger,
-                fidelity=self.fidelity,
-                seed=self.seed,
-                ideal=self.ideal,
-                pitch_m=self.pitch_m,
-                options=StepOptions(solve_every=self.solve_every, solve_tol=self.solve_tol),
-                cache=cache,
-            )
-        except SimTactileError as exc:
-            what = self.label or self.plate.name or self.plate.hash
-            raise type(exc)(f"slide of {what} (seed {self.seed}): {exc}") from exc
+        """:func:`simulate_slide`."""
+        return simulate_slide(self, cache)
 
 
 @dataclass(frozen=True)
@@ -173,15 +115,15 @@ class SlideWorker:
     cache_root: str
     write: bool = True
 
-    def __call__(self, job: SlideJob) -> SlideOutcome:
+    def __call__(self, job: Slide) -> SlideOutcome:
         t0 = time.perf_counter()
         cache = ArtefactCache(self.cache_root)
-        key = job.key()
+        key = slide_key(job)
         rec = cached_slide(cache, key)
         if rec is not None:  # with the warnings its simulation gave (kept in its meta)
             warns = tuple(str(w) for w in rec.meta.get("warnings") or ())
             return SlideOutcome(rec, warns, time.perf_counter() - t0, True)
-        res = job.simulate(cache)
+        res = simulate_slide(job, cache)
         if self.write:
             cache.put(key, SLIDE_EXT, res.recording.to_npz())
         return SlideOutcome(res.recording, tuple(res.warnings), time.perf_counter() - t0, False)

@@ -24,7 +24,7 @@ from ..plates.user import is_user_plate, parse_ref
 from ..records import TactileDataset
 from ..sensors import Finger, Sensor, get_sensor, sensor_names
 from ..sensors.calibration import Calibration, calibrated
-from ..sim.plan.fidelity import MAX_SOLVE_EVERY, SOLVE_TOL_RANGE
+from ..sim.plan.options import StepOptions, keyed
 from ..sim.plan.protocol import Protocol, SlideWindow
 from ..sim.plan.rig import ProbeRig
 from .jobs import SlideJob
@@ -74,10 +74,9 @@ class SlideSet:
     calibration: a sensor calibration (``sim-tactile calibrate``) applied to the sensor.
     pitch_m: the skin's node pitch [m] along the slide, fixed for every slide (None: the
         fidelity's choice; the level's pitch across the slide follows it as in ``simulate``).
-    solve_every: the skin solved at every n-th step of a slide held at its force
-        (:class:`~sim_tactile.sim.StepOptions`; 1: every step, the reference).
-    solve_tol: the spectral contact solve's tolerance (:class:`~sim_tactile.sim.StepOptions`;
-        None: its reference).
+    options: how every slide is computed (:class:`~sim_tactile.sim.plan.options.StepOptions`:
+        ``solve_every``, ``solve_tol``, ``path``, ...; the defaults: the fast paths whose
+        measured error is within target).
     rig: the slides are made on this probe rig (:mod:`~sim_tactile.sim.plan.rig`: the plate's
         texture on a probe sliding over the sensor, which lies on a bed; ``finger`` is then the
         sensor's skin and ``protocol.duration_s`` the window), not by the finger scene.
@@ -97,17 +96,12 @@ class SlideSet:
     calibration: Calibration | None = None
     rig: ProbeRig | None = None
     pitch_m: float | None = None
-    solve_every: int = 1
-    solve_tol: float | None = None
+    options: StepOptions = field(default_factory=StepOptions)
     sensor_spec: Sensor | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if self.pitch_m is not None:
             v.in_range("pitch_m", self.pitch_m, 20e-6, 5e-3, unit="m")
-        v.integer("solve_every", self.solve_every, 1, MAX_SOLVE_EVERY)
-        if self.solve_tol is not None:  # kept as the float it reads as
-            tol = v.in_range("solve_tol", self.solve_tol, *SOLVE_TOL_RANGE)
-            object.__setattr__(self, "solve_tol", tol)
         if self.rig is not None and self.protocol.duration_s is None:
             raise ConfigError("a slide set on the probe rig needs protocol.duration_s (its window)")
         if len(self.plates) < 2:
@@ -194,11 +188,7 @@ class SlideSet:
             d["rig"] = self.rig.to_json()
         if self.pitch_m is not None:
             d["pitch_m"] = self.pitch_m
-        if self.solve_every != 1:
-            d["solve_every"] = int(self.solve_every)
-        if self.solve_tol is not None:
-            d["solve_tol"] = float(self.solve_tol)
-        return d
+        return {**d, **keyed(self.options)}
 
     def setup(self, quick: bool) -> dict:
         """:meth:`describe` with the plates of the quick or the full run."""
@@ -238,9 +228,8 @@ class SlideSet:
                         self.ideal,
                         self.finger,
                         pitch_m=self.pitch_m,
-                        solve_every=self.solve_every,
-                        solve_tol=self.solve_tol,
                         rig=self.rig,
+                        options=self.options,
                         label=f"{name} slide {k}",
                     )
                 )

@@ -44,11 +44,7 @@ def config_task(path: str | Path) -> tuple[TaskSpec, int]:
     ev = cfg.pop("evaluate", {})
     if not isinstance(ev, dict):
         raise ConfigError(f"{where}: evaluate must be a table, got {ev!r}")
-    bad = sorted(set(ev) - set(EVALUATE_KEYS))
-    if bad:
-        raise ConfigError(
-            f"{where}: unknown evaluate key(s) {', '.join(bad)}; valid: {', '.join(EVALUATE_KEYS)}"
-        )
+    v.known_keys(where, ev, EVALUATE_KEYS, prefix="evaluate.")
     names = ev.get("classifiers", list(DEFAULT_CLASSIFIERS))
     if not isinstance(names, list) or not names:
         raise ConfigError(f"{where}: evaluate.classifiers must be a non-empty list, got {names!r}")

@@ -53,6 +53,7 @@ from .measured_errors import (
     node_count,
     refinement,
 )
+from .options import MAX_SOLVE_EVERY, SOLVE_TOL_RANGE  # noqa: F401  (their old home)
 
 LEVELS = ("L0", "L1", "L2")
 #: What a ``fidelity`` argument may be (a :class:`Fidelity` too, in Python).
@@ -95,12 +96,6 @@ RIDGE_NODES_PER_FEATURE = 10
 #: mm is 2.9-9.7% from the physics at 28-63x real time in the slide loop, 0.25 / 2 / 2 mm
 #: 0.8-8.4% at 16-36x (bench_clipped at d9cbe58) (see :mod:`~sim_tactile.sim.skin.anchored`).
 ANCHORED_GRIDS = ((0.5e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 2e-3), (0.25e-3, 2e-3, 1e-3))
-#: Most steps one held solve may stand for (``StepOptions.solve_every``): a sample of the
-#: slowest sensors spans about 20 steps.
-MAX_SOLVE_EVERY = 64
-#: The range a spectral contact solve's tolerance may be set in (``StepOptions.solve_tol``;
-#: its default, the reference, is :data:`~sim_tactile.sim.skin.contact.spectral.TOL`).
-SOLVE_TOL_RANGE = (1e-12, 1e-3)
 #: Steps to cross the smallest feature, at least.
 STEPS_PER_FEATURE = 20
 #: Longest time step auto may pick [s].

@@ -68,10 +68,7 @@ class ProbeRig:
 
     @classmethod
     def from_json(cls, d: dict) -> ProbeRig:
-        known = set(cls.__dataclass_fields__)
-        extra = sorted(set(d) - known)
-        if extra:
-            raise ConfigError(f"rig: unknown keys {extra}; valid: {sorted(known)}")
+        v.known_keys("rig", d, cls.__dataclass_fields__)
         return cls(**d)
 
     def sign(self, seed: int) -> float:

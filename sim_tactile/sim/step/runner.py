@@ -7,14 +7,13 @@ held step (:func:`~.choose.make_held_step`). Every step checks for a non-finite 
 runaway pad, and under the dynamic force loop the coupling's stability limit; any of these
 stops the run with a :class:`~sim_tactile.errors.PhysicsError` naming the cause.
 
-:class:`StepOptions` switches each fast path off for its plain reference, so tests and
-benchmarks compare them without reaching into the runner.
+:class:`~sim_tactile.sim.plan.options.StepOptions`, which switches each fast path off for its
+plain reference, lives in the planner now; importing it from here still works for one release.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -23,7 +22,8 @@ from ...errors import PhysicsError
 from ...plates import Plate
 from ...scene.model import Scene
 from ...sensors.pad import Finger
-from ..plan.fidelity import MAX_OMEGA_DT, MAX_SOLVE_EVERY, SOLVE_TOL_RANGE, Fidelity
+from ..plan.fidelity import MAX_OMEGA_DT, Fidelity
+from ..plan.options import StepOptions  # noqa: F401  (its old home, for one release)
 from ..skin.models import SkinModel
 from .held import HeldStep
 
@@ -58,46 +58,6 @@ def drag_warning(speed_m_s: float) -> str | None:
 
 #: Steps between checks of the dynamic coupling's omega * dt.
 _STIFFNESS_CHECK_STEPS = 50
-
-
-@dataclass(frozen=True)
-class StepOptions:
-    """Which implementation of each part of a step runs (all fast by default).
-
-    primitive_collider: the compiled collider of the plate (its features, a roughness
-        profile or a height map; :func:`~sim_tactile.sim.collide.choose.make_collider`), else MuJoCo's collider,
-        the reference;
-    compiled_hold: the held step as one compiled call where the compiled collider serves
-        (else the plain loop, the reference);
-    reduce_skin: the compiled held step on the smallest exact problem (columns, mirror half).
-    skin_solver: the coupled skin's contact solve, ``auto`` (spectral above
-        :data:`~sim_tactile.sim.plan.fidelity.DENSE_MAX_NODES` nodes), ``dense`` or ``spectral``
-        (:func:`~sim_tactile.sim.skin.models.make_skin`).
-    solve_every: under quasi-static force control, the held step solves the skin at every
-        ``solve_every``-th step of the slide and the taxel loads of the steps between are
-        read off the line between the two solves on either side (1: every step, the
-        reference). The finger's MuJoCo dynamics steps at every step as before; only the
-        skin's answer is read between solves (:mod:`~sim_tactile.sim.slide`).
-    solve_tol: the spectral contact solve's tolerance (the pressures' relative change in one
-        iteration at which it stops), in :data:`~sim_tactile.sim.plan.fidelity.SOLVE_TOL_RANGE`;
-        None: :data:`~sim_tactile.sim.skin.contact.spectral.TOL`, the reference. A looser one
-        takes fewer iterations; a dense solve is exact to rounding and does not read it.
-    """
-
-    primitive_collider: bool = True
-    compiled_hold: bool = True
-    reduce_skin: bool = True
-    skin_solver: str = "auto"
-    solve_every: int = 1
-    solve_tol: float | None = None
-
-    def __post_init__(self) -> None:
-        from ... import _validate as v
-
-        v.integer("solve_every", self.solve_every, 1, MAX_SOLVE_EVERY)
-        if self.solve_tol is not None:  # kept as the float it reads as
-            tol = v.in_range("solve_tol", self.solve_tol, *SOLVE_TOL_RANGE)
-            object.__setattr__(self, "solve_tol", tol)
 
 
 class Runner:

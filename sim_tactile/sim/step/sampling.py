@@ -1,7 +1,6 @@
 """What a driver makes of its steps: each sample the trapezoid mean of the loads over its
 period (:class:`SampleAverager`), and the result of one simulated window
-(:class:`SimResult`), its sensor's output (:func:`sensor_output`) and the head of its
-recording's meta (:func:`window_meta`), shared by the finger's slide (:mod:`~sim_tactile.sim.slide`) and the
+(:class:`SimResult`) and its sensor's output (:func:`sensor_output`), shared by the finger's slide (:mod:`~sim_tactile.sim.slide`) and the
 probe rig's (:mod:`~sim_tactile.sim.rig_sim`)."""
 
 from __future__ import annotations
@@ -77,24 +76,6 @@ def sensor_output(loads: np.ndarray, sensor, rate_hz: float, seed: int, ideal: b
         return loads, "N", "ideal"
     out = sensor.transduce(loads, rate_hz, np.random.default_rng([seed, 1]))
     return out, sensor.units, sensor.transducer_json()
-
-
-def window_meta(plate, sensor, finger, protocol, nominal, seed: int) -> dict:
-    """The keys a simulated window's recording meta starts with: the plate, the sensor, the
-    pad, the drawn and nominal protocols and the seed."""
-    layout = sensor.layout
-    return {
-        "plate": plate.name or plate.hash,
-        "plate_hash": plate.hash,
-        "plate_params": plate.params(),
-        "layout": layout.name,
-        "sensor": sensor.name,
-        "channel_names": list(layout.names),
-        "finger": finger.to_json(),
-        "protocol": protocol.to_json(),
-        "protocol_nominal": nominal.to_json(),
-        "seed": seed,
-    }
 
 
 def versions() -> dict:

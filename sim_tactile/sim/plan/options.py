@@ -1,0 +1,203 @@
+"""How a slide is computed, as opposed to what it is: every knob of :class:`StepOptions`,
+declared once with its range (:data:`KNOBS`), in scikit-learn's ``_param_validation``
+manner.
+
+The declaration is read by everything that takes a knob: :class:`StepOptions` checks its
+fields against it; a slide's description (:meth:`~.slide.Slide.describe`, so its cache key)
+records the knobs set away from their defaults (:func:`keyed`); configuration files
+(:mod:`sim_tactile.slides.config`) and the command line (``simulate``'s flags) take the
+public ones by their names, with the help and range written here; the file-format reference
+is generated from it. A new knob is one :class:`Knob` here, its field on
+:class:`StepOptions`, and the code that reads it.
+
+This module imports neither MuJoCo nor numba (the planner's floor).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any
+
+from ... import _validate as v
+from ...errors import ConfigError
+
+#: Most steps one held solve may stand for (``StepOptions.solve_every``): a sample of the
+#: slowest sensors spans about 20 steps.
+MAX_SOLVE_EVERY = 64
+#: The range a spectral contact solve's tolerance may be set in (``StepOptions.solve_tol``;
+#: its default, the reference, is :data:`~sim_tactile.sim.skin.contact.spectral.TOL`).
+SOLVE_TOL_RANGE = (1e-12, 1e-3)
+#: How a held slide's taxel loads are computed (``StepOptions.path``): ``auto`` (the phase
+#: table where the scene allows it and its measured error is within target, else the
+#: per-step solve), ``per-step`` (the skin solved at every step: the reference) or
+#: ``phase-table`` (asked for: refused where the scene does not allow it).
+PATHS = ("auto", "per-step", "phase-table")
+
+
+@dataclass(frozen=True)
+class Knob:
+    """One knob of :class:`StepOptions`: its ``name``, what it does (``help``), its ``kind``
+    (``bool``, ``int``, ``float`` or ``choice``), its range (``lo``, ``hi``; ``choices``),
+    whether None is allowed (``optional``: the reference), and whether configuration files
+    and the command line take it (``public``). Every knob away from its default enters a
+    slide's description, so its cache key."""
+
+    name: str
+    help: str
+    kind: str
+    lo: float | None = None
+    hi: float | None = None
+    choices: tuple[str, ...] = ()
+    optional: bool = False
+    public: bool = False
+
+    def check(self, value: Any) -> Any:
+        """``value`` checked against the declaration and in its canonical type (a float
+        that reads as one, an int, a bool, a choice); a ConfigError names the knob, the
+        value and the valid range."""
+        if value is None and self.optional:
+            return None
+        if self.kind == "bool":
+            if not isinstance(value, bool):
+                raise ConfigError(f"{self.name} must be true or false, got {value!r}")
+            return value
+        if self.kind == "int":
+            lo = None if self.lo is None else int(self.lo)
+            hi = None if self.hi is None else int(self.hi)
+            return v.integer(self.name, value, lo, hi)
+        if self.kind == "float":
+            if isinstance(value, bool):
+                raise ConfigError(f"{self.name} must be a number, got {value!r}")
+            return v.in_range(self.name, value, self.lo, self.hi)
+        return v.one_of(self.name, value, self.choices)
+
+    def valid(self) -> str:
+        """The valid values, as messages and the reference print them."""
+        if self.kind == "bool":
+            out = "true or false"
+        elif self.kind == "choice":
+            out = ", ".join(self.choices)
+        else:
+            what = "integer" if self.kind == "int" else "number"
+            out = f"{what} in [{self.lo:g}, {self.hi:g}]"
+        return out + (" (absent: the reference)" if self.optional else "")
+
+
+#: Every knob of :class:`StepOptions`, in its field order (see the module docstring).
+KNOBS: tuple[Knob, ...] = (
+    Knob(
+        "primitive_collider",
+        "the compiled collider of the plate (its features, a roughness profile or a height "
+        "map), else MuJoCo's collider, the reference",
+        "bool",
+    ),
+    Knob(
+        "compiled_hold",
+        "the held step as one compiled call where the compiled collider serves (else the "
+        "plain loop, the reference)",
+        "bool",
+    ),
+    Knob(
+        "reduce_skin",
+        "the compiled held step on the smallest exact problem (columns, mirror half)",
+        "bool",
+    ),
+    Knob(
+        "skin_solver",
+        "the coupled skin's contact solve: auto (spectral above DENSE_MAX_NODES nodes), "
+        "dense or spectral",
+        "choice",
+        choices=("auto", "dense", "spectral"),
+    ),
+    Knob(
+        "solve_every",
+        "the skin solved at every n-th step of a slide held at its force, the taxel loads "
+        "between read off the line between two solves (1: every step, the reference)",
+        "int",
+        1,
+        MAX_SOLVE_EVERY,
+        public=True,
+    ),
+    Knob(
+        "solve_tol",
+        "the spectral contact solve's tolerance (the pressures' relative change in one "
+        "iteration at which it stops; absent: 1e-10, the reference)",
+        "float",
+        *SOLVE_TOL_RANGE,
+        optional=True,
+        public=True,
+    ),
+    Knob(
+        "path",
+        "how a held slide's taxel loads are computed: auto (the phase table where the plate "
+        "repeats along the slide and its measured error allows, else per step), per-step "
+        "(the reference) or phase-table",
+        "choice",
+        choices=PATHS,
+        public=True,
+    ),
+)
+#: The knobs by name.
+KNOB = {k.name: k for k in KNOBS}
+
+
+@dataclass(frozen=True)
+class StepOptions:
+    """How each part of a slide is computed (all fast by default); each field is a knob of
+    :data:`KNOBS`, whose ``help`` says what it does and whose range it is checked against.
+
+    primitive_collider, compiled_hold, reduce_skin, skin_solver: which implementation of
+        each part of a step runs (each against its plain reference, tested equal);
+    solve_every: under quasi-static force control, the skin solved at every n-th step, the
+        taxel loads between on the line between two solves (1: every step, the reference);
+    solve_tol: the spectral contact solve's tolerance (None: the reference, 1e-10);
+    path: ``auto``, ``per-step`` or ``phase-table`` (:data:`PATHS`).
+    """
+
+    primitive_collider: bool = True
+    compiled_hold: bool = True
+    reduce_skin: bool = True
+    skin_solver: str = "auto"
+    solve_every: int = 1
+    solve_tol: float | None = None
+    path: str = "auto"
+
+    def __post_init__(self) -> None:
+        for f in fields(self):  # each kept as the value it reads as (a float, an int)
+            object.__setattr__(self, f.name, KNOB[f.name].check(getattr(self, f.name)))
+
+    @classmethod
+    def from_table(cls, table: dict[str, Any], where: str = "") -> StepOptions:
+        """The options of a configuration's public knobs (``table``: name -> value; the
+        others at their defaults); an unknown name is refused."""
+        public = [k.name for k in KNOBS if k.public]
+        v.known_keys(where, table, public)
+        return cls(**{k: table[k] for k in public if k in table})
+
+
+#: The defaults, to tell which knobs a slide sets.
+_DEFAULT = StepOptions()
+
+
+def keyed(options: StepOptions) -> dict[str, Any]:
+    """The knobs of ``options`` away from their defaults, as JSON data: what a slide's
+    description records of them (a slide at the defaults records none, so its key is the one
+    it had before any knob existed)."""
+    out = {}
+    for k in KNOBS:
+        val = getattr(options, k.name)
+        if val != getattr(_DEFAULT, k.name):
+            out[k.name] = (
+                val
+                if k.kind in ("bool", "choice")
+                else (int(val) if k.kind == "int" else float(val))
+            )
+    return out
+
+
+def reference_table() -> str:
+    """The public knobs as a Markdown table (name, valid values, what it does), for the
+    file-format reference."""
+    rows = ["| key | valid | what it does |", "|---|---|---|"]
+    rows += [f"| `{k.name}` | {k.valid()} | {k.help} |" for k in KNOBS if k.public]
+    return "\n".join(rows)

@@ -1,0 +1,152 @@
+"""One slide, described once: :class:`Slide`.
+
+A slide is a plate, a sensor (or another pad for it), a nominal protocol and the seed that
+draws its speed, force and offset, the fidelity it asks for, whether it records the ideal
+loads, the probe rig where it is made on one, and how it is computed
+(:class:`~.options.StepOptions`). Every layer reads this one value: the simulator runs it
+(:func:`sim_tactile.sim.run`), a data set's jobs are slides (:mod:`sim_tactile.slides`),
+a bench scene names one. :meth:`Slide.describe` is the one description behind its cache
+key, its recording's meta and a store's attributes.
+
+Like a Tonic transform, it holds the description and nothing else: what it resolves
+(:attr:`Slide.sensor_def`, :attr:`Slide.pad`, :attr:`Slide.surface`, :meth:`Slide.drawn`,
+:attr:`Slide.window`) is derived from its fields, once, and is not logic. This module loads
+neither MuJoCo nor numba.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+from ...plates.spec import Plate
+from ...plates.surface import Surface, surface_of
+from ...sensors import Finger, Layout, Sensor, resolve_sensor
+from .options import StepOptions, keyed
+from .protocol import Protocol, SlideWindow
+from .rig import ProbeRig
+
+
+@dataclass(frozen=True)
+class Slide:
+    """One slide (see the module docstring).
+
+    plate: the plate itself (its parameters, not a name).
+    sensor: the whole sensor, a sensor name or file, or a bare layout (resolved by
+        :attr:`sensor_def`).
+    protocol: nominal, with its per-slide jitters (its rate defaults to the sensor's);
+        :meth:`drawn` is the protocol the slide runs.
+    seed: draws the slide's speed, force and offset and seeds the sensor's imperfections.
+    fidelity: ``auto``, ``L0``-``L2`` or a resolved Fidelity.
+    ideal: record the noise-free normal loads [N] instead of the sensor's output.
+    finger: a pad that replaces the sensor's (None: the sensor's own).
+    pitch_m, dt_s: the node pitch along the slide and the time step [m, s] where they are
+        forced (None: the fidelity's).
+    rig: the probe rig that makes the slide (:mod:`~.rig`), else the finger scene.
+    options: how it is computed (:class:`~.options.StepOptions`).
+    label: what the slide is called in messages (its plate's name and place in a set).
+    """
+
+    plate: Plate
+    sensor: Sensor | Layout | str
+    protocol: Protocol = field(default_factory=Protocol)
+    seed: int = 0
+    fidelity: Any = "auto"
+    ideal: bool = False
+    finger: Finger | None = None
+    pitch_m: float | None = None
+    dt_s: float | None = None
+    rig: ProbeRig | None = None
+    options: StepOptions = field(default_factory=StepOptions)
+    label: str = field(default="", compare=False)
+
+    # ------------------------------------------------------------------ resolved once
+    @cached_property
+    def sensor_def(self) -> Sensor:
+        """The sensor (a name, file or bare layout resolved)."""
+        return resolve_sensor(self.sensor)
+
+    @property
+    def layout(self) -> Layout:
+        return self.sensor_def.layout
+
+    @property
+    def pad(self) -> Finger:
+        """The pad the slide is made with: ``finger``, else the sensor's."""
+        return self.finger or self.sensor_def.finger
+
+    @property
+    def surface(self) -> Surface:
+        """The plate's surface (:func:`~sim_tactile.plates.surface.surface_of`): what the
+        planner asks of the plate."""
+        return surface_of(self.plate)
+
+    @cached_property
+    def nominal(self) -> Protocol:
+        """The nominal protocol at its rate (the sensor's unless it has its own)."""
+        return self.protocol.at_rate(self.sensor_def.rate_hz)
+
+    def drawn(self) -> Protocol:
+        """The slide's own speed, force and offset, as the simulation draws them from
+        ``seed`` (:meth:`~.protocol.Protocol.drawn`), at the nominal rate."""
+        return self.nominal.drawn(self.seed)
+
+    @cached_property
+    def window(self) -> SlideWindow:
+        """Where the slide starts and stops on its plate and its samples (the finger
+        scene's; the rig records ``duration_s``)."""
+        return SlideWindow.of(self.plate, self.pad.patch_m[0], self.drawn())
+
+    def n_samples(self) -> int:
+        """Samples the slide records (its window; on the rig, ``duration_s`` at its rate)."""
+        if self.rig is not None:
+            return max(1, round(self.nominal.duration_s * self.nominal.rate_hz))
+        return SlideWindow.of(self.plate, self.pad.patch_m[0], self.nominal).n_samples
+
+    # ------------------------------------------------------------------ described once
+    def describe(self) -> dict:
+        """Everything that determines the slide, as JSON data: the one dict behind its cache
+        key, its recording's meta and a store's attributes. ``rig``, ``pitch_m``, ``dt_s``
+        and the knobs of ``options`` appear only where they are set, so the descriptions of
+        slides that leave them at their defaults are unchanged."""
+        d = {
+            "kind": "slide",
+            "plate": self.plate.params(),
+            "sensor": self.sensor_def.to_json(),
+            "protocol": self.protocol.to_json(),
+            "seed": int(self.seed),
+            "fidelity": self.fidelity
+            if isinstance(self.fidelity, str)
+            else self.fidelity.to_json(),
+            "ideal": bool(self.ideal),
+            "finger": None if self.finger is None else self.finger.to_json(),
+        }
+        if self.rig is not None:
+            d["rig"] = self.rig.to_json()
+        if self.pitch_m is not None:
+            d["pitch_m"] = self.pitch_m
+        if self.dt_s is not None:
+            d["dt_s"] = self.dt_s
+        return {**d, **keyed(self.options)}
+
+    def meta_head(self) -> dict:
+        """The keys a simulated window's recording meta starts with: the plate, the sensor,
+        the pad, the drawn and nominal protocols and the seed."""
+        sensor = self.sensor_def
+        return {
+            "plate": self.plate.name or self.plate.hash,
+            "plate_hash": self.plate.hash,
+            "plate_params": self.plate.params(),
+            "layout": sensor.layout.name,
+            "sensor": sensor.name,
+            "channel_names": list(sensor.layout.names),
+            "finger": self.pad.to_json(),
+            "protocol": self.drawn().to_json(),
+            "protocol_nominal": self.nominal.to_json(),
+            "seed": self.seed,
+        }
+
+    def named(self) -> str:
+        """How messages name the slide: its label, else its plate's name or hash."""
+        return self.label or self.plate.name or self.plate.hash
