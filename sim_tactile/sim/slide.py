@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -28,18 +28,21 @@ from .collide.choose import make_collider
 from .micro import micro_loads
 from .plan.fidelity import Fidelity, choose_fidelity, flat_stiffness
 from .plan.options import StepOptions
+from .plan.phase import MIN_PERIODS, PhasePlan, phase_plan
 from .plan.protocol import (
     APPROACH_CLEARANCE_M,
     APPROACH_SPEED,
-    SPEED_RAMP_S,
     Protocol,
     SlideWindow,
 )
 from .plan.slide import Slide
 from .skin.models import make_skin
 from .step.choose import make_held_step
+from .step.phase_table import tabulate
 from .step.runner import Runner, drag_factor, drag_warning
 from .step.sampling import SampleAverager, SimResult, sensor_output, versions
+from .step.strokes import Strokes
+from .step.tabled import Glide, slide_tabled
 
 #: A slide whose mean normal force strays further than this from the target is flagged.
 FORCE_TOLERANCE = 0.05
@@ -124,6 +127,8 @@ class _Slide:
     x_pad: np.ndarray
     stopped_at_s: float | None
     wall_s: float
+    drag_sum: float = 0.0
+    drag_steps: int = 0
 
 
 @dataclass
@@ -157,6 +162,12 @@ def prepare(slide: Slide | Plate | str, *args, cache=None, **kwargs) -> Pressed:
         sensor = args[0] if args else kwargs.pop("sensor", "grid3x3")
         protocol = kwargs.pop("protocol", None) or Protocol()
         slide = Slide(plate, sensor, protocol, options=opts, **kwargs)
+    proto, fid, window = _planned(slide)
+    return _press(slide, proto, fid, window, cache)
+
+
+def _planned(slide: Slide) -> tuple[Protocol, Fidelity, SlideWindow]:
+    """The slide's drawn protocol, its fidelity and its window."""
     proto = slide.drawn()
     finger = slide.pad
     check_pad(slide.layout, finger)
@@ -169,8 +180,12 @@ def prepare(slide: Slide | Plate | str, *args, cache=None, **kwargs) -> Pressed:
         pitch_m=slide.pitch_m,
         dt_s=slide.dt_s,
     )
-    window = SlideWindow.of(slide.plate, finger.patch_m[0], proto)
-    runner = _setup(slide, proto, fid, window, cache)
+    return proto, fid, SlideWindow.of(slide.plate, finger.patch_m[0], proto)
+
+
+def _press(slide: Slide, proto: Protocol, fid: Fidelity, window: SlideWindow, cache) -> Pressed:
+    """The scene at the window's start, approached, pressed and settled."""
+    runner = _setup(slide, proto, fid, window.x_start_m, cache)
     warnings_ = list(fid.warnings)
     if proto.force_control == "position":
         _touch(runner, proto.force_n)  # then held at that height
@@ -182,18 +197,25 @@ def prepare(slide: Slide | Plate | str, *args, cache=None, **kwargs) -> Pressed:
 
 def _run(slide: Slide, cache) -> SimResult:
     t_wall = time.perf_counter()
-    pressed = prepare(slide, cache=cache)
     plate, sensor, finger = slide.plate, slide.sensor_def, slide.pad
-    proto, fid = pressed.protocol, pressed.fidelity
-    window, runner, warnings = pressed.window, pressed.runner, pressed.warnings
+    proto, fid, window = _planned(slide)
     layout = sensor.layout
     opts = slide.options
     every = opts.solve_every
-    if every > 1 and runner.hold is not None and proto.force_control != "position":
-        slide_rec = _slide_sampled(runner, window, proto, fid.steps_per_sample, every)
-    else:
+    plan = _table_plan(slide, proto, window)
+    if plan is not None:
+        path, runner, warnings, slide_rec = _slide_on_table(slide, proto, fid, window, plan, cache)
         every = 1
-        slide_rec = _slide(runner, window, proto, fid.steps_per_sample)
+    else:
+        pressed = _press(slide, proto, fid, window, cache)
+        runner, warnings = pressed.runner, pressed.warnings
+        path = "per-step"
+        if every > 1 and runner.hold is not None and proto.force_control != "position":
+            slide_rec = _slide_sampled(runner, window, proto, fid.steps_per_sample, every)
+        else:
+            every = 1
+            slide_rec = _slide(runner, window, proto, fid.steps_per_sample)
+        slide_rec.drag_sum, slide_rec.drag_steps = runner.drag_sum, runner.n_slide_steps
     sim_s = window.n_samples / proto.rate_hz
     if slide_rec.stopped_at_s is not None:
         warnings.append(
@@ -215,7 +237,7 @@ def _run(slide: Slide, cache) -> SimResult:
     meta = {
         **slide.meta_head(),
         "fidelity": fid.to_json(),
-        "skin_problem": runner.describe(),
+        "skin_problem": path if plan is not None else runner.describe(),
         "solve_every": every,
         "rate_hz": proto.rate_hz,
         "dt_s": fid.dt_s,
@@ -223,7 +245,7 @@ def _run(slide: Slide, cache) -> SimResult:
         "micro_roughness": bool(micro.any()),
         "x_pad_m": slide_rec.x_pad.tolist(),
         "normal_force_n": slide_rec.forces.tolist(),
-        "mean_drag_n": runner.drag_sum / max(runner.n_slide_steps, 1),
+        "mean_drag_n": slide_rec.drag_sum / max(slide_rec.drag_steps, 1),
         "drag_factor": drag_factor(proto.speed_m_s),
         "drag_regularised": drag_warning(proto.speed_m_s) is not None,
         "versions": versions(),
@@ -241,13 +263,97 @@ def _run(slide: Slide, cache) -> SimResult:
     return SimResult(rec, fid, sim_s, wall, warnings)
 
 
-def _setup(slide: Slide, proto: Protocol, fid: Fidelity, window: SlideWindow, cache) -> Runner:
-    """The scene at the slide's start (the pad above the plate's highest point under it), its
-    skin model and the runner that steps it."""
+def _table_plan(slide: Slide, proto: Protocol, window: SlideWindow) -> PhasePlan | None:
+    """The slide's phase plan where its loads are read off a phase table (``path`` auto
+    where the plate repeats under the pad for long enough, or phase-table), else None: the
+    per-step slide (``path`` per-step, ``solve_every`` > 1, or a scene the table does not
+    serve; asked for by name there, a ConfigError says why)."""
+    opts = slide.options
+    if opts.path == "per-step" or (opts.path == "auto" and opts.solve_every > 1):
+        return None
+    plan, why = phase_plan(slide.plate, slide.pad.patch_m, proto.offset_y_m, proto.force_control)
+    if plan is not None:
+        lo, hi = _travel(window, proto)
+        period = plan.period_m or 0.0
+        inside = max(0.0, min(hi, plan.x_hi) - max(lo, plan.x_lo))
+        if inside < MIN_PERIODS * period or inside <= 0.0:
+            plan, why = (
+                None,
+                (
+                    f"the slide travels {inside * 1e3:.3g} mm on the repeating texture, under "
+                    f"{MIN_PERIODS:g} periods"
+                ),
+            )
+    if plan is None and opts.path == "phase-table":
+        raise ConfigError(f"path = 'phase-table' does not serve this slide: {why}")
+    return plan
+
+
+def _travel(window: SlideWindow, proto: Protocol) -> tuple[float, float]:
+    """The pad centre's x range [m] over the window (an upper bound of its travel)."""
+    reach = proto.speed_m_s * (window.n_samples + 1) / proto.rate_hz
+    xs = [window.x_start_m] + [x for s in window.strokes for x in s[:2]]
+    if len(window.strokes) == 1:
+        sign = window.strokes[0][2]
+        end = window.x_start_m + sign * min(reach, abs(window.x_limit_m - window.x_start_m))
+        xs = [window.x_start_m, end]
+    else:
+        xs.append(window.x_limit_m)
+    return min(xs), max(xs)
+
+
+def _slide_on_table(slide, proto, fid, window, plan, cache):
+    """``(path, runner, warnings, record)`` of a slide read off its phase table: the table
+    solved in its own scene at the plan's reference, then the slide stepped along it (a
+    slide that starts on flat ground is approached and pressed as the per-step slide is,
+    and solved step by step off the table)."""
+    table_proto = replace(proto, offset_y_m=plan.y_m)
+    scene = _setup(slide, table_proto, fid, plan.x_ref, cache)
+    table = tabulate(
+        scene.hold,
+        scene.d_dyn.qpos,
+        scene._jx,
+        scene._jz,
+        plan.x_ref,
+        scene.z0,
+        plan,
+        proto.force_n / scene.s.grid.area_m2,
+        scene.s.layout.n,
+        fid.pitch_m,
+    )
+    lo, hi = _travel(window, proto)
+    if plan.covers(lo) and plan.covers(hi):
+        runner, dyn, warnings = None, Glide(scene.s.m_dyn, scene._jx, scene._jz), list(fid.warnings)
+    else:
+        pressed = _press(slide, proto, fid, window, cache)
+        runner = dyn = pressed.runner
+        warnings = pressed.warnings
+    out = slide_tabled(
+        table,
+        dyn,
+        window,
+        proto,
+        fid.steps_per_sample,
+        fid.dt_s,
+        slide.pad.friction,
+        slide.pad.thickness_m,
+    )
+    loads, forces, x_pad, stopped, wall, drag_sum, drag_steps, tabled = out
+    total = window.n_samples * fid.steps_per_sample + 1
+    path = f"{table.describe()}, {table.solves} solves; {tabled} of {total} steps read off it" + (
+        "" if runner is None else f", the rest: {runner.describe()}"
+    )
+    return path, runner, warnings, _Slide(loads, forces, x_pad, stopped, wall, drag_sum, drag_steps)
+
+
+def _setup(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache) -> Runner:
+    """The scene with the pad centred at ``x0_m`` (the slide's start; a phase table's
+    reference) and ``proto.offset_y_m``, above the plate's highest point under it, its skin
+    model and the runner that steps it."""
     plate, layout, finger, options = slide.plate, slide.layout, slide.pad, slide.options
     grid = skin_grid(finger, fid.pitch_m, fid.pitch_y_m)
     z0 = APPROACH_CLEARANCE_M + max(
-        0.0, float(np.nanmax(_plate_heights(plate, grid, window.x_start_m, proto.offset_y_m)))
+        0.0, float(np.nanmax(_plate_heights(plate, grid, x0_m, proto.offset_y_m)))
     )
     omega_guess = math.sqrt(
         flat_stiffness(finger, fid.coupled, fid.winkler_k_pa_per_m) / finger.bone_mass_kg
@@ -259,7 +365,7 @@ def _setup(slide: Slide, proto: Protocol, fid: Fidelity, window: SlideWindow, ca
         grid,
         layout,
         dt_s=fid.dt_s,
-        x0_m=window.x_start_m,
+        x0_m=x0_m,
         y0_m=proto.offset_y_m,
         z0_m=z0,
         z_damping=2.0 * omega_guess * finger.bone_mass_kg,  # critical at the flat pad
@@ -285,7 +391,7 @@ def _setup(slide: Slide, proto: Protocol, fid: Fidelity, window: SlideWindow, ca
         layout=layout,
         finger=finger,
         quasi_static=quasi_static,
-        x0_m=window.x_start_m,
+        x0_m=x0_m,
         y0_m=proto.offset_y_m,
         z0_m=z0,
         compiled=options.compiled_hold,
@@ -351,43 +457,12 @@ def _press_and_settle(runner: Runner, proto: Protocol) -> list[str]:
     return [f"press force did not settle within {SETTLE_FORCE_TOL:.0%} of {F:g} N (now {Fs:.4g} N)"]
 
 
-class _Strokes:
-    """The slide's speed command along the window's strokes: ramped at the start of each
-    stroke, zero once the pad reaches the plate's end (``stopped_at_s``)."""
-
-    def __init__(self, window: SlideWindow, speed_m_s: float, dt: float) -> None:
-        self.w, self.speed, self.dt = window, speed_m_s, dt
-        self.i = 0
-        self.sign = window.strokes[0][2]
-        self.t_stroke = 0.0
-        self.t = 0.0
-        self.stopped_at_s: float | None = None
-        self.v = 0.0
-
-    def command(self, x: float) -> float:
-        """The speed command [m/s] for the pad at ``x`` (the plate frame) for the next step."""
-        w = self.w
-        if self.sign * (x - w.strokes[self.i][1]) >= 0 and self.i + 1 < len(w.strokes):
-            self.i += 1
-            self.sign = w.strokes[self.i][2]
-            self.t_stroke = 0.0
-        v = self.sign * self.speed * min(1.0, self.t_stroke / SPEED_RAMP_S)
-        if self.sign * x >= w.x_limit_m:
-            v = 0.0
-            if self.stopped_at_s is None:
-                self.stopped_at_s = self.t
-        self.t += self.dt
-        self.t_stroke += self.dt
-        self.v = v
-        return v
-
-
 def _slide(runner: Runner, window: SlideWindow, proto: Protocol, n_sub: int) -> _Slide:
     """Slide along the window's strokes under the held force, averaging each sample."""
     n = window.n_samples
     avg = SampleAverager(n, runner.s.layout.n, n_sub)
     x_pad = np.empty(n)
-    strokes = _Strokes(window, proto.speed_m_s, runner.dt)
+    strokes = Strokes(window, proto.speed_m_s, runner.dt)
     now = np.zeros(runner.s.layout.n)  # this step's taxel loads
     F, x0 = proto.force_n, window.x_start_m
     # under position control the pad keeps its height (moved kinematically by nothing)
@@ -426,7 +501,7 @@ def _slide_sampled(
     forces = np.empty(total)
     x_after = np.empty(total)  # the pad's x on the plate after each step
     v_after = np.empty(total)  # the stroke's speed command of each step
-    strokes = _Strokes(window, proto.speed_m_s, runner.dt)
+    strokes = Strokes(window, proto.speed_m_s, runner.dt)
     F, x0 = proto.force_n, window.x_start_m
     t0 = time.perf_counter()
     g = -1  # the last step solved

@@ -1,0 +1,175 @@
+"""The skin's answer tabulated over one texture period: :class:`PhaseTable`.
+
+Where a held slide's loads are a function of the pad's phase in the plate's period
+(:func:`~sim_tactile.sim.plan.phase.phase_plan`), :func:`tabulate` solves the held step
+(:class:`~.held.HeldStep`, the same one the per-step slide calls) at phases of one period and
+keeps, per phase, the taxel loads [N], the normal force [N], the deepest node [m] and the
+pad's height; a step of the slide reads them off the table, linearly between the two phases
+on either side (:meth:`PhaseTable.at`). The phases are chosen adaptively: a first even grid
+of about one phase per node pitch, then every interval whose midpoint's loads differ from
+the line between its ends by more than :data:`PHASE_TOL` of the loads' RMS is halved, down
+to :data:`MIN_PHASE_FRACTION` of a node pitch; the largest midpoint difference that remains
+is the table's own error estimate (:attr:`PhaseTable.error`). A uniform stretch (a flat
+plate) is one phase.
+
+The table is solved in a scene of its own, from the plan's reference position (not from
+the slide's history), so the same plan, grid and force give the same table bit for bit,
+whichever slide asks first.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import PhysicsError
+from ..plan.phase import PhasePlan
+from .held import HeldStep
+
+#: Largest midpoint difference, relative to the loads' RMS over the table (the RMS over
+#: phases of the taxel-load vector's norm), at which an interval is not halved again. The
+#: slide reads the loads between phases off a line; measured against the per-step solve on
+#: every task scene (perf/bench_phase.py), this keeps whole slides well within 2% (relative
+#: L2 of the taxel loads).
+PHASE_TOL = 0.005
+#: Smallest interval between two phases, as a share of the node pitch along the slide: the
+#: loads jump where a node row crosses a wall, and a finer table narrows the jump's smear
+#: only as the square root of its interval (measured on the iCub's gratings, 0.51% -> 0.23%
+#: relative L2 over a slide from 1 to 1/8 of a step's travel); a quarter of the pitch is
+#: about the travel of one of the iCub's steps (56 um at 0.224 mm nodes against 34-73 um).
+MIN_PHASE_FRACTION = 1 / 8
+#: Most phases one table may hold.
+MAX_PHASES = 1024
+
+
+@dataclass(frozen=True)
+class PhaseTable:
+    """A held slide's answer over one period (see the module docstring): ``phases`` (K,)
+    [m] in ``[0, period)``, sorted, and per phase the taxel ``loads`` (K, N) [N], the normal
+    ``force`` (K,) [N], the deepest node ``top`` (K,) [m] and the pad's lowest point ``z``
+    (K,) [m above the plate's base surface]; ``solves`` held steps made it; ``error`` is the
+    largest relative midpoint difference left (0 for one phase)."""
+
+    plan: PhasePlan
+    phases: np.ndarray
+    loads: np.ndarray
+    force: np.ndarray
+    top: np.ndarray
+    z: np.ndarray
+    solves: int
+    error: float
+
+    def at(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(loads (n, N), force (n,), top (n,), z (n,))`` of the pad centred at ``x`` (n,)
+        [m], each in the plan's interior: linear in the phase between the table's phases
+        (the last phase joins the first one period on)."""
+        x = np.asarray(x, dtype=float)
+        period = self.plan.period_m
+        k = len(self.phases)
+        if period is None or k == 1:
+            idx = np.zeros(x.shape, dtype=np.intp)
+            return self.loads[idx], self.force[idx], self.top[idx], self.z[idx]
+        phi = np.mod(x - self.plan.x_ref, period)
+        grid = np.append(self.phases, period)
+        i = np.clip(np.searchsorted(grid, phi, side="right") - 1, 0, k - 1)
+        w = (phi - grid[i]) / (grid[i + 1] - grid[i])
+        j = (i + 1) % k
+
+        def lerp(a: np.ndarray) -> np.ndarray:
+            wa = w if a.ndim == 1 else w[:, None]
+            return (1.0 - wa) * a[i] + wa * a[j]
+
+        return lerp(self.loads), lerp(self.force), lerp(self.top), lerp(self.z)
+
+    def describe(self) -> str:
+        if self.plan.period_m is None:
+            return f"phase table: {self.plan.describe()}, 1 phase"
+        return (
+            f"phase table: {self.plan.describe()}, {len(self.phases)} phases, "
+            f"interpolation error below {max(self.error, 1e-6):.2g} of the loads"
+        )
+
+
+def tabulate(
+    hold: HeldStep,
+    qpos: np.ndarray,
+    jx: int,
+    jz: int,
+    x_scene_m: float,
+    z_scene_m: float,
+    plan: PhasePlan,
+    total_pa: float,
+    n_taxels: int,
+    pitch_m: float,
+    tol: float = PHASE_TOL,
+) -> PhaseTable:
+    """Solve ``hold`` over one period of ``plan`` (see the module docstring).
+
+    ``qpos``: the table scene's joint positions at rest (its pad centred at ``x_scene_m``,
+    its lowest point ``z_scene_m`` above the base at ``qpos[jz] = 0``), copied, never
+    written; ``total_pa``: the force as the held step takes it (the node pressures' sum
+    [Pa]); ``pitch_m``: the node pitch along the slide, which sets the first grid and the
+    smallest interval (neither depends on the slide's speed or step, so slides at any speed
+    share a table)."""
+    q = np.array(qpos, dtype=float)
+    solved: dict[float, tuple[np.ndarray, float, float, float]] = {}
+
+    def solve(phi: float) -> None:
+        out = np.zeros(n_taxels)
+        q[jx] = plan.x_ref + phi - x_scene_m
+        force, top = hold.step(q, jz, total_pa, out)
+        if not (np.isfinite(force) and np.isfinite(out).all()):
+            raise PhysicsError("the skin load is not finite (NaN or infinity)")
+        solved[phi] = (out, float(force), float(top), float(z_scene_m + q[jz]))
+
+    period = plan.period_m
+    if period is None:
+        solve(0.0)
+        return _table(plan, solved, 0.0)
+    n0 = max(4, int(np.ceil(period / pitch_m)))
+    for phi in np.arange(n0) * (period / n0):
+        solve(float(phi))
+    todo = [(float(a), float(b)) for a, b in zip(*_ends(sorted(solved), period), strict=True)]
+    smallest = pitch_m * MIN_PHASE_FRACTION
+    scale = _rms(solved)
+    worst = 0.0
+    while todo:
+        nxt = []
+        for a, b in todo:
+            mid = 0.5 * (a + b)
+            solve(mid)
+            fa, fb = solved[a][0], solved[b % period][0]
+            err = float(np.linalg.norm(solved[mid][0] - 0.5 * (fa + fb))) / scale
+            if err > tol and (b - a) / 2 > smallest and len(solved) < MAX_PHASES:
+                nxt += [(a, mid), (mid, b)]
+            else:
+                worst = max(worst, err)
+        todo = nxt
+    return _table(plan, solved, worst)
+
+
+def _ends(phases: list[float], period: float) -> tuple[list[float], list[float]]:
+    """The intervals between successive phases, the last closing at ``period``."""
+    return phases, [*phases[1:], period]
+
+
+def _rms(solved: dict) -> float:
+    norms = [float(np.linalg.norm(v[0])) for v in solved.values()]
+    rms = float(np.sqrt(np.mean(np.square(norms))))
+    return rms if rms > 0 else 1.0
+
+
+def _table(plan: PhasePlan, solved: dict, error: float) -> PhaseTable:
+    phases = np.array(sorted(solved))
+    rows = [solved[p] for p in phases]
+    return PhaseTable(
+        plan,
+        phases,
+        np.array([r[0] for r in rows]),
+        np.array([r[1] for r in rows]),
+        np.array([r[2] for r in rows]),
+        np.array([r[3] for r in rows]),
+        len(solved),
+        float(error),
+    )

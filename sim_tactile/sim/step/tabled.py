@@ -1,0 +1,155 @@
+"""A held slide read off its phase table where the pad is on the repeating texture
+(:func:`slide_tabled`), and solved step by step elsewhere.
+
+MuJoCo still steps the finger's dynamics at every step (the arm's velocity servo moves the
+pad along the slide; nothing else does while the force is held), so the pad's positions are
+the per-step slide's; a step in the plan's interior takes its taxel loads, force and depth
+from the table (:meth:`~.phase_table.PhaseTable.at`) instead of a collision query and a
+contact solve. A step outside it (the approach onto the texture and the exit, on a slide
+that starts on flat ground) is the per-step held step, started from the table's height for
+its pose. Each sample is the trapezoid mean of its steps, as the per-step slide averages
+them (:class:`~.sampling.SampleAverager`).
+"""
+
+from __future__ import annotations
+
+import time
+
+import mujoco
+import numpy as np
+
+from ...errors import PhysicsError
+from ..plan.protocol import Protocol, SlideWindow
+from .phase_table import PhaseTable
+from .runner import V_STICK, Runner
+from .sampling import SampleAverager
+from .strokes import Strokes
+
+
+class Glide:
+    """The finger's slide joint alone, for a slide read wholly off its table: a fresh
+    MuJoCo state of the scene's dynamics model ``m_dyn`` at rest (the pad where the held
+    press leaves it: no travel, no speed), stepped with the servo's command and the press
+    joint held, as :meth:`~.runner.Runner.coast` steps a pressed runner."""
+
+    def __init__(self, m_dyn, jx: int, jz: int) -> None:
+        self.m, self.jx, self.jz = m_dyn, jx, jz
+        self.d = mujoco.MjData(m_dyn)
+        self.d.qpos[:] = 0.0
+
+    @property
+    def x_m(self) -> float:
+        return float(self.d.qpos[self.jx])
+
+    @property
+    def vx(self) -> float:
+        return float(self.d.qvel[self.jx])
+
+    def coast(self, slide_v: float) -> None:
+        d = self.d
+        d.qvel[self.jz] = 0.0
+        d.qfrc_applied[self.jz] = 0.0
+        d.qfrc_applied[self.jx] = 0.0
+        d.ctrl[0] = slide_v
+        mujoco.mj_step(self.m, d)
+
+    def check_warnings(self) -> None:
+        d = self.d
+        if d.warning.number.any():
+            bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
+            raise PhysicsError(
+                f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"
+            )
+
+
+def slide_tabled(
+    table: PhaseTable,
+    dyn: Runner | Glide,
+    window: SlideWindow,
+    proto: Protocol,
+    n_sub: int,
+    dt: float,
+    friction: float,
+    max_pen_m: float,
+):
+    """Slide along the window's strokes under the held force, each step read off ``table``
+    where the pad lies in its plan's interior, else solved by ``dyn`` (a pressed
+    :class:`~.runner.Runner`; a :class:`Glide` where every step lies in the interior).
+
+    Returns ``(loads (T, N), forces (T,), x_pad (T,), stopped_at_s, wall_s, drag_sum,
+    n_slide_steps, tabled_steps)``, as the per-step slide records them."""
+    if float(table.top.max()) > max_pen_m:
+        raise PhysicsError(
+            f"skin pressed to the bottom: a node is {table.top.max() * 1e3:.3g} mm deep, beyond "
+            f"the skin thickness {max_pen_m * 1e3:.3g} mm (lower the force or use a thicker skin)"
+        )
+    n = window.n_samples
+    n_tax = table.loads.shape[1]
+    total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
+    loads = np.empty((total, n_tax))
+    forces = np.empty(total)
+    x_before = np.empty(total)  # the pad's x on the plate as each step reads its loads
+    vx = np.empty(total)  # its speed then (the drag's)
+    cmd = np.empty(total)  # the stroke's speed command of each step
+    x_after = np.empty(total)
+    inside = np.zeros(total, dtype=bool)
+    strokes = Strokes(window, proto.speed_m_s, dt)
+    plan, x0, F = table.plan, window.x_start_m, proto.force_n
+    held = dyn if isinstance(dyn, Runner) else None
+    t0 = time.perf_counter()
+    for i in range(total):
+        x = x0 + dyn.x_m
+        v = strokes.command(x)
+        x_before[i], cmd[i] = x, v
+        if plan.covers(x):
+            inside[i] = True
+            vx[i] = dyn.vx if held is None else float(held._qvel[held._jx])
+            dyn.coast(v)
+        elif held is None:
+            raise PhysicsError(
+                f"the pad left the repeating texture at x = {x * 1e3:.4g} mm "
+                f"(the table serves {plan.describe()})"
+            )
+        else:
+            if i and inside[i - 1]:  # back from the table: start from its height here
+                held._qpos[held._jz] = table.at(np.array([x]))[3][0] - held.z0
+            vx[i] = np.nan  # the runner records its own drag
+            forces[i] = held.step(force_cmd=F, slide_v=v, taxel_out=loads[i])
+        x_after[i] = x0 + dyn.x_m
+        if i % n_sub == n_sub - 1:
+            dyn.check_warnings()
+    if inside.any():
+        tl, tf, _, _ = table.at(x_before[inside])
+        loads[inside], forces[inside] = tl, tf
+    drag_sum, n_steps = _drag(forces, vx, cmd, inside, friction)
+    if held is not None:
+        drag_sum += held.drag_sum
+        n_steps += held.n_slide_steps
+    avg = SampleAverager(n, n_tax, n_sub)
+    for i in range(total - 1):
+        s, k = divmod(i, n_sub)
+        avg.add(s, k, loads[i], forces[i])
+        if k == n_sub - 1:
+            avg.end_sample()
+    avg.finish(loads[total - 1], forces[total - 1])
+    last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
+    x_pad = x_after[last] - 0.5 * cmd[last] / proto.rate_hz
+    wall = time.perf_counter() - t0
+    return (
+        avg.loads,
+        avg.forces,
+        x_pad,
+        strokes.stopped_at_s,
+        wall,
+        drag_sum,
+        n_steps,
+        int(inside.sum()),
+    )
+
+
+def _drag(forces, vx, cmd, inside, friction) -> tuple[float, int]:
+    """The tabled steps' friction drag, summed as the runner sums it (``mu N tanh(v /
+    V_STICK)`` at the pad's speed, on steps that slide), and their count."""
+    moving = inside & (cmd != 0.0)
+    drag = friction * forces[moving] * np.tanh(vx[moving] / V_STICK)
+    return float(np.abs(drag).sum()), int(moving.sum())
