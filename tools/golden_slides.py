@@ -30,6 +30,7 @@ import numpy as np
 from sim_tactile.cache import ArtefactCache
 from sim_tactile.hashing import derive_seed
 from sim_tactile.plates import get_plate
+from sim_tactile.sim import StepOptions
 from sim_tactile.slides import SlideJob
 from sim_tactile.tasks import get_task
 
@@ -68,7 +69,9 @@ CASES = [
 
 
 def case_job(case: dict) -> SlideJob:
-    """The slide of a case: the task's own seed, protocol and sensor, the window shortened."""
+    """The slide of a case: the task's own seed, protocol and sensor, the window shortened,
+    on the per-step path (the reference every faster path is measured against; its phase
+    table is tested against it in tests/test_sim_phase_table.py)."""
     ss = get_task(case["task"]).get_data
     seed = derive_seed(0, ss.plates.index(case["plate"]), case["slide"], bits=63)
     proto = ss.window_protocol()
@@ -86,6 +89,7 @@ def case_job(case: dict) -> SlideJob:
         ss.finger,
         pitch_m=ss.pitch_m,
         rig=ss.rig,
+        options=StepOptions(path="per-step"),
     )
 
 

@@ -11,38 +11,30 @@ run with a PhysicsError naming the cause.
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import ConfigError, PhysicsError
-from ..plates import Plate, get_plate, height_at
+from ..plates import Plate, get_plate
 from ..records import Recording
-from ..scene.model import build_scene
-from ..scene.nodes import SkinGrid, skin_grid
 from ..sensors import Finger, Layout, Sensor, check_pad
-from .collide.choose import make_collider
 from .micro import micro_loads
-from .plan.fidelity import Fidelity, choose_fidelity, flat_stiffness
+from .plan.fidelity import Fidelity
 from .plan.options import StepOptions
-from .plan.phase import MIN_PERIODS, PhasePlan, phase_plan
 from .plan.protocol import (
-    APPROACH_CLEARANCE_M,
     APPROACH_SPEED,
     Protocol,
     SlideWindow,
 )
 from .plan.slide import Slide
-from .skin.models import make_skin
-from .step.choose import make_held_step
-from .step.phase_table import tabulate
+from .step.build import runner_for
 from .step.runner import Runner, drag_factor, drag_warning
 from .step.sampling import SampleAverager, SimResult, sensor_output, versions
 from .step.strokes import Strokes
-from .step.tabled import Glide, slide_tabled
+from .step.tabled import slide_on_table
 
 #: A slide whose mean normal force strays further than this from the target is flagged.
 FORCE_TOLERANCE = 0.05
@@ -168,24 +160,13 @@ def prepare(slide: Slide | Plate | str, *args, cache=None, **kwargs) -> Pressed:
 
 def _planned(slide: Slide) -> tuple[Protocol, Fidelity, SlideWindow]:
     """The slide's drawn protocol, its fidelity and its window."""
-    proto = slide.drawn()
-    finger = slide.pad
-    check_pad(slide.layout, finger)
-    fid = choose_fidelity(
-        slide.plate,
-        slide.layout,
-        finger,
-        proto,
-        slide.fidelity,
-        pitch_m=slide.pitch_m,
-        dt_s=slide.dt_s,
-    )
-    return proto, fid, SlideWindow.of(slide.plate, finger.patch_m[0], proto)
+    check_pad(slide.layout, slide.pad)
+    return slide.drawn(), slide.resolved, slide.window
 
 
 def _press(slide: Slide, proto: Protocol, fid: Fidelity, window: SlideWindow, cache) -> Pressed:
     """The scene at the window's start, approached, pressed and settled."""
-    runner = _setup(slide, proto, fid, window.x_start_m, cache)
+    runner = runner_for(slide, proto, fid, window.x_start_m, cache)
     warnings_ = list(fid.warnings)
     if proto.force_control == "position":
         _touch(runner, proto.force_n)  # then held at that height
@@ -202,9 +183,12 @@ def _run(slide: Slide, cache) -> SimResult:
     layout = sensor.layout
     opts = slide.options
     every = opts.solve_every
-    plan = _table_plan(slide, proto, window)
+    plan = slide.table_plan()
     if plan is not None:
-        path, runner, warnings, slide_rec = _slide_on_table(slide, proto, fid, window, plan, cache)
+        press = lambda: _press(slide, proto, fid, window, cache)  # noqa: E731
+        tabled = slide_on_table(slide, proto, fid, window, plan, press, cache)
+        path, runner, warnings = tabled.describe(), tabled.runner, tabled.warnings
+        slide_rec = _Slide(*tabled.record)
         every = 1
     else:
         pressed = _press(slide, proto, fid, window, cache)
@@ -261,154 +245,6 @@ def _run(slide: Slide, cache) -> SimResult:
     }
     rec = Recording(out.astype(np.float32), times, layout.positions, units=units, meta=meta)
     return SimResult(rec, fid, sim_s, wall, warnings)
-
-
-def _table_plan(slide: Slide, proto: Protocol, window: SlideWindow) -> PhasePlan | None:
-    """The slide's phase plan where its loads are read off a phase table (``path`` auto
-    where the plate repeats under the pad for long enough, or phase-table), else None: the
-    per-step slide (``path`` per-step, ``solve_every`` > 1, or a scene the table does not
-    serve; asked for by name there, a ConfigError says why)."""
-    opts = slide.options
-    if opts.path == "per-step" or (opts.path == "auto" and opts.solve_every > 1):
-        return None
-    plan, why = phase_plan(slide.plate, slide.pad.patch_m, proto.offset_y_m, proto.force_control)
-    if plan is not None:
-        lo, hi = _travel(window, proto)
-        period = plan.period_m or 0.0
-        inside = max(0.0, min(hi, plan.x_hi) - max(lo, plan.x_lo))
-        if inside < MIN_PERIODS * period or inside <= 0.0:
-            plan, why = (
-                None,
-                (
-                    f"the slide travels {inside * 1e3:.3g} mm on the repeating texture, under "
-                    f"{MIN_PERIODS:g} periods"
-                ),
-            )
-    if plan is None and opts.path == "phase-table":
-        raise ConfigError(f"path = 'phase-table' does not serve this slide: {why}")
-    return plan
-
-
-def _travel(window: SlideWindow, proto: Protocol) -> tuple[float, float]:
-    """The pad centre's x range [m] over the window (an upper bound of its travel)."""
-    reach = proto.speed_m_s * (window.n_samples + 1) / proto.rate_hz
-    xs = [window.x_start_m] + [x for s in window.strokes for x in s[:2]]
-    if len(window.strokes) == 1:
-        sign = window.strokes[0][2]
-        end = window.x_start_m + sign * min(reach, abs(window.x_limit_m - window.x_start_m))
-        xs = [window.x_start_m, end]
-    else:
-        xs.append(window.x_limit_m)
-    return min(xs), max(xs)
-
-
-def _slide_on_table(slide, proto, fid, window, plan, cache):
-    """``(path, runner, warnings, record)`` of a slide read off its phase table: the table
-    solved in its own scene at the plan's reference, then the slide stepped along it (a
-    slide that starts on flat ground is approached and pressed as the per-step slide is,
-    and solved step by step off the table)."""
-    table_proto = replace(proto, offset_y_m=plan.y_m)
-    scene = _setup(slide, table_proto, fid, plan.x_ref, cache)
-    table = tabulate(
-        scene.hold,
-        scene.d_dyn.qpos,
-        scene._jx,
-        scene._jz,
-        plan.x_ref,
-        scene.z0,
-        plan,
-        proto.force_n / scene.s.grid.area_m2,
-        scene.s.layout.n,
-        fid.pitch_m,
-    )
-    lo, hi = _travel(window, proto)
-    if plan.covers(lo) and plan.covers(hi):
-        runner, dyn, warnings = None, Glide(scene.s.m_dyn, scene._jx, scene._jz), list(fid.warnings)
-    else:
-        pressed = _press(slide, proto, fid, window, cache)
-        runner = dyn = pressed.runner
-        warnings = pressed.warnings
-    out = slide_tabled(
-        table,
-        dyn,
-        window,
-        proto,
-        fid.steps_per_sample,
-        fid.dt_s,
-        slide.pad.friction,
-        slide.pad.thickness_m,
-    )
-    loads, forces, x_pad, stopped, wall, drag_sum, drag_steps, tabled = out
-    total = window.n_samples * fid.steps_per_sample + 1
-    path = f"{table.describe()}, {table.solves} solves; {tabled} of {total} steps read off it" + (
-        "" if runner is None else f", the rest: {runner.describe()}"
-    )
-    return path, runner, warnings, _Slide(loads, forces, x_pad, stopped, wall, drag_sum, drag_steps)
-
-
-def _setup(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache) -> Runner:
-    """The scene with the pad centred at ``x0_m`` (the slide's start; a phase table's
-    reference) and ``proto.offset_y_m``, above the plate's highest point under it, its skin
-    model and the runner that steps it."""
-    plate, layout, finger, options = slide.plate, slide.layout, slide.pad, slide.options
-    grid = skin_grid(finger, fid.pitch_m, fid.pitch_y_m)
-    z0 = APPROACH_CLEARANCE_M + max(
-        0.0, float(np.nanmax(_plate_heights(plate, grid, x0_m, proto.offset_y_m)))
-    )
-    omega_guess = math.sqrt(
-        flat_stiffness(finger, fid.coupled, fid.winkler_k_pa_per_m) / finger.bone_mass_kg
-    )
-    quasi_static = proto.force_control == "quasi-static"
-    scene = build_scene(
-        plate,
-        finger,
-        grid,
-        layout,
-        dt_s=fid.dt_s,
-        x0_m=x0_m,
-        y0_m=proto.offset_y_m,
-        z0_m=z0,
-        z_damping=2.0 * omega_guess * finger.bone_mass_kg,  # critical at the flat pad
-        node_margin_m=slide.surface.margin_m if quasi_static else 0.0,
-        cache=cache,
-    )
-    skin = make_skin(
-        fid.level,
-        grid,
-        finger,
-        winkler_k_pa_per_m=fid.winkler_k_pa_per_m,
-        solver=options.skin_solver,
-        tol=options.solve_tol,
-        cache=cache,
-    )
-    collider = make_collider(scene, options.primitive_collider)
-    hold = make_held_step(
-        scene,
-        skin,
-        collider,
-        fid,
-        plate=plate,
-        layout=layout,
-        finger=finger,
-        quasi_static=quasi_static,
-        x0_m=x0_m,
-        y0_m=proto.offset_y_m,
-        z0_m=z0,
-        compiled=options.compiled_hold,
-        reduce=options.reduce_skin,
-    )
-    return Runner(
-        scene,
-        skin,
-        fid,
-        finger,
-        fid.dt_s,
-        collider=collider,
-        z0_m=z0,
-        plate=plate,
-        quasi_static=quasi_static,
-        hold=hold,
-    )
 
 
 def _approach(runner: Runner, force_n: float, touch: float = 0.2) -> None:
@@ -553,7 +389,3 @@ def _force_warnings(forces: np.ndarray, target_n: float, speed_m_s: float) -> li
             f"{100 * off:.1f}% of the samples"
         )
     return out
-
-
-def _plate_heights(plate: Plate, grid: SkinGrid, x: float, y: float) -> np.ndarray:
-    return height_at(plate, grid.xy[:, 0] + x, grid.xy[:, 1] + y) - grid.z

@@ -40,7 +40,8 @@ class Knob:
     (``bool``, ``int``, ``float`` or ``choice``), its range (``lo``, ``hi``; ``choices``),
     whether None is allowed (``optional``: the reference), and whether configuration files
     and the command line take it (``public``). Every knob away from its default enters a
-    slide's description, so its cache key."""
+    slide's description, so its cache key (``keyed``), or the slide records what the knob
+    resolves to (``path``: the path it takes)."""
 
     name: str
     help: str
@@ -50,6 +51,9 @@ class Knob:
     choices: tuple[str, ...] = ()
     optional: bool = False
     public: bool = False
+    #: whether a slide's description records it as set (else the slide records what it
+    #: resolves to: ``path``)
+    keyed: bool = True
 
     def check(self, value: Any) -> Any:
         """``value`` checked against the declaration and in its canonical type (a float
@@ -135,6 +139,7 @@ KNOBS: tuple[Knob, ...] = (
         "choice",
         choices=PATHS,
         public=True,
+        keyed=False,
     ),
 )
 #: The knobs by name.
@@ -184,7 +189,7 @@ def keyed(options: StepOptions) -> dict[str, Any]:
     description records of them (a slide at the defaults records none, so its key is the one
     it had before any knob existed)."""
     out = {}
-    for k in KNOBS:
+    for k in (k for k in KNOBS if k.keyed):
         val = getattr(options, k.name)
         if val != getattr(_DEFAULT, k.name):
             out[k.name] = (

@@ -23,12 +23,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...cache import memoized
+from ...errors import ConfigError
 from ...plates.spec import Plate
 from ...plates.surface import surface_of
+from .protocol import Protocol, SlideWindow
 
 #: Reach beyond the pad's patch [m] within which the plate must repeat for the table to
-#: serve: the skin nodes' collider margin (0.5 mm at most) and their radius, with room.
-REACH_MARGIN_M = 2e-3
+#: serve: the skin nodes' collider margin (0.5 mm at most), their probes' radius (a quarter
+#: of the node pitch) and the lattice's overhang past the patch (at most half a pitch), at
+#: auto's coarsest 1 mm pitch.
+REACH_MARGIN_M = 1.25e-3
 #: Largest height difference [m] between the plate at ``x`` and at ``x + P`` that still
 #: counts as a repetition: far below any node's depth (1 nm; the features' positions differ
 #: from an exact repetition by round-off, some 1e-18 m).
@@ -71,6 +75,45 @@ class PhasePlan:
         return f"period {self.period_m * 1e3:.4g} mm ({where})"
 
 
+def table_plan(
+    plate: Plate, patch_m, proto: Protocol, window: SlideWindow, path: str, solve_every: int
+) -> PhasePlan | None:
+    """The plan of a slide whose loads are read off a phase table: ``path`` ``auto`` where
+    the plate repeats under the pad for at least :data:`MIN_PERIODS` of the slide's travel
+    (and no ``solve_every`` > 1 asks for the sampled per-step slide), or ``phase-table``
+    (refused with a ConfigError that says why where it does not serve); else None, the
+    per-step slide. ``proto`` is the drawn protocol, ``window`` its window."""
+    if path == "per-step" or (path == "auto" and solve_every > 1):
+        return None
+    plan, why = phase_plan(plate, patch_m, proto.offset_y_m, proto.force_control)
+    if plan is not None:
+        lo, hi = travel(window, proto)
+        inside = max(0.0, min(hi, plan.x_hi) - max(lo, plan.x_lo))
+        if inside <= 0.0 or inside < MIN_PERIODS * (plan.period_m or 0.0):
+            plan, why = (
+                None,
+                (
+                    f"the slide travels {inside * 1e3:.3g} mm on the repeating texture, under "
+                    f"{MIN_PERIODS:g} periods"
+                ),
+            )
+    if plan is None and path == "phase-table":
+        raise ConfigError(f"path = 'phase-table' does not serve this slide: {why}")
+    return plan
+
+
+def travel(window: SlideWindow, proto: Protocol) -> tuple[float, float]:
+    """The pad centre's x range [m] over ``window`` at ``proto``'s speed (an upper bound of
+    its travel: the ramp at each stroke's start only shortens it)."""
+    reach = proto.speed_m_s * (window.n_samples + 1) / proto.rate_hz
+    if len(window.strokes) == 1:
+        sign = window.strokes[0][2]
+        end = window.x_start_m + sign * min(reach, abs(window.x_limit_m - window.x_start_m))
+        return min(window.x_start_m, end), max(window.x_start_m, end)
+    xs = [window.x_start_m, window.x_limit_m] + [x for s in window.strokes for x in s[:2]]
+    return min(xs), max(xs)
+
+
 def phase_plan(
     plate: Plate, patch_m: tuple[float, float], offset_y_m: float, force_control: str
 ) -> tuple[PhasePlan | None, str]:
@@ -78,41 +121,106 @@ def phase_plan(
     over ``plate`` is a function of its phase, or None and why not."""
     if force_control != "quasi-static":
         return None, f"the force is held by {force_control!r} control, not quasi-statically"
-    return _plan(plate, (float(patch_m[0]), float(patch_m[1])), float(offset_y_m))
+    rx = float(patch_m[0]) / 2 + REACH_MARGIN_M
+    ry = float(patch_m[1]) / 2 + REACH_MARGIN_M
+    found = _repetition(plate, rx)
+    if isinstance(found, str):
+        return None, found
+    period, lo, hi = found
+    free = period is None or abs(offset_y_m) + ry <= _y_free_half_width(plate, rx)
+    return PhasePlan(period, lo, hi, lo, 0.0 if free else float(offset_y_m)), ""
 
 
-@memoized("phase plans", maxsize=256)
-def _plan(plate: Plate, patch: tuple[float, float], offset: float):
+@memoized("plates' repetitions", maxsize=256)
+def _repetition(plate: Plate, rx: float) -> tuple[float | None, float, float] | str:
+    """``(period or None, x_lo, x_hi)``: the period and the interior of a pad reaching
+    ``rx`` along the slide (checked across the plate's whole width), or why there is none.
+    A flat plate is uniform: no period, the whole plate its interior."""
     surf = surface_of(plate)
-    rx = patch[0] / 2 + REACH_MARGIN_M
-    ry = patch[1] / 2 + REACH_MARGIN_M
-    uniform = not surf.features and surf.arrays is None  # flat: no feature, no samples
-    if uniform:
-        lo, hi = -plate.length_m / 2 + rx, plate.length_m / 2 - rx
-        period = None
+    if not surf.features and surf.arrays is None:  # flat: no feature, no samples
+        return None, -plate.length_m / 2 + rx, plate.length_m / 2 - rx
+    period = surf.period_m
+    if period is None:
+        return "the plate has no period along the slide"
+    if surf.features:
+        a, b = _repeating_span(surf.features, period)
+        a, b = max(a, -plate.length_m / 2), min(b, plate.length_m / 2)
     else:
-        period = surf.period_m
-        if period is None:
-            return None, "the plate has no period along the slide"
-        lo, hi = -plate.area_length_m / 2 + rx, plate.area_length_m / 2 - rx
-        if hi - lo < MIN_PERIODS * period:
-            return None, (
-                f"the pad ({patch[0] * 1e3:.3g} mm) wholly on the texture spans "
-                f"{max(hi - lo, 0) * 1e3:.3g} mm of travel, under {MIN_PERIODS:g} periods "
-                f"({period * 1e3:.3g} mm)"
-            )
-    scale = surf.feature_scale_m or CHECK_PITCH_M
-    step = min(CHECK_PITCH_M, scale / 10)
-    y = _grid(offset, ry, step)
-    if uniform:
-        return PhasePlan(None, lo, hi, lo, 0.0), "flat under the pad"
-    if not _repeats(surf, lo, hi, period, rx, y, step):
-        return None, (
+        a, b = -plate.area_length_m / 2, plate.area_length_m / 2
+    lo, hi = a + rx, b - rx
+    if hi - lo < MIN_PERIODS * period:
+        return (
+            f"the pad wholly on the texture spans {max(hi - lo, 0) * 1e3:.3g} mm of travel, "
+            f"under {MIN_PERIODS:g} periods ({period * 1e3:.3g} mm)"
+        )
+    if surf.features:
+        ok = _features_repeat(surf.features, a, b, period)
+    else:
+        step = _check_pitch(surf)
+        ok = _repeats(surf, lo, hi, period, rx, _grid(0.0, plate.width_m / 2, step), step)
+    if not ok:
+        return (
             f"the plate does not repeat with its period ({period * 1e3:.4g} mm) over the "
             "pad's reach"
         )
-    y_free = _offset_free(surf, lo, period, rx, offset, ry, step)
-    return PhasePlan(period, lo, hi, lo, 0.0 if y_free else offset), ""
+    return period, lo, hi
+
+
+def _shape(f, dx: float = 0.0) -> tuple:
+    """A feature's kind, place (shifted ``dx`` along the slide) and size, to the nanometre."""
+    nm = (f.x + dx, f.y, f.hx, f.hy, f.height_m, f.top_hx)
+    return (f.kind, *(round(v / REPEAT_TOL_M) for v in nm))
+
+
+def _repeating_span(features, period: float) -> tuple[float, float]:
+    """``(a, b)``: the widest span [m] along the slide over which the features repeat: the
+    end columns have no copy beyond them, so a reach must not see where one would be
+    (``a >= x + hx - period`` for a feature without its copy one period back,
+    ``b <= x - hx + period`` for one without its copy one period on). A missing copy inside
+    the texture leaves no span (``a >= b``)."""
+    have = {_shape(f) for f in features}
+    a, b = -math.inf, math.inf
+    for f in features:
+        if _shape(f, -period) not in have:
+            a = max(a, f.x + f.hx - period)
+        if _shape(f, period) not in have:
+            b = min(b, f.x - f.hx + period)
+    return a, b
+
+
+def _features_repeat(features, a: float, b: float, period: float) -> bool:
+    """Whether every feature that reaches into ``(a, b - period)`` has its copy one period
+    on, and every one that reaches into ``(a + period, b)`` its copy one period back: a pad
+    that reaches ``(x - r, x + r)`` sees the same features at ``x`` and ``x + period`` for
+    every ``x`` with ``x - r >= a`` and ``x + period + r <= b`` (to the nanometre)."""
+    have = {_shape(f) for f in features}
+    a, b = a + REPEAT_TOL_M, b - REPEAT_TOL_M  # a feature that only touches the reach: none
+    for f in features:
+        if f.x + f.hx > a and f.x - f.hx < b - period and _shape(f, period) not in have:
+            return False
+        if f.x + f.hx > a + period and f.x - f.hx < b and _shape(f, -period) not in have:
+            return False
+    return True
+
+
+@memoized("plates' offset-free widths", maxsize=256)
+def _y_free_half_width(plate: Plate, rx: float) -> float:
+    """The half-width [m] about the plate's centre line within which its surface does not
+    depend on y (ridges across the slide: their half-length; 0 where it depends on y, as
+    on a grid of bumps or a height map)."""
+    fs = surface_of(plate).features
+    found = _repetition(plate, rx)
+    if isinstance(found, str) or found[0] is None or not fs:
+        return 0.0
+    columns = {round(f.x / REPEAT_TOL_M) for f in fs}
+    if len(columns) != len(fs) or any(f.kind not in ("box", "prism") for f in fs):
+        return 0.0  # bumps in rows, or shapes that vary along y
+    return max(0.0, min(f.hy - abs(f.y) for f in fs))
+
+
+def _check_pitch(surf) -> float:
+    scale = surf.feature_scale_m or CHECK_PITCH_M
+    return min(CHECK_PITCH_M, scale / 10)
 
 
 def _grid(x0: float, rx: float, step: float) -> np.ndarray:
@@ -140,12 +248,4 @@ def _repeats(surf, lo, hi, period, rx, y, step) -> bool:
     return True
 
 
-def _offset_free(surf, lo, period, rx, offset, ry, step) -> bool:
-    """Whether the surface under the pad over one period is the same at the slide's offset
-    and at none (ridges across the whole pad): then every offset shares one table."""
-    xs = _grid(lo + period / 2, rx + period / 2, step)
-    y = _grid(0.0, ry, step)
-    a = surf.height(xs[:, None], y[None, :] + offset, near=(lo + period / 2, rx + period))
-    b = surf.height(xs[:, None], y[None, :], near=(lo + period / 2, rx + period))
-    same_rows = float(np.max(np.abs(a - a[:, :1]))) <= REPEAT_TOL_M
-    return bool(same_rows and float(np.max(np.abs(a - b))) <= REPEAT_TOL_M)
+__all__ = ["MIN_PERIODS", "PhasePlan", "phase_plan", "table_plan", "travel"]

@@ -23,7 +23,10 @@ from typing import Any
 from ...plates.spec import Plate
 from ...plates.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
+from .fidelity import DENSE_MAX_NODES, Fidelity, choose_fidelity
+from .measured_errors import node_count
 from .options import StepOptions, keyed
+from .phase import PhasePlan, table_plan, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
 
@@ -104,12 +107,54 @@ class Slide:
             return max(1, round(self.nominal.duration_s * self.nominal.rate_hz))
         return SlideWindow.of(self.plate, self.pad.patch_m[0], self.nominal).n_samples
 
+    @cached_property
+    def resolved(self) -> Fidelity:
+        """The fidelity the slide runs at (:func:`~.fidelity.choose_fidelity` of its
+        ``fidelity``, ``pitch_m`` and ``dt_s`` for its drawn protocol)."""
+        return choose_fidelity(
+            self.plate,
+            self.layout,
+            self.pad,
+            self.drawn(),
+            self.fidelity,
+            pitch_m=self.pitch_m,
+            dt_s=self.dt_s,
+        )
+
+    def table_plan(self) -> PhasePlan | None:
+        """The phase plan where the slide's loads are read off a phase table, else None: the
+        per-step slide. ``path`` ``phase-table`` takes it wherever the scene allows
+        (:func:`~.phase.table_plan`); ``auto`` where the whole window lies on the repeating
+        texture (the slide then needs no press and no step solved on its own), or where it
+        lies there for part of it and each step's solve is dear (the skin solved spectrally:
+        a table costs tens of solves, the stretch it replaces hundreds); a cheap dense or
+        plate-anchored step is as quick solved as read. The finger scene's only (the probe
+        rig has its own slide)."""
+        if self.rig is not None:
+            return None
+        proto, opts = self.drawn(), self.options
+        plan = table_plan(
+            self.plate, self.pad.patch_m, proto, self.window, opts.path, opts.solve_every
+        )
+        if plan is None or opts.path == "phase-table":
+            return plan
+        lo, hi = travel(self.window, proto)
+        if plan.covers(lo) and plan.covers(hi):
+            return plan
+        fid = self.resolved
+        dense = fid.wall_m is not None or fid.clipped or opts.skin_solver == "dense"
+        nodes = node_count(self.pad, fid.pitch_m, fid.pitch_y_m)
+        spectral = opts.skin_solver == "spectral" or nodes > DENSE_MAX_NODES
+        return plan if spectral and not dense else None
+
     # ------------------------------------------------------------------ described once
     def describe(self) -> dict:
         """Everything that determines the slide, as JSON data: the one dict behind its cache
         key, its recording's meta and a store's attributes. ``rig``, ``pitch_m``, ``dt_s``
         and the knobs of ``options`` appear only where they are set, so the descriptions of
-        slides that leave them at their defaults are unchanged."""
+        slides that leave them at their defaults are unchanged; ``path`` says
+        ``phase-table`` where the slide is read off a phase table (:meth:`table_plan`), so
+        that nothing the per-step slide made is served for it."""
         d = {
             "kind": "slide",
             "plate": self.plate.params(),
@@ -128,7 +173,10 @@ class Slide:
             d["pitch_m"] = self.pitch_m
         if self.dt_s is not None:
             d["dt_s"] = self.dt_s
-        return {**d, **keyed(self.options)}
+        d.update(keyed(self.options))
+        if self.table_plan() is not None:  # another path, another key
+            d["path"] = "phase-table"
+        return d
 
     def meta_head(self) -> dict:
         """The keys a simulated window's recording meta starts with: the plate, the sensor,

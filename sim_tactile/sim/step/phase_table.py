@@ -19,11 +19,16 @@ whichever slide asks first.
 
 from __future__ import annotations
 
+import io
+import math
+import warnings
+import zipfile
 from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import PhysicsError
+from ...cache import SETUP
+from ...errors import CacheWarning, PhysicsError
 from ..plan.phase import PhasePlan
 from .held import HeldStep
 
@@ -59,6 +64,10 @@ class PhaseTable:
     z: np.ndarray
     solves: int
     error: float
+
+    @property
+    def n_taxels(self) -> int:
+        return self.loads.shape[1]
 
     def at(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(loads (n, N), force (n,), top (n,), z (n,))`` of the pad centred at ``x`` (n,)
@@ -173,3 +182,120 @@ def _table(plan: PhasePlan, solved: dict, error: float) -> PhaseTable:
         len(solved),
         float(error),
     )
+
+
+# ------------------------------------------------------------------ tables a data set shares
+#: Force levels per doubling of the force at which shared tables are solved (4.4% apart): a
+#: slide whose force lies between two levels reads the line between their tables
+#: (:func:`force_levels`; its error measured on the task scenes by perf/bench_phase.py).
+LEVELS_PER_OCTAVE = 16
+#: The table cache's file kind.
+TABLE_EXT = "phase.npz"
+
+
+def force_levels(force_n: float) -> list[tuple[float, float]]:
+    """``[(level force [N], weight), ...]``: the one or two shared levels
+    ``2 ** (k / LEVELS_PER_OCTAVE)`` N on either side of ``force_n``, weighted by the line
+    between them (one level, weight 1, where the force is one)."""
+    t = math.log2(force_n) * LEVELS_PER_OCTAVE
+    k = math.floor(t)
+    lo = 2.0 ** (k / LEVELS_PER_OCTAVE)
+    if lo == force_n:
+        return [(lo, 1.0)]
+    hi = 2.0 ** ((k + 1) / LEVELS_PER_OCTAVE)
+    w = (force_n - lo) / (hi - lo)
+    return [(lo, 1.0 - w), (hi, w)]
+
+
+@dataclass(frozen=True)
+class Blend:
+    """Tables of one plan at other forces, read as the line between them in the force:
+    ``at(x)`` is ``sum(weight * table.at(x))`` (the interface of :class:`PhaseTable` that the
+    tabled slide reads)."""
+
+    tables: tuple[PhaseTable, ...]
+    weights: tuple[float, ...]
+    levels: tuple[float, ...]
+
+    @property
+    def plan(self) -> PhasePlan:
+        return self.tables[0].plan
+
+    @property
+    def n_taxels(self) -> int:
+        return self.tables[0].loads.shape[1]
+
+    @property
+    def top(self) -> np.ndarray:
+        return np.concatenate([t.top for t in self.tables])
+
+    @property
+    def solves(self) -> int:
+        return sum(t.solves for t in self.tables)
+
+    def at(self, x: np.ndarray):
+        parts = [t.at(x) for t in self.tables]
+        return tuple(
+            sum(w * p[k] for w, p in zip(self.weights, parts, strict=True)) for k in range(4)
+        )
+
+    def describe(self) -> str:
+        forces = " and ".join(f"{f:.4g} N" for f in self.levels)
+        phases = " and ".join(str(len(t.phases)) for t in self.tables)
+        return (
+            f"phase tables at {forces} (shared force levels): {self.plan.describe()}, "
+            f"{phases} phases, interpolation error below "
+            f"{max(max(t.error for t in self.tables), 1e-6):.2g} of the loads"
+        )
+
+
+def kept_table(key: str, build, cache) -> tuple[PhaseTable, bool]:
+    """``(table, made)``: the table under ``key`` from this process's memo or ``cache`` (an
+    :class:`~sim_tactile.cache.ArtefactCache`, checked as every entry is), else
+    ``build()`` kept in both. ``key`` holds everything the table depends on, and a table
+    is the same bit for bit whoever builds it, so a slide does not depend on where its
+    table came from."""
+    kept = SETUP.get(key)
+    if kept is not None:
+        return _from_arrays(kept), False
+    if cache is not None:
+        hit = cache.get(key, TABLE_EXT)
+        if hit is not None:
+            try:
+                with np.load(hit, allow_pickle=False) as z:
+                    arrays = tuple(z[f] for f in _FIELDS)
+                if arrays[1].ndim != 2 or any(len(a) != len(arrays[0]) for a in arrays[1:5]):
+                    raise ValueError("its arrays disagree in length")
+                return _from_arrays(SETUP.put(key, arrays)), False
+            except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+                warnings.warn(
+                    f"cache entry {hit} cannot be read as a phase table "
+                    f"({type(exc).__name__}: {exc}); it is solved again",
+                    CacheWarning,
+                    stacklevel=2,
+                )
+                cache.discard(key, TABLE_EXT)
+    table = build()
+    arrays = _to_arrays(table)
+    if cache is not None:
+        buf = io.BytesIO()
+        np.savez(buf, **dict(zip(_FIELDS, arrays, strict=True)))
+        cache.put(key, TABLE_EXT, buf.getvalue())
+    SETUP.put(key, arrays)
+    return table, True
+
+
+_FIELDS = ("phases", "loads", "force", "top", "z", "plan", "stats")
+
+
+def _to_arrays(t: PhaseTable) -> tuple:
+    p = t.plan
+    period = np.nan if p.period_m is None else p.period_m
+    plan = np.array([period, p.x_lo, p.x_hi, p.x_ref, p.y_m])
+    return (t.phases, t.loads, t.force, t.top, t.z, plan, np.array([t.solves, t.error]))
+
+
+def _from_arrays(a: tuple) -> PhaseTable:
+    period, lo, hi, ref, y = (float(v) for v in a[5])
+    plan = PhasePlan(None if math.isnan(period) else period, lo, hi, ref, y)
+    return PhaseTable(plan, a[0], a[1], a[2], a[3], a[4], int(a[6][0]), float(a[6][1]))

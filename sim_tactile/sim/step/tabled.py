@@ -14,13 +14,21 @@ them (:class:`~.sampling.SampleAverager`).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
 
 from ...errors import PhysicsError
+from ...hashing import blas_kernel, code_version, content_hash
+from ..plan.fidelity import Fidelity
+from ..plan.options import keyed
+from ..plan.phase import PhasePlan, travel
 from ..plan.protocol import Protocol, SlideWindow
-from .phase_table import PhaseTable
+from ..plan.slide import Slide
+from .build import runner_for, scene_for
+from .phase_table import Blend, PhaseTable, force_levels, kept_table, tabulate
 from .runner import V_STICK, Runner
 from .sampling import SampleAverager
 from .strokes import Strokes
@@ -78,13 +86,13 @@ def slide_tabled(
 
     Returns ``(loads (T, N), forces (T,), x_pad (T,), stopped_at_s, wall_s, drag_sum,
     n_slide_steps, tabled_steps)``, as the per-step slide records them."""
-    if float(table.top.max()) > max_pen_m:
+    if float(np.max(table.top)) > max_pen_m:
         raise PhysicsError(
             f"skin pressed to the bottom: a node is {table.top.max() * 1e3:.3g} mm deep, beyond "
             f"the skin thickness {max_pen_m * 1e3:.3g} mm (lower the force or use a thicker skin)"
         )
     n = window.n_samples
-    n_tax = table.loads.shape[1]
+    n_tax = table.n_taxels
     total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
     loads = np.empty((total, n_tax))
     forces = np.empty(total)
@@ -153,3 +161,146 @@ def _drag(forces, vx, cmd, inside, friction) -> tuple[float, int]:
     moving = inside & (cmd != 0.0)
     drag = friction * forces[moving] * np.tanh(vx[moving] / V_STICK)
     return float(np.abs(drag).sum()), int(moving.sum())
+
+
+# ------------------------------------------------------------------ a slide on its table
+#: The modules whose source a table depends on (with what they import): its cache key's.
+TABLE_MODULES = (__name__,)
+#: The libraries whose versions change a table.
+TABLE_LIBRARIES = ("mujoco", "numba", "numpy", "scipy")
+
+
+@dataclass
+class OnTable:
+    """A slide stepped along its phase table (:func:`slide_on_table`): the table (or the
+    blend of two), the runner of the steps solved off it (None where every step was read
+    off), the warnings so far and the record (loads, forces, x_pad, stopped_at_s, wall_s,
+    drag_sum, drag_steps), with how many of ``steps`` were read off the table."""
+
+    table: PhaseTable | Blend
+    runner: Runner | None
+    warnings: list[str]
+    record: tuple
+    tabled: int
+    steps: int
+    made: int
+
+    def describe(self) -> str:
+        t = self.table
+        made = f"{self.made} of its tables solved for it" if self.made else "its tables reused"
+        out = f"{t.describe()}, {t.solves} solves ({made}); {self.tabled} of {self.steps} steps read off it"
+        return out + ("" if self.runner is None else f", the rest: {self.runner.describe()}")
+
+
+def slide_on_table(
+    slide: Slide,
+    proto: Protocol,
+    fid: Fidelity,
+    window: SlideWindow,
+    plan: PhasePlan,
+    press: Callable,
+    cache,
+) -> OnTable:
+    """Step ``slide`` (drawn as ``proto``, at ``fid``) along its phase table
+    (:func:`table_for`); ``press()`` approaches and presses the slide's own runner as the
+    per-step slide does (called only where the window leaves the plan's interior)."""
+    table, made = table_for(slide, proto, fid, plan, cache)
+    lo, hi = travel(window, proto)
+    if plan.covers(lo) and plan.covers(hi):
+        runner, warnings = None, list(fid.warnings)
+        scene, _ = scene_for(slide, proto, fid, window.x_start_m, cache)
+        dyn = Glide(scene.m_dyn, scene.jx, scene.jz)
+    else:
+        pressed = press()
+        runner = dyn = pressed.runner
+        warnings = pressed.warnings
+    record = slide_tabled(
+        table,
+        dyn,
+        window,
+        proto,
+        fid.steps_per_sample,
+        fid.dt_s,
+        slide.pad.friction,
+        slide.pad.thickness_m,
+    )
+    steps = window.n_samples * fid.steps_per_sample + 1
+    return OnTable(table, runner, warnings, record[:7], record[7], steps, made)
+
+
+def shared(slide: Slide, plan: PhasePlan) -> bool:
+    """Whether the slides of ``slide``'s set share tables at force levels (their force
+    varies from slide to slide, and the table does not depend on their offset: it does not,
+    or the offset does not vary); else each slide's table is solved at its own force."""
+    nominal = slide.protocol
+    offset_free = plan.y_m == 0.0 or nominal.offset_jitter_m == 0.0
+    return nominal.force_jitter > 0.0 and offset_free
+
+
+def table_for(
+    slide: Slide, proto: Protocol, fid: Fidelity, plan: PhasePlan, cache
+) -> tuple[PhaseTable | Blend, int]:
+    """``(table, made)``: the slide's phase table at its force, and how many tables were
+    solved for it (the rest came from this process or ``cache``). Where the slides of a set
+    share tables (:func:`shared`), the line between the tables at the two force levels on
+    either side of the slide's force (:func:`~.phase_table.force_levels`), else the table at
+    its own force."""
+    levels = force_levels(proto.force_n) if shared(slide, plan) else [(proto.force_n, 1.0)]
+    tables, made = [], 0
+    for force, _ in levels:
+        key = table_key(slide, fid, plan, force)
+        build = lambda f=force: solve_table(slide, proto, fid, plan, f, cache)  # noqa: E731
+        table, new = kept_table(key, build, cache)
+        tables.append(table)
+        made += new
+    if len(tables) == 1 and levels[0][0] == proto.force_n:
+        return tables[0], made
+    return Blend(tuple(tables), tuple(w for _, w in levels), tuple(f for f, _ in levels)), made
+
+
+def table_key(slide: Slide, fid: Fidelity, plan: PhasePlan, force_n: float) -> str:
+    """The content key of a table: everything it depends on (the plate, the sensor and pad,
+    the node grid and skin model, the knobs of how a step is solved, the plan, the force),
+    the code that solves it and the BLAS kernel; nothing of the slide's speed, step, seed or
+    window, which the table does not depend on."""
+    opts = {k: v for k, v in keyed(slide.options).items() if k not in ("path", "solve_every")}
+    grid = {
+        k: getattr(fid, k)
+        for k in ("level", "pitch_m", "pitch_y_m", "winkler_k_pa_per_m", "clipped", "wall_m")
+    }
+    return content_hash(
+        {
+            "what": "phase table",
+            "plate": slide.plate.params(),
+            "sensor": slide.sensor_def.to_json(),
+            "pad": slide.pad.to_json(),
+            "grid": grid,
+            "options": opts,
+            "plan": [plan.period_m, plan.x_lo, plan.x_hi, plan.x_ref, plan.y_m],
+            "force_n": float(force_n),
+            "code": code_version(*TABLE_MODULES, libraries=TABLE_LIBRARIES),
+            "blas": blas_kernel(),
+        }
+    )
+
+
+def solve_table(
+    slide: Slide, proto: Protocol, fid: Fidelity, plan: PhasePlan, force_n: float, cache
+) -> PhaseTable:
+    """The table of ``plan`` at ``force_n``, solved in a scene of its own: the pad at the
+    plan's reference and offset, a fresh held step (so the table does not depend on which
+    slide asks for it)."""
+    at = replace(proto, offset_y_m=plan.y_m, force_n=force_n)
+    scene = runner_for(slide, at, fid, plan.x_ref, cache)
+    return tabulate(
+        scene.hold,
+        scene.d_dyn.qpos,
+        scene._jx,
+        scene._jz,
+        plan.x_ref,
+        scene.z0,
+        plan,
+        force_n / scene.s.grid.area_m2,
+        scene.s.layout.n,
+        fid.pitch_m,
+    )

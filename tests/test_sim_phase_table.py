@@ -1,0 +1,225 @@
+"""The phase table (sim/plan/phase.py, sim/step/phase_table.py, sim/step/tabled.py): a held
+slide's loads solved over one texture period and read off by phase.
+
+Against the per-step solve, the reference: on a plate of every task whose protocol holds
+its force, the taxel loads of a slide read off the table are within the 2% the path is
+chosen by (relative L2 over the slide), the pad's path is the per-step slide's bit for bit,
+and a flat plate (one phase) is the per-step slide to the solver's tolerance. The table is
+the same bit for bit whichever slide asks for it first, from the process, from the disk
+cache or solved afresh; a damaged cache entry is solved again with a warning. Where the scene
+does not allow it (no period, no held force), asking for it by name is one clear error.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from sim_tactile.cache import ArtefactCache, forget_process_memos
+from sim_tactile.errors import CacheWarning, ConfigError
+from sim_tactile.plates import get_plate
+from sim_tactile.sim import Protocol, Slide, StepOptions, run
+from sim_tactile.sim.plan.phase import phase_plan
+from sim_tactile.sim.step.phase_table import TABLE_EXT, force_levels
+from sim_tactile.tasks import get_task
+
+#: The table path is the default where its error against the per-step solve is at most
+#: this (relative L2 of the taxel loads over a slide; the issue's and the manual's target).
+REL_L2_TARGET = 0.02
+#: A flat plate is one phase: the per-step slide's loads to the spectral or dense solve's
+#: convergence (1e-10 of the pressures' sum per iteration; float32 data).
+FLAT_RTOL = 1e-6
+
+TABLE = StepOptions(path="phase-table")
+STEP = StepOptions(path="per-step")
+
+
+def _task_slide(task: str, plate: str, duration_s: float, **proto) -> Slide:
+    """The first quick slide of ``plate`` in ``task`` (its seed, sensor and protocol),
+    recording the ideal loads for ``duration_s``."""
+    ss = get_task(task).get_data
+    jobs = ss.jobs(seed=0, quick=False)
+    job = next(j for j in jobs if j.plate.name == plate)
+    protocol = replace(job.protocol, duration_s=duration_s, **proto)
+    return Slide(
+        job.plate,
+        job.sensor_def,
+        protocol,
+        job.seed,
+        job.fidelity,
+        True,
+        job.finger,
+        job.pitch_m,
+        rig=job.rig,
+    )
+
+
+def _both(slide: Slide, cache):
+    table = run(replace(slide, options=TABLE), cache).recording
+    step = run(replace(slide, options=STEP), cache).recording
+    return table, step
+
+
+def _rel_l2(a, b) -> float:
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return float(np.linalg.norm(a - b) / np.linalg.norm(b))
+
+
+CASES = [
+    # task, plate, window [s], protocol changes (a slide that starts on the texture is read
+    # wholly off the table; one from flat ground is approached and solved per step off it)
+    pytest.param("finger7-v1", "finger7/ridges-4", 0.9, {}, id="finger7-ridges-from-flat"),
+    pytest.param("finger7-v1", "finger7/bumps-6x6", 0.25, {"start": "texture"}, id="finger7-bumps"),
+    pytest.param(
+        "multilayer3-v1",
+        "multilayer3/grating-9",
+        0.22,
+        {"start": "texture"},
+        id="multilayer3-grating",
+    ),
+    pytest.param(
+        "textures20-biotac19-v2",
+        "textures20-long/grating-3.0mm",
+        0.5,
+        {},
+        id="biotac-grating",
+        marks=pytest.mark.slow,
+    ),
+    pytest.param(
+        "textures20-icub60-v2",
+        "textures20-long/boxes-4.5mm",
+        0.3,
+        {},
+        id="icub-boxes",
+        marks=pytest.mark.slow,
+    ),
+]
+
+
+@pytest.mark.parametrize(("task", "plate", "duration", "changes"), CASES)
+def test_the_table_is_within_its_target_of_the_per_step_solve(
+    task, plate, duration, changes, cache
+):
+    slide = _task_slide(task, plate, duration, **changes)
+    table, step = _both(slide, cache)
+    assert "phase table" in table.meta["skin_problem"]
+    assert np.abs(step.data).max() > 0  # the pad touched the texture
+    assert _rel_l2(table.data, step.data) <= REL_L2_TARGET
+    # the pad's path is the per-step slide's: MuJoCo steps the same servo either way
+    assert np.array_equal(table.meta["x_pad_m"], step.meta["x_pad_m"])
+    assert np.allclose(table.meta["normal_force_n"], step.meta["normal_force_n"], rtol=1e-6)
+
+
+def test_a_flat_plate_is_one_phase_and_the_per_step_slide(cache):
+    slide = _task_slide("textures20-biotac19-v2", "textures20-long/flat", 0.3)
+    table, step = _both(slide, cache)
+    assert "1 phase" in table.meta["skin_problem"]
+    assert np.allclose(table.data, step.data, rtol=FLAT_RTOL, atol=1e-9)
+    assert table.meta["mean_drag_n"] == pytest.approx(step.meta["mean_drag_n"], rel=1e-9)
+
+
+def test_auto_takes_the_table_where_the_window_lies_on_the_texture_and_says_so():
+    on = _task_slide("finger7-v1", "finger7/bumps-6x6", 0.25, start="texture")
+    assert on.table_plan() is not None and on.describe()["path"] == "phase-table"
+    # from flat ground over a plate-anchored lattice (cheap dense steps): per step, and the
+    # description, hence the key, is the per-step slide's
+    across = _task_slide("finger7-v1", "finger7/ridges-4", 0.9)
+    assert across.table_plan() is None and "path" not in across.describe()
+    assert replace(on, options=STEP).table_plan() is None
+    assert "path" not in replace(on, options=STEP).describe()
+
+
+@pytest.mark.parametrize(
+    ("plate", "proto", "why"),
+    [
+        ("roughness8/ra-12.5", {}, "no period along the slide"),
+        ("finger7/ridges-4", {"force_control": "position"}, "not quasi-statically"),
+        ("finger7/ridges-2", {}, "under 2 periods"),
+    ],
+)
+def test_asking_for_the_table_where_the_scene_has_none_is_one_clear_error(plate, proto, why):
+    slide = Slide(get_plate(plate), "grid3x3", Protocol(**proto), options=TABLE)
+    with pytest.raises(ConfigError, match=f"path = 'phase-table' does not serve.*{why}"):
+        slide.table_plan()
+
+
+def test_a_table_is_the_same_whichever_slide_asks_first_and_wherever_it_comes_from(tmp_path):
+    """Two slides of one plate at other speeds and offsets share the tables of their force
+    levels (ridges across the whole pad: the offset does not matter); the tables are solved
+    in a scene of their own, so the second slide reads the first one's tables, and a fresh
+    process solving them again, or reading them from disk, gives the same bits."""
+    base = _task_slide("finger7-v1", "finger7/ridges-8", 0.2, start="texture")
+    a = replace(base, seed=11, options=TABLE)
+    b = replace(base, seed=12, options=TABLE)
+    assert a.drawn().speed_m_s != b.drawn().speed_m_s
+    cache = ArtefactCache(tmp_path / "c")
+    forget_process_memos()
+    first = run(a, cache).recording
+    again_b = run(b, cache).recording
+    assert "its tables reused" in again_b.meta["skin_problem"] or "0 of" in str(
+        again_b.meta["skin_problem"]
+    )
+    entries = sorted((tmp_path / "c").rglob(f"*.{TABLE_EXT}"))
+    assert entries, "the tables were not kept in the cache"
+    forget_process_memos()  # a new worker: read from disk
+    from_disk = run(a, cache).recording
+    assert np.array_equal(from_disk.data, first.data)
+    forget_process_memos()  # solved afresh, nothing kept
+    fresh = run(a, ArtefactCache(tmp_path / "other")).recording
+    assert np.array_equal(fresh.data, first.data)
+
+
+def test_a_damaged_table_in_the_cache_is_solved_again_with_a_warning(tmp_path):
+    slide = replace(
+        _task_slide("finger7-v1", "finger7/ridges-8", 0.2, start="texture"), options=TABLE
+    )
+    cache = ArtefactCache(tmp_path)
+    forget_process_memos()
+    good = run(slide, cache).recording
+    for entry in tmp_path.rglob(f"*.{TABLE_EXT}"):
+        data = bytearray(entry.read_bytes())
+        data[len(data) // 2] ^= 0xFF
+        entry.write_bytes(bytes(data))
+    forget_process_memos()
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        again = run(slide, cache).recording
+    assert any(issubclass(w.category, CacheWarning) for w in seen)
+    assert np.array_equal(again.data, good.data)
+
+
+def test_force_levels_bracket_the_force_on_a_fixed_grid():
+    for f in (0.37, 1.0, 1.2345, 4.9):
+        levels = force_levels(f)
+        assert math.isclose(sum(w for _, w in levels), 1.0)
+        assert math.isclose(sum(F * w for F, w in levels), f, rel_tol=1e-12)
+        assert all(F > 0 for F, _ in levels)
+        if len(levels) == 2:
+            (lo, _), (hi, _) = levels
+            assert lo < f < hi and hi / lo == pytest.approx(2 ** (1 / 16))
+    assert force_levels(1.0) == [(1.0, 1.0)]
+    assert force_levels(0.5) == [(0.5, 1.0)]
+
+
+def test_the_plan_checks_the_repetition_on_the_plates_own_features():
+    plate = get_plate("textures20-long/grating-3.0mm")
+    plan, why = phase_plan(plate, (0.032, 0.022), 0.0, "quasi-static")
+    assert plan is not None and plan.period_m == pytest.approx(3e-3) and why == ""
+    assert plan.y_m == 0.0  # ridges across the whole pad: every offset shares the table
+    bumps, _ = phase_plan(
+        get_plate("textures20-long/boxes-3.0mm"), (0.032, 0.022), 1e-3, "quasi-static"
+    )
+    assert bumps is not None and bumps.y_m == 1e-3  # a grid of bumps: the offset's own
+    # a plate whose features do not repeat: one ridge moved
+    from sim_tactile.plates.surface import surface_of
+
+    feats = list(surface_of(plate).features)
+    feats[len(feats) // 2] = replace(feats[len(feats) // 2], x=feats[len(feats) // 2].x + 1e-4)
+    from sim_tactile.sim.plan import phase
+
+    a, b = phase._repeating_span(feats, surface_of(plate).period_m)
+    assert a >= b  # no span repeats
