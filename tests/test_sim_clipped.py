@@ -16,6 +16,7 @@ from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, Sensor, get_sensor
 from sim_tactile.sensors.layouts import grid_layout
 from sim_tactile.sensors.stack import Layer, Stack
+from sim_tactile.sim import StepOptions
 from sim_tactile.sim.plan import measured_errors as me
 from sim_tactile.sim.plan.fidelity import choose_fidelity
 from sim_tactile.sim.plan.lattices import check_clippable
@@ -137,13 +138,15 @@ def test_a_clipped_slide_with_nothing_to_cut_equals_the_whole_patch_slide():
     s = _aligned_sensor()
     proto = Protocol(duration_s=0.3)
     fid = choose_fidelity(get_plate("finger7/flat"), s.layout, s.finger, proto, "L1")
-    whole = simulate("finger7/flat", s, protocol=proto, fidelity=fid, ideal=True)
+    step = StepOptions(path="per-step")  # the held steps themselves, not a table of either
+    whole = simulate("finger7/flat", s, protocol=proto, fidelity=fid, ideal=True, options=step)
     clip = simulate(
         "finger7/flat",
         s,
         protocol=proto,
         fidelity=dataclasses.replace(fid, clipped=True),
         ideal=True,
+        options=step,
     )
     assert "clipped" in clip.recording.meta["skin_problem"]
     assert clip.recording.meta["fidelity"]["clipped"] is True

@@ -201,7 +201,7 @@ def test_the_compiled_held_step_equals_the_plain_loop(fidelity, reference, cache
             cache=cache,
         ).recording
 
-    fast, slow = run(StepOptions()), run(reference)
+    fast, slow = run(StepOptions(path="per-step")), run(reference)
     assert "mirror-halved" in fast.meta["skin_problem"]
     assert slow.meta["skin_problem"] == "full problem"
     assert fast.data.max() > (0.005 if plate == "finger7/flat" else 0.05)

@@ -12,6 +12,7 @@ import pytest
 from sim_tactile.errors import PhysicsError
 from sim_tactile.plates import get_plate
 from sim_tactile.sensors import Finger
+from sim_tactile.sim import StepOptions
 from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.sim.slide import simulate
 from sim_tactile.sim.step.runner import DRAG_FULL, V_STICK, drag_factor, drag_warning
@@ -64,9 +65,14 @@ def test_a_pad_pressed_to_the_bottom_names_the_commanded_force_and_its_load():
     approach's own command); it names the 1 N commanded and the 0.02 N carried there."""
     thin = replace(get_plate("finger7/flat"), thickness_m=1e-3)
     proto = Protocol(force_n=1.0, duration_s=0.2)
+    soft = Finger(young_pa=2e3)
+    step = StepOptions(path="per-step")  # the approach, which the flat plate's table skips
     with pytest.raises(PhysicsError) as exc:
-        simulate(thin, "grid3x3", finger=Finger(young_pa=2e3), protocol=proto)
+        simulate(thin, "grid3x3", finger=soft, protocol=proto, options=step)
     msg = str(exc.value)
     assert "of the 1 N commanded" in msg and " 0 N " not in msg, msg
     carried = float(msg.split("the pad carries ")[1].split(" N")[0])
     assert 0.0 < carried < 0.2  # short of the fifth of 1 N that ends the approach
+    # read off its one-phase table, the held press is checked as a held step is
+    with pytest.raises(PhysicsError, match="skin pressed to the bottom"):
+        simulate(thin, "grid3x3", finger=soft, protocol=proto)

@@ -181,7 +181,7 @@ def _run(slide: Slide, cache) -> SimResult:
     plate, sensor, finger = slide.plate, slide.sensor_def, slide.pad
     proto, fid, window = _planned(slide)
     layout = sensor.layout
-    opts = slide.options
+    opts = slide.how
     every = opts.solve_every
     plan = slide.table_plan()
     if plan is not None:

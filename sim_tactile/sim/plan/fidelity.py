@@ -446,6 +446,29 @@ def _varies_along_x_only(plate: Plate, finger) -> bool:
     return bool(fs) and all(f.kind == "box" and 2 * f.hy >= plate.area_width_m - 1e-9 for f in fs)
 
 
+def friction_coupled(finger) -> bool:
+    """Whether the finger's sliding friction enters its normal problem (its compliance is
+    not symmetric: a skin that carries its tractions, with friction, on a layered or
+    compressible skin); such a skin is always solved dense."""
+    return bool(
+        finger.skin_tractions
+        and finger.friction > 0
+        and (finger.stack is not None or finger.poisson < 0.5)
+    )
+
+
+def solved_spectrally(fid: Fidelity, finger, solver: str = "auto") -> bool:
+    """Whether a slide at ``fid`` solves its skin spectrally (as
+    :func:`~sim_tactile.sim.skin.models.make_skin` decides): a coupled skin of the pad's own
+    lattice above :data:`DENSE_MAX_NODES` nodes (or ``solver`` spectral) whose compliance is
+    symmetric; a plate-anchored lattice and clipped patches are their own dense problems."""
+    if not fid.coupled or fid.wall_m is not None or fid.clipped or solver == "dense":
+        return False
+    if friction_coupled(finger):
+        return False
+    return solver == "spectral" or node_count(finger, fid.pitch_m, fid.pitch_y_m) > DENSE_MAX_NODES
+
+
 def flat_stiffness(finger, coupled: bool, k_w: float) -> float:
     """Stiffness of the whole pad pressed flat on a plate [N/m]: the largest contact stiffness
     the bone meets. Winkler: k_w times the area; half-space: a flat circular punch of the same

@@ -27,6 +27,15 @@ MAX_SOLVE_EVERY = 64
 #: The range a spectral contact solve's tolerance may be set in (``StepOptions.solve_tol``;
 #: its default, the reference, is :data:`~sim_tactile.sim.skin.contact.spectral.TOL`).
 SOLVE_TOL_RANGE = (1e-12, 1e-3)
+#: What ``path = auto`` takes where a slide is solved step by step with a spectral skin (the
+#: dear solve: tens of FFT products a step) and its knobs are at their defaults: the
+#: spectral solve to this tolerance, whose loads agree with the reference's to better than
+#: 5e-6 on the iCub's scenes (1.8x faster; perf/bench_response.py) ...
+AUTO_SOLVE_TOL = 1e-4
+#: ... and the skin solved at every this-many steps of a held slide, the loads between on
+#: the line between two solves (1.1% rel L2 on the iCub's scenes, 0.7% on its v2 strips;
+#: with the tolerance, 4.6-5.4x faster), where a sample spans at least this many steps.
+AUTO_SOLVE_EVERY = 4
 #: How a held slide's taxel loads are computed (``StepOptions.path``): ``auto`` (the phase
 #: table where the scene allows it and its measured error is within target, else the
 #: per-step solve), ``per-step`` (the skin solved at every step: the reference) or

@@ -16,16 +16,15 @@ neither MuJoCo nor numba.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
 from ...plates.spec import Plate
 from ...plates.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
-from .fidelity import DENSE_MAX_NODES, Fidelity, choose_fidelity
-from .measured_errors import node_count
-from .options import StepOptions, keyed
+from .fidelity import Fidelity, choose_fidelity, solved_spectrally
+from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, keyed
 from .phase import PhasePlan, table_plan, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
@@ -123,38 +122,70 @@ class Slide:
 
     def table_plan(self) -> PhasePlan | None:
         """The phase plan where the slide's loads are read off a phase table, else None: the
-        per-step slide. ``path`` ``phase-table`` takes it wherever the scene allows
-        (:func:`~.phase.table_plan`); ``auto`` where the whole window lies on the repeating
+        per-step slide (:attr:`route`)."""
+        return self.route[0]
+
+    @cached_property
+    def route(self) -> tuple[PhasePlan | None, StepOptions]:
+        """``(plan, options)``: how the slide is computed, its ``options`` resolved.
+
+        ``path`` ``phase-table`` takes the table wherever the scene allows it
+        (:func:`~.phase.table_plan`). ``auto`` chooses only where no other knob was set by
+        hand (else it is ``per-step``, the knobs as given): the table where the whole window
+        lies on the repeating
         texture (the slide then needs no press and no step solved on its own), or where it
-        lies there for part of it and each step's solve is dear (the skin solved spectrally:
-        a table costs tens of solves, the stretch it replaces hundreds); a cheap dense or
-        plate-anchored step is as quick solved as read. The finger scene's only (the probe
-        rig has its own slide)."""
-        if self.rig is not None:
-            return None
-        proto, opts = self.drawn(), self.options
+        lies there for part of it and each step's solve is dear (a spectral skin: a table
+        costs tens of solves, the stretch it replaces hundreds; a cheap dense or
+        plate-anchored step is as quick solved as read). Elsewhere the slide is solved step
+        by step; under ``auto`` with a spectral skin, to
+        :data:`~.options.AUTO_SOLVE_TOL` and at every :data:`~.options.AUTO_SOLVE_EVERY`-th
+        step where the force is held (their errors measured within 2% on the task scenes);
+        ``per-step`` is the reference, the knobs as given. The resolved options say which
+        (``path`` ``phase-table`` or ``per-step``). The probe rig has its own slide."""
+        opts = self.options
+        default = opts == StepOptions()  # auto chooses only where no knob was set by hand
+        if self.rig is not None or (opts.path == "auto" and not default):
+            return None, replace(opts, path="per-step")
+        proto = self.drawn()
         plan = table_plan(
             self.plate, self.pad.patch_m, proto, self.window, opts.path, opts.solve_every
         )
-        if plan is None or opts.path == "phase-table":
-            return plan
-        lo, hi = travel(self.window, proto)
-        if plan.covers(lo) and plan.covers(hi):
-            return plan
-        fid = self.resolved
-        dense = fid.wall_m is not None or fid.clipped or opts.skin_solver == "dense"
-        nodes = node_count(self.pad, fid.pitch_m, fid.pitch_y_m)
-        spectral = opts.skin_solver == "spectral" or nodes > DENSE_MAX_NODES
-        return plan if spectral and not dense else None
+        auto = opts.path == "auto"
+        if plan is not None and auto:
+            lo, hi = travel(self.window, proto)
+            whole = plan.covers(lo) and plan.covers(hi)
+            if not (whole or self.spectral):
+                plan = None
+        if plan is not None:
+            tol = AUTO_SOLVE_TOL if auto and self.spectral else opts.solve_tol
+            return plan, replace(opts, path="phase-table", solve_tol=tol)
+        if not (auto and self.spectral):
+            return None, replace(opts, path="per-step")
+        held = proto.force_control == "quasi-static"
+        every = (
+            AUTO_SOLVE_EVERY if held and self.resolved.steps_per_sample >= AUTO_SOLVE_EVERY else 1
+        )
+        return None, replace(opts, path="per-step", solve_every=every, solve_tol=AUTO_SOLVE_TOL)
+
+    @property
+    def spectral(self) -> bool:
+        """Whether the slide's skin is solved spectrally (:func:`~.fidelity.solved_spectrally`)."""
+        return solved_spectrally(self.resolved, self.pad, self.options.skin_solver)
+
+    @property
+    def how(self) -> StepOptions:
+        """The options the slide runs with (:attr:`route`'s)."""
+        return self.route[1]
 
     # ------------------------------------------------------------------ described once
     def describe(self) -> dict:
         """Everything that determines the slide, as JSON data: the one dict behind its cache
         key, its recording's meta and a store's attributes. ``rig``, ``pitch_m``, ``dt_s``
-        and the knobs of ``options`` appear only where they are set, so the descriptions of
-        slides that leave them at their defaults are unchanged; ``path`` says
-        ``phase-table`` where the slide is read off a phase table (:meth:`table_plan`), so
-        that nothing the per-step slide made is served for it."""
+        and the knobs appear only where they are set, so the descriptions of slides that
+        leave them at their defaults are unchanged: the knobs as the slide runs them
+        (:attr:`route`: those ``path = auto`` chose, as if they were set), and ``path``
+        ``phase-table`` where the slide is read off a phase table, so that nothing another
+        path made is served for it."""
         d = {
             "kind": "slide",
             "plate": self.plate.params(),
@@ -173,7 +204,7 @@ class Slide:
             d["pitch_m"] = self.pitch_m
         if self.dt_s is not None:
             d["dt_s"] = self.dt_s
-        d.update(keyed(self.options))
+        d.update(keyed(self.how))  # the knobs as the slide runs them
         if self.table_plan() is not None:  # another path, another key
             d["path"] = "phase-table"
         return d

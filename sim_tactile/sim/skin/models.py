@@ -48,7 +48,7 @@ from ...scene.layered import Stack, layered_compliance_matrix, layered_complianc
 from ...scene.nodes import SkinGrid
 from ...scene.tractions import shear_normal_compliance
 from ...sensors.pad import Finger
-from ..plan.fidelity import DENSE_MAX_NODES
+from ..plan.fidelity import DENSE_MAX_NODES, friction_coupled
 from . import contact
 from .contact.spectral import TOL, Spectral
 
@@ -321,13 +321,7 @@ SOLVERS = ("auto", "dense", "spectral")
 SkinModel = WinklerSkin | CoupledSkin | SpectralSkin
 
 
-def _friction_coupled(finger: Finger) -> bool:
-    """Whether the finger's sliding friction enters its normal problem (C not symmetric)."""
-    return bool(
-        finger.skin_tractions
-        and finger.friction > 0
-        and (finger.stack is not None or finger.poisson < 0.5)
-    )
+_friction_coupled = friction_coupled  # its home is the planner's, which asks too
 
 
 def make_skin(

@@ -51,7 +51,7 @@ def scene_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache):
 
 def runner_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache) -> Runner:
     """The scene of :func:`scene_for`, its skin model and the runner that steps it."""
-    plate, layout, finger, options = slide.plate, slide.layout, slide.pad, slide.options
+    plate, layout, finger, options = slide.plate, slide.layout, slide.pad, slide.how
     scene, z0 = scene_for(slide, proto, fid, x0_m, cache)
     quasi_static = proto.force_control == "quasi-static"
     skin = make_skin(

@@ -112,6 +112,7 @@ def tabulate(
     n_taxels: int,
     pitch_m: float,
     tol: float = PHASE_TOL,
+    check=None,
 ) -> PhaseTable:
     """Solve ``hold`` over one period of ``plan`` (see the module docstring).
 
@@ -120,7 +121,9 @@ def tabulate(
     written; ``total_pa``: the force as the held step takes it (the node pressures' sum
     [Pa]); ``pitch_m``: the node pitch along the slide, which sets the first grid and the
     smallest interval (neither depends on the slide's speed or step, so slides at any speed
-    share a table)."""
+    share a table). ``check(z, force, top)``: raises where a solved phase is not
+    trustworthy (:meth:`~.runner.Runner.check_held`, as the per-step slide checks its
+    steps)."""
     q = np.array(qpos, dtype=float)
     solved: dict[float, tuple[np.ndarray, float, float, float]] = {}
 
@@ -130,6 +133,8 @@ def tabulate(
         force, top = hold.step(q, jz, total_pa, out)
         if not (np.isfinite(force) and np.isfinite(out).all()):
             raise PhysicsError("the skin load is not finite (NaN or infinity)")
+        if check is not None:
+            check(float(q[jz]), float(force), float(top))
         solved[phi] = (out, float(force), float(top), float(z_scene_m + q[jz]))
 
     period = plan.period_m

@@ -230,10 +230,18 @@ class Runner:
             )
         self._stiff_check = _STIFFNESS_CHECK_STEPS
 
-    def _check_depth(self, force_cmd: float, load_n: float) -> None:
+    def check_held(self, z: float, force_cmd: float, load_n: float, top: float) -> None:
+        """The checks of a held step at the press joint's position ``z`` [m] (a phase
+        table's, solved off this runner's own state): a finite load, no node deeper than the
+        skin (``top`` [m]), the pad above what the skin carries and not run away."""
+        self._after_skin(load_n, top, force_cmd, 0.0)
+        self._check_depth(force_cmd, load_n, z)
+
+    def _check_depth(self, force_cmd: float, load_n: float, z: float | None = None) -> None:
         """Raise if the pad is below what the skin carries, or ran away. ``force_cmd``: the
-        force commanded (or approached) [N]; ``load_n``: the skin's load at this depth [N]."""
-        z = self._qpos[self._jz]
+        force commanded (or approached) [N]; ``load_n``: the skin's load at this depth [N];
+        ``z``: the press joint's position (None: this runner's)."""
+        z = self._qpos[self._jz] if z is None else z
         low = self.z0 + z
         if low < -self.max_depth:
             raise PhysicsError(

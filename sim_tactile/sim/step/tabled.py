@@ -263,7 +263,7 @@ def table_key(slide: Slide, fid: Fidelity, plan: PhasePlan, force_n: float) -> s
     the node grid and skin model, the knobs of how a step is solved, the plan, the force),
     the code that solves it and the BLAS kernel; nothing of the slide's speed, step, seed or
     window, which the table does not depend on."""
-    opts = {k: v for k, v in keyed(slide.options).items() if k not in ("path", "solve_every")}
+    opts = {k: v for k, v in keyed(slide.how).items() if k not in ("path", "solve_every")}
     grid = {
         k: getattr(fid, k)
         for k in ("level", "pitch_m", "pitch_y_m", "winkler_k_pa_per_m", "clipped", "wall_m")
@@ -303,4 +303,5 @@ def solve_table(
         force_n / scene.s.grid.area_m2,
         scene.s.layout.n,
         fid.pitch_m,
+        check=lambda z, f, top: scene.check_held(z, force_n, f, top),
     )
