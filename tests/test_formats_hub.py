@@ -6,11 +6,14 @@ writes nothing."""
 from __future__ import annotations
 
 import json
+import shutil
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 from _fake_task import tones_fixture
+from _stores import TINY, make_store
 
 from sim_tactile import datasets, tasks
 from sim_tactile.errors import MissingDependencyError, StoreError
@@ -145,3 +148,45 @@ def test_the_command_line_writes_parquet(tones, tmp_path, cli):
     assert (tmp_path / "h" / "croissant.json").is_file()
     card = (tmp_path / "h" / "README.md").read_text()
     assert "license: other" in card  # a recorded (not simulated) set keeps its own license
+
+
+def _rows(loaded) -> tuple[np.ndarray, np.ndarray]:
+    d = loaded["train"].with_format("numpy")
+    return np.asarray(d["index"]), np.stack(list(d["data"]))
+
+
+def _card_loads(folder: Path):
+    """The export at ``folder`` loaded exactly as its card says: the card's Python block,
+    its ``folder`` set to the folder's path."""
+    code = (folder / "README.md").read_text().split("```python\n")[1].split("```")[0]
+    assert 'folder = "."' in code and "load_dataset(" in code
+    ns: dict = {}
+    exec(code.replace('folder = "."', f"folder = {str(folder)!r}"), ns)  # our own card
+    return ns["ds"]
+
+
+def test_exports_in_folders_of_one_name_each_load_their_own_rows(tmp_path, monkeypatch):
+    """Two stores of the same size (other seeds) and a bigger one, exported into folders
+    named ``hub`` (and one ``hub`` reused after deleting it), loaded through one Hugging
+    Face cache: by folder (``load_dataset(folder)``, whose cache is keyed by the folder's
+    name and the card's YAML) and the way the card says, each gives its own rows. Before
+    the card named its content, the second folder served the first one's rows."""
+    monkeypatch.setattr(hf.config, "HF_DATASETS_CACHE", str(tmp_path / "hf-cache"))
+    stores = [
+        make_store(tmp_path, "a.zarr", TINY),
+        make_store(tmp_path, "b.zarr", TINY | {"seed": 8}),
+        make_store(tmp_path, "c.zarr", TINY | {"slides_per_plate": 5}),
+    ]
+    for load in (lambda folder: hf.load_dataset(str(folder)), _card_loads):
+        base = tmp_path / load.__name__.strip("<>_")
+        folders = [base / "a" / "hub", base / "b" / "hub", base / "a" / "hub"]
+        for store, folder in zip(stores, folders, strict=True):
+            if folder.exists():
+                shutil.rmtree(folder)  # the same path reused for another export
+            export_parquet(store, folder)
+            st = datasets.open(store)
+            index, data = _rows(load(folder))
+            np.testing.assert_array_equal(index, np.arange(len(st)))
+            np.testing.assert_array_equal(data, np.stack([st[k] for k in range(len(st))]))
+    text = (folders[0] / "README.md").read_text()
+    assert "content sha256" in text and "configuration hash" in text

@@ -41,8 +41,15 @@ def main(out: Path, quick: bool = True) -> dict:
     print(res["configs"], res["files"][:3])
     print((out / "hub" / "README.md").read_text()[:400])  # the card's YAML header
 
-    # Hugging Face datasets reads the splits and the class names
-    ds = datasets.load_dataset(str(out / "hub"))
+    # Hugging Face datasets reads the splits and the class names: from the files, as the
+    # card says (its cache is keyed by the files), or by folder (keyed by the folder's name
+    # and the card's YAML, which names the content: another export into a folder of the
+    # same name is read anew, not served from this one's cache)
+    hub = out / "hub"
+    ds = datasets.load_dataset(
+        "parquet", data_files={"train": f"{hub}/data/default/train-*.parquet"}
+    )
+    assert len(datasets.load_dataset(str(hub))["train"]) == len(ds["train"])
     train = ds["train"].with_format("numpy")
     x = np.stack(list(train["data"]))
     print(ds, train.features["label"].names, x.shape)

@@ -40,6 +40,7 @@ from ..datasets.real import (
 from ..errors import ConfigError
 from ..sensors import Sensor, get_sensor
 from ..sensors.calibration import MIN_SHARE, Calibration
+from .contact import AGREE_SIGMAS
 from .fit import (
     ACTIVE_SIGMAS,
     QUIET_SIGMAS,
@@ -177,8 +178,9 @@ def forced_notes(fit: ChannelFit, names) -> list[str]:
     ]
     if rest is not None:
         notes.append(
-            f"force rest level (tare), found in the data: {rest.level:.4g} N (the commonest "
-            f"force reading, then fitted on the quiet stretches), noise {rest.noise:.3g} N; "
+            f"force rest level (tare), found in the data: {rest.level:.4g} N (the lowest level "
+            "the force reading stays still at, then fitted on the quiet stretches), noise "
+            f"{rest.noise:.3g} N; "
             "forces are measured from it, and the gains corrected for that noise"
         )
     if fit.at_floor is not None:
@@ -192,6 +194,16 @@ def forced_notes(fit: ChannelFit, names) -> list[str]:
                 if low
                 else ""
             )
+        )
+    if fit.in_contact is not None:
+        both = [names[k] for k in np.flatnonzero(fit.in_contact)]
+        notes.append(
+            "noise in contact: the residual of the one-factor fit (every channel and the "
+            f"force a line in one force) over {fit.n_contact} first differences in contact, "
+            "weighted with the rest's estimate by their standard errors, for "
+            + (f"{both}" if both else "no channel")
+            + f"; elsewhere (a rest at the floor, a contact at it, or the two estimates "
+            f"{AGREE_SIGMAS:g} standard errors apart: no line in the force) the rest's alone"
         )
     if fit.intercept is not None:
         rise = fit.intercept + fit.counts_per_n * fit.force_n - fit.offset

@@ -48,11 +48,23 @@ class ChannelFit:
     intercept: np.ndarray | None = None
     #: the share of each channel's quiet readings at its floor (C,), None where not fitted
     at_floor: np.ndarray | None = None
+    #: where the noise takes in the residual of the one-factor fit in contact (C,)
+    #: (:mod:`~sim_tactile.calibrate.contact`), None where not fitted; ``n_contact``: the
+    #: first differences that fit saw
+    in_contact: np.ndarray | None = None
+    n_contact: int = 0
+
+
+#: A grid finer than this share of the readings' typical first difference (their RMS) is no
+#: ADC's step but a text file's last printed digit: such readings count as continuous, and
+#: no step enters the noise (a fit on a grid of 1e-6 counts would sum over 10^7 levels).
+NEGLIGIBLE_STEP = 1e-3
 
 
 def quant_step(levels: list[np.ndarray]) -> float:
     """The ADC step: the smallest non-zero difference between any two recorded levels (0 if
-    the levels are not on a grid)."""
+    the levels are not on a grid, or on one finer than :data:`NEGLIGIBLE_STEP` of their
+    first differences: the data are not quantised)."""
     vals = np.unique(np.concatenate([np.ravel(x) for x in levels]))
     d = np.diff(vals)
     d = d[d > 0]
@@ -62,7 +74,9 @@ def quant_step(levels: list[np.ndarray]) -> float:
     on_grid = np.allclose(
         np.round(vals / step) * step, vals, rtol=0.0, atol=1e-6 * max(step, 1e-12)
     )
-    return step if on_grid and step > 0 else 0.0
+    diffs = np.concatenate([np.diff(x, axis=0).ravel() for x in levels if len(x) > 1])
+    typical = float(np.sqrt(np.mean(diffs**2))) if diffs.size else 0.0
+    return step if on_grid and step > NEGLIGIBLE_STEP * typical else 0.0
 
 
 def _slope_var_per_noise(n: int) -> float:
@@ -79,17 +93,23 @@ def trimmed_noise(d: np.ndarray) -> float:
     return float(d[keep].std() / np.sqrt(2) / TRIM_STD_RATIO)
 
 
-def random_walk_rate(stretches: list[np.ndarray], noise: np.ndarray, rate_hz: float):
+def random_walk_rate(
+    stretches: list[np.ndarray],
+    noise: np.ndarray,
+    rate_hz: float,
+    extra: list[np.ndarray] | None = None,
+):
     """Per channel, the rate of a random-walk drift (the standard deviation of its change over
     one second) from the least-squares slopes of quiet stretches (each (n, C)) beyond what
-    white noise of ``noise`` (per channel) gives them."""
+    white noise of ``noise`` (per channel) gives them, and beyond ``extra`` (per stretch,
+    (C,)): any other variance of a stretch's slope known to be there [units^2 / s^2]."""
     # a random walk of rate r: a stretch's least-squares slope S has E[S^2] =
     # noise^2 c + r^2 g, c = 12 / (n (n^2 - 1)) rate^2, g = 6 / (5 L); r^2 by weighted least
     # squares over the stretches, weights 1 / c^2 (short stretches, whose slopes the noise
     # dominates, count little)
     num = np.zeros(len(noise))
     den = 0.0
-    for seg in stretches:
+    for k, seg in enumerate(stretches):
         n = seg.shape[0]
         t = np.arange(n) / rate_hz
         tc = t - t.mean()
@@ -97,7 +117,8 @@ def random_walk_rate(stretches: list[np.ndarray], noise: np.ndarray, rate_hz: fl
         c = _slope_var_per_noise(n) * rate_hz**2
         g = 6.0 / (5.0 * n / rate_hz)
         w = 1.0 / c**2
-        num += w * g * (slope_k**2 - noise**2 * c)
+        known = noise**2 * c + (extra[k] if extra is not None else 0.0)
+        num += w * g * (slope_k**2 - known)
         den += w * g * g
     return np.sqrt(np.maximum(num / den, 0.0))
 

@@ -8,22 +8,27 @@ The model, per channel c, and for the force channel f (say pdc / 100 counts per 
 with Q a rounding to the ADC step, F the true normal force [N], the noises white and
 Gaussian, the drift a random walk. What is fitted, and how:
 
-1. **the force's rest level (its tare)**: first the commonest reading of the force channel
-   among its lower half (:func:`~.rest.rest_mode`: at rest the channel stays within its
-   noise of one level, in contact it spreads over the force's range), then the quiet
+1. **the force's rest level (its tare)**: first the lowest level at which the force reading
+   stays still (:func:`~.rest.still_level`: at rest it is the lowest it reads and stays
+   within its noise there; a press is higher however still it is held), then the quiet
    stretches (the force within ``quiet_n``, or four of its noise deviations if more, of
-   that level for ``min_quiet_s``, less :data:`QUIET_EDGE_S` at each end), and on them the
-   rest level and noise of the model above (:func:`~.rest.fit_rest`: exact under clipping
-   and quantisation); twice, the second time about the fitted level. The force is measured
-   from the tare. Assumed: the sensor was tared once (one rest level for all recordings),
-   and rests long enough that its rest is its commonest reading.
+   that level for ``min_quiet_s``, less :data:`QUIET_EDGE_S` at each end that borders a
+   contact: a recording's own start or end is no contact's onset), and on them the rest
+   level and noise of the model above (:func:`~.rest.fit_rest`: exact under clipping and
+   quantisation); twice, the second time about the fitted level. The force is measured
+   from the tare. Assumed: the sensor was tared once (one rest level for all recordings).
 2. **each channel's offset and noise**: the same rest fit of the channel on the same quiet
    stretches: the offset is the channel's level at rest, not a line's intercept; the noise
    is sigma, reported as the ADC records it unclipped (sqrt(sigma^2 + step^2 / 12), which
-   the calibration's ``noise_model`` turns back). The quiet stretches are taken whole: no
-   force is subtracted (the force reading's own noise, times the gain, would add to the
-   channel's: that was 9% on a channel of 60 counts per newton under 1.5 counts of pdc
-   noise).
+   the calibration's ``noise_model`` turns back; no step where the data are not on a grid).
+   The quiet stretches are taken whole: no force is subtracted (the force reading's own
+   noise, times the gain, would add to the channel's: that was 9% on a channel of 60
+   counts per newton under 1.5 counts of pdc noise). Where the rest is seen whole (not
+   clipped), the noise then takes in the contact too
+   (:mod:`~sim_tactile.calibrate.contact`): the residual of the one-factor fit of all
+   channels and the force in contact, weighted with the rest's by their standard errors
+   where the two agree (on a dozen slides with half a second of rest at either end, the
+   noise's standard error was near 3% from the rest alone, near 1% from both).
 3. **each channel's counts per newton**: a line through the channel's level against the
    force in bins of ``bin_n`` (bins with more than :data:`MAX_CLIPPED` of their readings at
    the floor are left out; where the force channel is clipped, its readings at its floor
@@ -36,7 +41,8 @@ Gaussian, the drift a random walk. What is fitted, and how:
    noise is its rest noise's, measured in step 1).
 4. **the drift**: a random walk's rate from the slopes of the same quiet stretches
    (:func:`~.fit.random_walk_rate`), without the response to what force is left in them
-   (averaged over :data:`SMOOTH_S`, so that the force reading's noise stays out) and
+   (averaged over :data:`SMOOTH_S`) and without what that response's own noise adds to
+   their slopes (the force reading's noise times the gain, :func:`_held_noise`), and
    without the stretches where a channel jumps (a glitch); the noise's variance then
    without the drift's share of the first differences (rate^2 / sample rate).
 """
@@ -48,8 +54,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
+from .contact import combine, contact_noise
 from .fit import QUIET_EDGE_S, ChannelFit, quant_step, random_walk_rate
-from .rest import SPIKE_SIGMAS, Rest, diff_variance, fit_rest, quiet_segments, rest_mode
+from .rest import SPIKE_SIGMAS, Rest, diff_variance, fit_rest, quiet_segments, still_level
 
 #: A channel's force bin needs this many samples for its median.
 MIN_BIN_SAMPLES = 50
@@ -131,24 +138,38 @@ class _Quiet:
 
 def _force_rest(forces, quiet_n, n_min, edge, force_floor, fstep) -> _Quiet:
     """Step 1 of the module docstring."""
-    tare = rest_mode(np.concatenate(forces), fstep if fstep > 0 else quiet_n / 4)
-    band, rest, cut = quiet_n, None, []
+    tare, spread = still_level(forces, fstep if fstep > 0 else quiet_n / 4, n_min)
+    # the band takes in a noisy rest's noise (4 SD), where that noise is within the band
+    # itself: a lowest still level that wanders further is a held contact, not a rest
+    band = max(quiet_n, QUIET_FORCE_SIGMAS * spread) if spread <= quiet_n else quiet_n
+    rest, cut = None, []
     for _ in range(2):
         cut = [
-            (k, slice(s.start + edge, s.stop - edge))
+            (k, s)
             for k, f in enumerate(forces)
-            for s in quiet_segments(f, tare, band, n_min + 2 * edge)
+            for s in _inner(quiet_segments(f, tare, band, n_min), edge, len(f))
+            if s.stop - s.start >= n_min
         ]
         if not cut:
             raise ConfigError(
                 f"no quiet stretch (force within {band:.3g} N of its rest level {tare:.4g} N "
-                f"for {n_min + 2 * edge} samples) in the recordings: the rest levels, the "
-                "noise floor and the drift cannot be fitted"
+                f"for {n_min} samples, less {edge} at a contact) in the recordings: the rest "
+                "levels, the noise floor and the drift cannot be fitted"
             )
         rest = fit_rest([forces[k][s] for k, s in cut], floor=force_floor, step=fstep)
         tare = rest.level
-        band = max(quiet_n, QUIET_FORCE_SIGMAS * float(np.sqrt(rest.recorded_var)))
+        band = max(quiet_n, QUIET_FORCE_SIGMAS * max(rest.noise, np.sqrt(rest.recorded_var)))
     return _Quiet(rest, band, cut)
+
+
+def _inner(segments: list[slice], edge: int, n: int) -> list[slice]:
+    """The quiet ``segments`` of a recording of ``n`` samples less ``edge`` samples at each
+    end that borders the contact (its onset or release); an end at the recording's own start
+    or end borders none, and keeps its samples."""
+    return [
+        slice(s.start + (edge if s.start > 0 else 0), s.stop - (edge if s.stop < n else 0))
+        for s in segments
+    ]
 
 
 def _mean_below(rest: Rest, cut: float) -> float:
@@ -185,6 +206,24 @@ def _held(pairs, slope: np.ndarray, width: int) -> list[np.ndarray]:
     return [
         x - np.outer(uniform_filter1d(f, max(width, 1), mode="nearest"), slope) for x, f in pairs
     ]
+
+
+def _held_noise(pairs, slope: np.ndarray, width: int, force_var: float, rate_hz: float):
+    """What :func:`_held` adds to each stretch's least-squares slope (per stretch, (C,))
+    [units^2 / s^2]: the force reading's noise (variance ``force_var``), averaged over
+    ``width`` samples and times ``slope``, still moves a slope; a drift fit that took it for
+    a random walk found one of 2 counts per sqrt(s) where there was none."""
+    from scipy.ndimage import uniform_filter1d
+
+    out, memo = [], {}
+    for x, _ in pairs:
+        n = len(x)
+        if n not in memo:
+            tc = np.arange(n) - 0.5 * (n - 1)
+            k = uniform_filter1d(np.eye(n), max(width, 1), axis=0, mode="nearest")
+            memo[n] = float(np.sum((k.T @ tc) ** 2) / (tc @ tc) ** 2) * rate_hz**2
+        out.append(slope * slope * force_var * memo[n])
+    return out
 
 
 def _check(levels, forces) -> int:
@@ -238,10 +277,12 @@ def fit_channels(
     ]
     slope, intercept, r2 = (np.array(v) for v in zip(*fits, strict=True))
     rests = [fit_rest([x[:, c] for x in stretches], floor=floor, step=step) for c in range(C)]
+    width = round(SMOOTH_S * rate_hz)
     drift = random_walk_rate(
-        _held(pairs, np.nan_to_num(slope), round(SMOOTH_S * rate_hz)),
+        _held(pairs, np.nan_to_num(slope), width),
         np.sqrt([r.recorded_var for r in rests]),
         rate_hz,
+        _held_noise(pairs, np.nan_to_num(slope), width, q.rest.recorded_var, rate_hz),
     )
     drift_var = 0.5 * drift**2 / rate_hz  # the walk's share of half a first difference's
     rests = [
@@ -250,11 +291,17 @@ def fit_channels(
     ]
     lengths = np.array([s.shape[0] / rate_hz for s in stretches])
     contact = F > q.band_n
+    inside = contact_noise(levels, [f - q.rest.level for f in forces], q.band_n, floor, drift_var)
+    noise_var, combined = combine(
+        np.array([r.noise for r in rests]) ** 2 + step * step / 12,
+        np.array([r.noise_var_var for r in rests]),
+        inside,
+    )
     return ChannelFit(
         slope,
         np.array([r.level for r in rests]),
         r2,
-        np.sqrt(np.array([r.noise for r in rests]) ** 2 + step * step / 12),
+        np.sqrt(noise_var),
         drift,
         step,
         float(np.median(lengths)),
@@ -263,4 +310,6 @@ def fit_channels(
         force_rest=q.rest,
         intercept=intercept,
         at_floor=np.array([r.at_floor for r in rests]),
+        in_contact=combined,
+        n_contact=inside.n,
     )

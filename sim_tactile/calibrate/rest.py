@@ -21,8 +21,9 @@ unclipped variance on average over the grid).
 
 :func:`rest_mode` finds a channel's rest level before anything is known: the commonest
 reading among its lower half (at rest a channel stays within its noise of one level; in
-contact the force spreads it over the force's range). :func:`quiet_segments` are the
-stretches where it stays there.
+contact the force spreads it over the force's range); :func:`still_level`, the force's: the
+lowest level it stays still at (a press held still would be its commonest reading).
+:func:`quiet_segments` are the stretches where it stays there.
 """
 
 from __future__ import annotations
@@ -35,6 +36,11 @@ import numpy as np
 SPIKE_SIGMAS = 8.0
 #: Share of the largest first differences left out of the first, rough scale.
 ROUGH_TRIM = 0.005
+#: The variance of :func:`diff_variance`'s estimate of a white Gaussian's variance v from n
+#: first differences is this many v^2 / n (half their mean square: each difference's
+#: square has variance 8 v^2, neighbours' squares a covariance of 2 v^2; 2 v^2 / n for
+#: the readings themselves).
+DIFF_VAR_VAR = 3.0
 #: A quantised channel with this share of its quiet readings at the floor is fitted from
 #: its first differences' histogram (:func:`_diff_fit`), not from its readings' mean.
 CLIPPED_REST = 0.02
@@ -50,13 +56,16 @@ class Rest:
     clipping) of the model in the module docstring, in the channel's units;
     ``recorded_var``: the variance of its readings' white part as recorded (quantised and
     clipped), what a drift fit subtracts from the slopes; ``at_floor``: the share of the
-    quiet readings at the floor; ``n``: how many readings."""
+    quiet readings at the floor; ``n``: how many readings; ``noise_var_var``: the variance
+    of ``noise ** 2`` as an estimate, where the rest is seen whole (not clipped; NaN
+    elsewhere)."""
 
     level: float
     noise: float
     recorded_var: float
     at_floor: float
     n: int
+    noise_var_var: float = float("nan")
 
 
 def rest_mode(values: np.ndarray, width: float) -> float:
@@ -69,6 +78,46 @@ def rest_mode(values: np.ndarray, width: float) -> float:
     start = np.floor(low.min() / width - 0.5) * width + 0.5 * width
     idx = np.floor((low - start) / width).astype(np.int64)
     return float(start + (np.bincount(idx).argmax() + 0.5) * width)
+
+
+#: A window is still when its spread is within this many times the still windows' typical
+#: spread (the :data:`STILL_QUANTILE` of all windows' spreads, at least the bin width).
+STILL_SPREAD = 2.0
+#: The share of windows whose spread sets the still windows' typical spread: a recording at
+#: rest for a tenth of its windows or more shows its noise there.
+STILL_QUANTILE = 0.1
+#: The rest is the lowest cluster of at least this share of the still windows (and 3): a
+#: lone still window below it is no rest level.
+REST_CLUSTER = 0.05
+
+
+def still_level(series: list[np.ndarray], width: float, n: int) -> tuple[float, float]:
+    """The level at which readings ``series`` (each (T,)) rest: the lowest level at which
+    they stay still, and the still windows' typical standard deviation. Each series is cut
+    into windows of ``n`` samples; a window is still when its standard deviation is within
+    :data:`STILL_SPREAD` times the typical one; the rest is the lowest cluster of still
+    windows' means (one holding :data:`REST_CLUSTER` of them, within :data:`STILL_SPREAD`
+    typical deviations of its lowest), and its level the commonest reading there
+    (:func:`rest_mode`, bins of ``width``). A force at rest is the lowest it reads, and
+    stays there a while; in contact it is higher, however long and however still it is
+    held (the commonest reading overall is a press's where it holds still longer than the
+    rest)."""
+    wins = [np.asarray(x, float)[k : k + n] for x in series for k in range(0, len(x) - n + 1, n)]
+    wins = [w for w in wins if np.isfinite(w).all()]
+    if not wins:
+        return rest_mode(np.concatenate([np.ravel(x) for x in series]), width), 0.0
+    sd = np.array([w.std() for w in wins])
+    mean = np.array([w.mean() for w in wins])
+    typical = max(float(np.quantile(sd, STILL_QUANTILE)), width)
+    still = np.flatnonzero(sd <= STILL_SPREAD * typical)
+    order = still[np.argsort(mean[still])]
+    need = max(3, int(np.ceil(REST_CLUSTER * len(order))))
+    m = mean[order]
+    near = np.searchsorted(m, m + STILL_SPREAD * typical, side="right") - np.arange(len(m))
+    first = int(np.argmax(near >= need)) if (near >= need).any() else 0
+    cluster = order[(m >= m[first]) & (m <= m[first] + STILL_SPREAD * typical)]
+    spread = float(np.median(sd[cluster]))
+    return rest_mode(np.concatenate([wins[i] for i in cluster]), width), spread
 
 
 def quiet_segments(x: np.ndarray, level: float, band: float, n_min: int) -> list[slice]:
@@ -211,15 +260,19 @@ def fit_rest(
         level = float(floor) if floor is not None and at_floor > 0 else m
         return Rest(level, float(np.sqrt(max(v - step * step / 12, 0.0))), v, at_floor, x.size)
     if floor is None or at_floor < CLIPPED_REST:
+        vv = DIFF_VAR_VAR * v * v / max(d.size, 1)  # the variance of v as an estimate
         if step <= 0:
-            return Rest(m, float(np.sqrt(v)), v, at_floor, x.size)
+            return Rest(m, float(np.sqrt(v)), v, at_floor, x.size, vv)
         mus = np.array([np.mean(s) for s in quiet])
         w = np.array([max(np.size(s) - 1, 0) for s in quiet], dtype=float)
         lo, hi = 1e-3 * step, np.sqrt(v) + step
         if phase_var(mus, w, lo, step) >= v:  # less spread than any noise gives: none seen
             return Rest(m, 0.0, v, at_floor, x.size)
         sigma = brentq(lambda sg: phase_var(mus, w, sg, step) - v, lo, hi, xtol=1e-9 * step)
-        return Rest(m, float(sigma), v, at_floor, x.size)
+        # through the grid, v moves with sigma^2 at its own rate (1 where Sheppard holds)
+        a, b = 0.99 * sigma, 1.01 * sigma
+        rate = (phase_var(mus, w, b, step) - phase_var(mus, w, a, step)) / (b * b - a * a)
+        return Rest(m, float(sigma), v, at_floor, x.size, vv / max(rate, 1e-3) ** 2)
     if step > 0:
         mu, sigma = _diff_fit(d, v, at_floor, floor, step)
         return Rest(mu, sigma, v, at_floor, x.size)

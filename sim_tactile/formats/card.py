@@ -135,14 +135,35 @@ def _made(st: SlideStore) -> list[str]:
     return out
 
 
+def content_name(info: dict) -> str:
+    """What makes one configuration of an export unique, in one line: its shards' SHA-256
+    (the rows a loader reads, byte for byte), the store's configuration hash and slide code
+    (what made them) and the split sizes."""
+    st: SlideStore = info["store"]
+    sizes = ", ".join(f"{k} {s['slides']}" for k, s in info["splits"].items())
+    return (
+        f"sim_tactile export, configuration {info['config']!r}: content sha256 "
+        f"{info['content_sha256']}; configuration hash {st.config_hash}; slide code "
+        f"{st.meta.get('code_version', '-')}; splits {sizes}"
+    )
+
+
 def card_data(infos: list[dict], version: str):
-    """``huggingface_hub.DatasetCardData`` of an export."""
+    """``huggingface_hub.DatasetCardData`` of an export. Each configuration carries its
+    content (:func:`content_name`) as its ``description``, and the ``dataset_info`` block its
+    features and split sizes: ``datasets.load_dataset(<folder>)`` keys its cache by the
+    folder's name and this YAML (the configurations and the infos), not by the files, so
+    what is in the files must be in the YAML. ``load_dataset`` also checks the loaded
+    splits' sizes against ``dataset_info``."""
     hub = require("huggingface_hub", "hub")
+    hf = require("datasets", "hub")
+    infos_mod = require("datasets.info", "hub")
     st0: SlideStore = infos[0]["store"]
     recorded = st0.config.get("kind") != "simulated"
     configs = [
         {
             "config_name": i["config"],
+            "description": content_name(i),
             "data_files": [
                 {"split": side, "path": f"data/{i['config']}/{side}-*.parquet"}
                 for side in i["splits"]
@@ -151,7 +172,7 @@ def card_data(infos: list[dict], version: str):
         for i in infos
     ]
     n = sum(s["slides"] for i in infos for s in i["splits"].values())
-    return hub.DatasetCardData(
+    data = hub.DatasetCardData(
         license="other" if recorded else SIM_LICENSE,
         pretty_name=st0.meta.get("name") or "sim_tactile data set",
         size_categories=_size_category(n),
@@ -160,6 +181,42 @@ def card_data(infos: list[dict], version: str):
         + ([] if recorded else ["simulation"]),
         configs=configs,
     )
+    infos_dict = infos_mod.DatasetInfosDict(
+        {
+            i["config"]: hf.DatasetInfo(
+                config_name=i["config"],
+                features=i["features"],
+                splits=hf.SplitDict.from_split_dict(
+                    [
+                        {"name": side, "num_bytes": s["bytes"], "num_examples": s["slides"]}
+                        for side, s in i["splits"].items()
+                    ]
+                ),
+                download_size=i["download_bytes"],
+                dataset_size=sum(s["bytes"] for s in i["splits"].values()),
+            )
+            for i in infos
+        }
+    )
+    infos_dict.to_dataset_card_data(data)
+    return data
+
+
+def load_snippet(infos: list[dict]) -> list[str]:
+    """The card's way to load the export: ``datasets.load_dataset("parquet",
+    data_files=...)`` of each configuration's files, under their folder (a loader keys its
+    cache by those files and their times, so a new export is read anew)."""
+    lines = ["```python", "from datasets import load_dataset", "", 'folder = "."  # this folder']
+    for i in infos:
+        name = "ds" if len(infos) == 1 else f"ds_{i['config'].replace('-', '_')}"
+        lines.append(f"{name} = load_dataset(")
+        lines.append('    "parquet",')
+        lines.append("    data_files={")
+        for side in i["splits"]:
+            lines.append(f'        "{side}": f"{{folder}}/data/{i["config"]}/{side}-*.parquet",')
+        lines += ["    },", ")"]
+    lines.append("```")
+    return lines
 
 
 def card_text(infos: list[dict], version: str) -> str:
@@ -194,9 +251,18 @@ def card_text(infos: list[dict], version: str) -> str:
     lines += [f"| `{a}` | {b} | {c} |" for a, b, c in COLUMNS]
     lines += [
         "",
-        'Load it with `datasets.load_dataset("parquet", data_dir=...)` or '
-        '`datasets.load_dataset("<this folder>")`; `croissant.json` describes the same '
-        "files in Croissant (`mlcroissant.Dataset`).",
+        "## Loading",
+        "",
+        "Read the files themselves (set `folder` to this folder's path):",
+        "",
+        *load_snippet(infos),
+        "",
+        "`datasets.load_dataset(folder)` reads them too, through this card's `configs`; its "
+        "cache is keyed by the folder's name and this card's YAML, which names each "
+        "configuration's content (`description`: the files' SHA-256, the configuration hash, "
+        "the slide code, the split sizes), so another export in a folder of the same name is "
+        "not served from this one's cache. `croissant.json` describes the same files in "
+        "Croissant (`mlcroissant.Dataset`).",
         "",
         "## License",
         "",

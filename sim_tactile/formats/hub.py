@@ -15,14 +15,20 @@ task the store was generated for (repeat 0 of its protocol, with the store's see
 ``train``, of every slide. A suite's store gives one configuration per part.
 
 The columns' types are ``datasets.Features`` (its Arrow schema, written with pyarrow), so
-``datasets.load_dataset("parquet", data_dir=...)`` or ``load_dataset(DIR)`` restores the class
-names; the Croissant file is built with ``mlcroissant``. Everything is written into a
+``datasets.load_dataset("parquet", data_files=...)`` (the card's way: the files themselves)
+or ``load_dataset(DIR)`` restores the class names. The card's YAML names each
+configuration's content (:func:`~.card.card_data`: the shards' SHA-256, the configuration
+hash, the slide code, the split sizes), because ``load_dataset(DIR)`` keys its cache by the
+folder's name and that YAML, not by the files: two exports into folders of one name would
+otherwise share one cache entry, and the second would serve the first's rows. The Croissant
+file is built with ``mlcroissant``. Everything is written into a
 temporary folder beside ``DIR`` and renamed at the end (as the numpy export is): a
 failure leaves nothing behind.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -90,30 +96,45 @@ def _table(st: SlideStore, features, idx: np.ndarray):
     return pa.Table.from_pydict(cols).cast(features.arrow_schema)
 
 
+def _digest_file(digest, root: Path, rel: Path) -> None:
+    """Add the file ``root / rel`` to ``digest``: its name, then its bytes (read in pieces)."""
+    digest.update(rel.as_posix().encode() + b"\0")
+    with open(root / rel, "rb") as fh:
+        for piece in iter(lambda: fh.read(2**20), b""):
+            digest.update(piece)
+
+
 def _write_config(st: SlideStore, root: Path, config: str, rows: int | None, log) -> dict:
     """One configuration's shards; returns what the card and the Croissant file need."""
     pq = require("pyarrow.parquet", EXTRA)
     features = _features(len(st.channel_names), st.class_names)
     t_max = int(st.lengths.max()) if len(st) else 0
     per_shard = rows or max(1, SHARD_BYTES // max(1, 4 * t_max * len(st.channel_names)))
-    splits = {}
+    splits, digest = {}, hashlib.sha256()
     for side, idx in _splits(st).items():
         n_shards = max(1, -(-len(idx) // per_shard))
-        files = []
+        files, n_bytes = [], 0
         for s in range(n_shards):
             rel = Path("data") / config / f"{side}-{s:05d}-of-{n_shards:05d}.parquet"
             (root / rel).parent.mkdir(parents=True, exist_ok=True)
             part = idx[s * per_shard : (s + 1) * per_shard]
-            pq.write_table(_table(st, features, part), root / rel, compression="zstd")
+            table = _table(st, features, part)
+            pq.write_table(table, root / rel, compression="zstd")
+            n_bytes += int(table.nbytes)
+            _digest_file(digest, root, rel)
             files.append(rel.as_posix())
         log(f"{config}/{side}: {len(idx)} slides in {n_shards} shard(s)")
-        splits[side] = {"slides": len(idx), "files": files}
+        splits[side] = {"slides": len(idx), "files": files, "bytes": n_bytes}
     return {
         "config": config,
         "store": st,
         "features": features,
         "splits": splits,
         "shape": [t_max, len(st.channel_names)],
+        "content_sha256": digest.hexdigest(),
+        "download_bytes": sum(
+            (root / f).stat().st_size for s in splits.values() for f in s["files"]
+        ),
     }
 
 

@@ -141,22 +141,105 @@ def lif_encoder_to_nir(encoder: Any):
     return nir.NIRGraph(nodes=nodes, edges=edges, metadata=meta)
 
 
+#: A node's parameters that are time constants [s]: finite and > 0 (NIR's neurons divide
+#: by them; a negative one makes a neuron whose potential grows without bound).
+TIME_CONSTANTS = ("tau", "tau_syn", "tau_mem")
+#: What a NIR file may be refused for while it is read: h5py's and nir's own errors on a
+#: file that is not HDF5, is cut short, or holds no graph of known nodes.
+_READ_ERRORS = (OSError, KeyError, ValueError, TypeError, AttributeError, IndexError)
+
+
+def check_graph(graph: Any, where: str) -> None:
+    """Refuse ``graph`` (read from or written to ``where``, named in the error) unless every
+    number in it is finite, every time constant (:data:`TIME_CONSTANTS`) is > 0, every
+    neuron's threshold is above its reset, and every edge joins two of its nodes; a graph
+    inside it is checked the same way."""
+    nir = _nir()
+    nodes = getattr(graph, "nodes", None)
+    if not isinstance(nodes, dict):
+        raise ConfigError(f"NIR file {where!r} holds a {type(graph).__name__}; valid: a graph")
+    for name, node in nodes.items():
+        if isinstance(node, nir.NIRGraph):
+            check_graph(node, f"{where}: {name}")
+            continue
+        for key, value in vars(node).items():
+            if key in ("input_type", "output_type", "metadata") or isinstance(value, str):
+                continue
+            try:
+                a = np.asarray(value, dtype=np.float64)
+            except (TypeError, ValueError):
+                continue
+            bad = int(np.count_nonzero(~np.isfinite(a)))
+            if bad:
+                raise ConfigError(
+                    f"NIR file {where!r}: node {name!r}: {key} has {bad} values that are NaN "
+                    "or infinite; valid: finite numbers"
+                )
+            if key in TIME_CONSTANTS and not (a > 0).all():
+                raise ConfigError(
+                    f"NIR file {where!r}: node {name!r}: {key} = {float(a.min()):g} s; "
+                    "valid: > 0 s (a time constant)"
+                )
+        if hasattr(node, "v_threshold") and hasattr(node, "v_reset"):
+            if not (np.asarray(node.v_threshold) > np.asarray(node.v_reset)).all():
+                raise ConfigError(
+                    f"NIR file {where!r}: node {name!r}: v_threshold is not above v_reset "
+                    "everywhere; valid: v_threshold > v_reset (else the neuron fires on "
+                    "every step)"
+                )
+    for edge in getattr(graph, "edges", []):
+        if len(edge) != 2 or any(e not in nodes for e in edge):
+            raise ConfigError(
+                f"NIR file {where!r}: edge {tuple(edge)} joins no two of its nodes {sorted(nodes)}"
+            )
+
+
 def write_nir(graph: Any, path: str | Path) -> Path:
-    """Write ``graph`` to ``path`` (HDF5, ``nir.write``; the folder must exist)."""
+    """Write ``graph`` to ``path`` (HDF5, ``nir.write``; the folder must exist), whole or
+    not at all: into a temporary file beside it, then renamed over it (a file already at
+    ``path`` stays as it was if the write fails). The graph is checked first
+    (:func:`check_graph`)."""
+    import os
+    import tempfile
+
     nir = _nir()
     path = Path(path)
     if not path.parent.is_dir():
         raise ConfigError(f"folder {str(path.parent)!r} does not exist; create it first")
-    nir.write(str(path), graph)
+    if path.is_dir():
+        raise ConfigError(f"NIR file {str(path)!r} is a folder; valid: a file's path")
+    check_graph(graph, str(path))
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".partial")
+    os.close(fd)
+    try:
+        nir.write(tmp, graph)
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
     return path
 
 
 def read_nir(path: str | Path):
-    """A graph written by :func:`write_nir` (``nir.read``)."""
+    """A graph written by :func:`write_nir` (``nir.read``), read as data: a file that is not
+    a NIR graph, or whose graph fails :func:`check_graph`, is refused naming the file."""
     path = Path(path)
+    if path.is_dir():
+        raise ConfigError(f"NIR file {str(path)!r} is a folder; valid: a file's path")
     if not path.is_file():
         raise ConfigError(f"NIR file {str(path)!r} does not exist")
-    return _nir().read(str(path))
+    nir = _nir()
+    try:
+        graph = nir.read(str(path))
+    except _READ_ERRORS as exc:
+        raise ConfigError(
+            f"NIR file {str(path)!r} cannot be read as a NIR graph ({type(exc).__name__}: "
+            f"{' '.join(str(exc).split())}); valid: an HDF5 file written by nir.write"
+        ) from None
+    check_graph(graph, str(path))
+    return graph
 
 
 def norse_run(graph: Any, x: np.ndarray, dt_s: float) -> np.ndarray:
