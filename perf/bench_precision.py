@@ -35,6 +35,7 @@ def _float32_product(solver):
     """``solver.apply`` with its transforms in single precision (the answer in float64)."""
     from sim_tactile.sim.skin.contact import spectral
 
+    spectral._load_fft()
     pp = spectral._pocketfft
     khat = solver.khat.astype(np.complex64)
     padded = np.zeros(solver._padded.shape, np.float32)
@@ -66,6 +67,7 @@ def main() -> int:
     from sim_tactile.errors import PhysicsError
     from sim_tactile.sim.skin.contact import spectral
 
+    spectral._load_fft()
     if spectral._pocketfft is None:
         print("scipy.fft's pocketfft binding is not available: nothing to measure")
         return 1

@@ -54,7 +54,7 @@ from .datasets.store import (
 from .errors import ConfigError, StoreError, Terminated, WorkerError
 from .hashing import canonical_json
 from .sensors.calibration import load_calibration
-from .slides.config import config_slide_set, load_config
+from .slides.config import config_slide_set, is_config_path, load_config
 from .slides.jobs import SlideWorker
 from .slides.plan import Plan, slide_plan
 from .slides.run import (
@@ -66,14 +66,15 @@ from .slides.run import (
     warning_lines,
 )
 from .slides.slide_set import SlideSet
-from .tasks import DataRequest, get_task, task_ids
-from .tasks.registry import with_calibration
 
 
 # --------------------------------------------------------------------------- plans
 def _task_plans(
     task_id: str, quick: bool, seed: int, data, log, cal=None
 ) -> tuple[list[Plan], dict]:
+    from .tasks import DataRequest, get_task
+    from .tasks.registry import with_calibration
+
     spec = get_task(task_id)
     if cal is not None:
         spec = with_calibration(spec, cal)
@@ -103,11 +104,16 @@ def resolve(target: str, *, quick: bool, seed: int | None, data=None, log=None, 
     a calibration file (``sim-tactile calibrate``) for the task's sensor."""
     log = log or (lambda m: None)
     cal = None if sensor_config is None else load_calibration(sensor_config)
-    if target in task_ids(aliases=True):
-        seed = 0 if seed is None else v.integer("--seed", seed, 0)
-        return _task_plans(target, quick, seed, data, log, cal)
     path = Path(target)
-    if path.suffix.lower() in (".toml", ".json") or path.is_file():
+    # a configuration file by its suffix (the rule a user predicts from the command line, and
+    # tasks.config_task's); the task registry, which loads the learners, only for a task id
+    if not is_config_path(target):
+        from .tasks import task_ids
+
+        if target in task_ids(aliases=True):
+            seed = 0 if seed is None else v.integer("--seed", seed, 0)
+            return _task_plans(target, quick, seed, data, log, cal)
+    if is_config_path(target):
         cfg = load_config(path)
         ss, file_seed, name = config_slide_set(cfg, f"configuration file {path}", path.parent)
         if cal is not None:
@@ -122,6 +128,8 @@ def resolve(target: str, *, quick: bool, seed: int | None, data=None, log=None, 
             ss, quick=quick, seed=file_seed, task=None, name=name or path.stem, source=cfg
         )
         return [plan], {}
+    from .tasks import task_ids
+
     raise ConfigError(
         f"TASK {target!r} is neither a task id (valid: {', '.join(task_ids())}) nor a "
         "configuration file (.toml or .json)"

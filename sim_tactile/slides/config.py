@@ -98,6 +98,12 @@ TOP_KEYS = {
 RANDOMISE = ("speed_jitter", "force_jitter", "offset_jitter_m")
 
 
+def is_config_path(target: str | Path) -> bool:
+    """Whether ``target`` names a configuration file rather than a task id: by its suffix,
+    ``.toml`` or ``.json`` (the rule a user predicts from the command line)."""
+    return str(target).lower().endswith((".toml", ".json"))
+
+
 def load_config(path: str | Path) -> dict:
     """Read a configuration file (TOML or JSON) as data; no code is run."""
     path = Path(path)

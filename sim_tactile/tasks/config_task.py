@@ -21,18 +21,13 @@ from pathlib import Path
 from .. import _validate as v
 from ..errors import ConfigError
 from ..learn.classifiers import classifier_names
-from ..slides.config import config_slide_set, load_config
+from ..slides.config import config_slide_set, is_config_path, load_config  # noqa: F401
 from .registry import Settings, TaskSpec
 
 #: The id prefix of a configuration's task.
 PREFIX = "config:"
 EVALUATE_KEYS = ("classifiers", "split", "repeats")
 DEFAULT_CLASSIFIERS = ("svm-raw", "svm-spike")
-
-
-def is_config_path(target: str) -> bool:
-    """Whether ``target`` names a configuration file rather than a task id."""
-    return str(target).lower().endswith((".toml", ".json"))
 
 
 def config_task(path: str | Path) -> tuple[TaskSpec, int]:

@@ -38,18 +38,36 @@ problem (not symmetric) takes the dense solve.
 from __future__ import annotations
 
 import numpy as np
-from scipy import fft
 
 from ....errors import PhysicsError
 from . import cg_kernels
 
-try:  # scipy.fft's own pocketfft binding, without its dispatch (see Spectral.apply)
-    from scipy.fft._pocketfft import pypocketfft as _pocketfft
-except ImportError:  # pragma: no cover (another scipy: the public path)
-    _pocketfft = None
-#: whether :meth:`Spectral.apply` takes the direct transforms (set when the module loads,
-#: by :func:`_direct_works`)
+#: scipy.fft, its own pocketfft binding (None where this scipy has none) and whether
+#: :meth:`Spectral.apply` takes the direct transforms: loaded with the first spectral skin
+#: (:func:`_load_fft`), not with the module: scipy.fft's import took 0.4-0.7 s of every
+#: command's start-up, most of which solve no skin spectrally
+fft = _pocketfft = None
 _DIRECT = False
+_LOADED = False
+
+
+def _load_fft() -> None:
+    """Import scipy.fft and its binding once, and check the direct transforms
+    (:func:`_direct_works`)."""
+    global fft, _pocketfft, _DIRECT, _LOADED
+    if _LOADED:
+        return
+    from scipy import fft as scipy_fft
+
+    fft = scipy_fft
+    try:  # scipy.fft's own pocketfft binding, without its dispatch (see Spectral.apply)
+        from scipy.fft._pocketfft import pypocketfft
+
+        _pocketfft = pypocketfft
+    except ImportError:  # pragma: no cover (another scipy: the public path)
+        _pocketfft = None
+    _LOADED = True
+    _DIRECT = _direct_works()
 
 #: Convergence of the conjugate-gradient iteration: the pressures' change in one iteration,
 #: summed over the nodes, relative to their sum (Polonsky and Keer's criterion). At 1e-10
@@ -111,6 +129,7 @@ class Spectral:
     compiled = True
 
     def __init__(self, table: np.ndarray, tol: float = TOL, max_iter: int = MAX_ITER):
+        _load_fft()
         table = np.asarray(table, dtype=np.float64)
         ny, nx = table.shape
         self.nx, self.ny, self.n = nx, ny, nx * ny
@@ -475,5 +494,3 @@ def _direct_works() -> bool:
     except Exception:  # noqa: BLE001  (another binding's signature: the public path)
         return False
 
-
-_DIRECT = _direct_works()
