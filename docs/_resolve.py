@@ -1,7 +1,7 @@
 """Resolve a docstring's cross-reference the way Python resolves the name.
 
 The docstrings name objects as their modules see them: ``:class:`Sensor``` in a module that
-imports ``Sensor``, ``:func:`sim_tactile.plates.height_at``` by the package that re-exports
+imports ``Sensor``, ``:func:`sim_tactile.plates.surface_of``` by the package that re-exports
 it. The API reference documents each object once, where it is defined. When Sphinx finds no
 target under the written name, this looks the name up in Python (in the module of the
 docstring, then in its class, then up its packages), takes the object it names, and links to

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError, PhysicsError
-from ..plates import Plate, get_plate, height_at
+from ..plates import Plate, get_plate, surface_of
 from ..records import Recording
 from ..scene.model import build_scene
 from ..scene.nodes import SkinGrid, skin_grid
@@ -481,4 +481,4 @@ def _force_warnings(forces: np.ndarray, target_n: float, speed_m_s: float) -> li
 
 
 def _plate_heights(plate: Plate, grid: SkinGrid, x: float, y: float) -> np.ndarray:
-    return height_at(plate, grid.xy[:, 0] + x, grid.xy[:, 1] + y) - grid.z
+    return surface_of(plate).height(grid.xy[:, 0] + x, grid.xy[:, 1] + y) - grid.z

@@ -4,7 +4,7 @@ A collider answers one question, ``depths_at``
 (:meth:`~.primitive.PrimitiveCollider.depths_at`): with the finger's joints at ``qpos``, how
 deep is each skin node in the plate (``-inf`` where no plate geom lies within the node's
 margin), and is any node that close. :func:`~.choose.make_collider` chooses one, in one place (the plate's
-:func:`~sim_tactile.plates.surface.surface_of` says whether it is sampled):
+:func:`~sim_tactile.plates.define.surface.surface_of` says whether it is sampled):
 
 - :class:`~.primitive.PrimitiveCollider`: a compiled narrow phase for plates of features: boxes,
   spherical caps, upright cylinders and drafted ridges (which MuJoCo holds as convex meshes).

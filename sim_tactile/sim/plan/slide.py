@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
 
-from ...plates.spec import Plate
-from ...plates.surface import Surface, surface_of
+from ...plates.define.spec import Plate
+from ...plates.define.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
 from .options import StepOptions, keyed
 from .protocol import Protocol, SlideWindow
@@ -78,7 +78,7 @@ class Slide:
 
     @property
     def surface(self) -> Surface:
-        """The plate's surface (:func:`~sim_tactile.plates.surface.surface_of`): what the
+        """The plate's surface (:func:`~sim_tactile.plates.define.surface.surface_of`): what the
         planner asks of the plate."""
         return surface_of(self.plate)
 

@@ -35,10 +35,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..errors import UnknownNameError
-from ..toml_text import asset_data, asset_path
+from ...errors import UnknownNameError
+from ...toml_text import asset_data, asset_path
+from ..define.spec import Plate
 from .files import plate_from_data
-from .spec import Plate
 
 MM = 1e-3
 
@@ -75,7 +75,7 @@ def preset_names() -> list[str]:
 def is_plate_file(ref: str | Path) -> bool:
     """Whether ``ref`` names a file (a plate file, ``.toml``, or a user's CAD, script or
     height map, :mod:`.user`) rather than a preset."""
-    from .user import is_user_plate
+    from ..parts.user import is_user_plate
 
     return str(ref).lower().endswith(".toml") or is_user_plate(ref)
 
@@ -88,7 +88,7 @@ def get_plate(name: str | Path) -> Plate:
         from .files import load_plate_file
 
         return load_plate_file(name)
-    from .user import is_user_plate, load_user_plate
+    from ..parts.user import is_user_plate, load_user_plate
 
     if is_user_plate(name):
         return load_user_plate(str(name))
