@@ -28,6 +28,8 @@ def _import_path(dotted: str) -> object | None:
             continue
         except Exception:  # a module that fails to import is not a target
             return None
+        if obj.__spec__ is None:  # a moved module's deprecated old name: not a target (the
+            continue  # package's attribute of that name may be: plates.build, the function)
         for attr in parts[cut:]:
             obj = getattr(obj, attr, None)
             if obj is None:

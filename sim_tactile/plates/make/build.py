@@ -21,6 +21,8 @@ from ..define.surface import surface_of
 from ..parts.cad_run import STL_ANGULAR_TOLERANCE_RAD, STL_TOLERANCE_MM
 from ..read.presets import get_plate
 
+#: The artefacts :func:`~sim_tactile.plates.build` makes by default: STL and STEP (mm), MJCF
+#: and the preview PNG.
 KINDS = ("stl", "step", "mjcf", "png")
 ALL_KINDS = (*KINDS, "heightmap")
 _EXT = {"stl": "stl", "step": "step", "mjcf": "xml", "png": "png", "heightmap": "npy"}

@@ -1,5 +1,5 @@
 """The preset plates, by their released names (``sim-tactile plates list``): each a plate
-file of the project's ``assets/plates`` (:mod:`~sim_tactile.plates.files`; installed as ``sim_tactile.assets``),
+file of the project's ``assets/plates`` (:mod:`~sim_tactile.plates.read.files`; installed as ``sim_tactile.assets``),
 in the order of its ``index.toml``. Every dimension a paper leaves open was chosen as this
 module says, once, and is listed in the manual's plate table; the files hold the numbers.
 
@@ -82,7 +82,7 @@ def is_plate_file(ref: str | Path) -> bool:
 
 def get_plate(name: str | Path) -> Plate:
     """The preset plate called ``name`` (e.g. ``"finger7/ridges-4"``), the plate of a plate
-    file (a path ending in ``.toml``, :mod:`~sim_tactile.plates.files`), or of a user's STEP, STL, CadQuery
+    file (a path ending in ``.toml``, :mod:`~sim_tactile.plates.read.files`), or of a user's STEP, STL, CadQuery
     script or height map (a reference of :mod:`.user`, e.g. ``"knurl.py:make"``)."""
     if str(name).lower().endswith(".toml"):
         from .files import load_plate_file

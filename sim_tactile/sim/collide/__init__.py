@@ -19,3 +19,18 @@ margin), and is any node that close. :func:`~.choose.make_collider` chooses one,
   none of them takes (a mesh that is not a drafted ridge of the plate's features, a rotated
   plate). No preset plate steps it.
 """
+
+from __future__ import annotations
+
+from ..._lazy import lazy_exports
+
+#: The public names and the module that defines each (loaded on first use).
+_EXPORTS = {
+    "PrimitiveCollider": ".primitive",
+    "SurfaceCollider": ".height",
+    "MujocoCollider": ".reference",
+    "make_collider": ".choose",
+}
+
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
