@@ -1,9 +1,17 @@
 """Pages of the manual generated from the code at build time (``docs/conf.py`` calls them):
-the API reference (one page per module, and one per public package listing its ``__all__``)
-and one page per benchmark task, from the task registry.
+the API reference and one page per benchmark task, from the task registry.
 
-Nothing here is written by hand, so the reference follows the code: a name added to a
-package's ``__all__``, a new module or a new task appears on the next build.
+The API reference is curated by the code: one page per public entry point
+(:data:`ENTRY_POINTS`), a paragraph on what it is for (its docstring) and then the names of
+its ``__all__``, each documented once, on the page of the entry point it is most at home in
+(:func:`homes`), and linked from every other page that exports it; one page for those who
+extend the simulator (:data:`EXTENDING`, :data:`SEAMS`). A name is public when it is in one
+of these ``__all__``; anything else may move without notice. Every other module has a page
+for the maintainers, outside the manual's table of contents (``modules.rst``, an orphan
+page), so that a docstring's reference to an internal name still has a target.
+
+Nothing here is written by hand, so the reference follows the code: a name added to an
+``__all__``, a new module or a new task appears on the next build.
 """
 
 from __future__ import annotations
@@ -13,12 +21,63 @@ import inspect
 import pkgutil
 import re
 import sys
+from functools import cache
 from pathlib import Path
 
 ROOT = "sim_tactile"
-#: modules left out of the API reference: the command line (its own page, from the parser)
-#: and the numba kernels' private modules
+#: modules left out of the maintainers' module pages: the command line (its own page, from
+#: the parser)
 SKIP = ("sim_tactile.cli",)
+#: The public entry points, in the reference's order: the packages and the few modules users
+#: import, each declaring what they may touch in ``__all__``.
+ENTRY_POINTS = (
+    "sim_tactile",
+    "sim_tactile.plates",
+    "sim_tactile.sensors",
+    "sim_tactile.scene",
+    "sim_tactile.sim",
+    "sim_tactile.slides",
+    "sim_tactile.tasks",
+    "sim_tactile.encoders",
+    "sim_tactile.spikes",
+    "sim_tactile.learn",
+    "sim_tactile.datasets",
+    "sim_tactile.formats",
+    "sim_tactile.calibrate",
+    "sim_tactile.bench",
+    "sim_tactile.records",
+    "sim_tactile.errors",
+    "sim_tactile.cache",
+    "sim_tactile.generate",
+)
+#: The floors of ``sim/`` (and the contact solvers under the skin), for those who extend the
+#: simulator: each declares ``__all__``; one page, ``extending``, documents them.
+EXTENDING = (
+    "sim_tactile.sim.plan",
+    "sim_tactile.sim.collide",
+    "sim_tactile.sim.skin",
+    "sim_tactile.sim.skin.contact",
+    "sim_tactile.sim.step",
+)
+#: The seams' entry points: the one function that chooses among each seam's models, and the
+#: entry point that exports it.
+SEAMS = {
+    "make_collider": ("sim_tactile.sim.collide", "each skin node's depth in the plate"),
+    "make_skin": ("sim_tactile.sim.skin", "the nodes' pressures from their depths"),
+    "make_held_step": ("sim_tactile.sim.step", "one step under the held force"),
+    "surface_of": ("sim_tactile.plates", "a plate's surface: one per kind of texture"),
+    "make_backend": ("sim_tactile.slides", "where slides run"),
+}
+#: The packages that are neither an entry point nor private by name, and why: their public
+#: names, if any, are in an entry point's ``__all__``.
+INTERNAL_PACKAGES = {
+    "sim_tactile.cli": "the command line; its reference is the command-line page",
+    "sim_tactile.plates.define": "a folder of sim_tactile.plates, whose __all__ it serves",
+    "sim_tactile.plates.read": "a folder of sim_tactile.plates, whose __all__ it serves",
+    "sim_tactile.plates.parts": "a folder of sim_tactile.plates, whose __all__ it serves",
+    "sim_tactile.plates.make": "a folder of sim_tactile.plates, whose __all__ it serves",
+    "sim_tactile.tasks.defs": "the tasks' definitions, read through sim_tactile.tasks",
+}
 
 
 def modules() -> list[str]:
@@ -35,13 +94,9 @@ def modules() -> list[str]:
 
 
 def public_packages() -> list[str]:
-    """The packages and modules that declare a public surface (``__all__``)."""
-    out = []
-    for name in modules():
-        mod = importlib.import_module(name)
-        if hasattr(mod, "__path__") and hasattr(mod, "__all__"):
-            out.append(name)
-    return out
+    """The entry points and the extending floors: every package or module whose ``__all__``
+    names public names."""
+    return [*ENTRY_POINTS, *EXTENDING]
 
 
 def canonical(package: str, name: str) -> tuple[str, str]:
@@ -53,17 +108,42 @@ def canonical(package: str, name: str) -> tuple[str, str]:
     if inspect.isclass(obj):
         role = "exc" if issubclass(obj, BaseException) else "class"
         return role, f"{obj.__module__}.{obj.__qualname__}"
-    if inspect.isfunction(obj) or inspect.isbuiltin(obj) or hasattr(obj, "py_func"):
+    if inspect.isroutine(obj) or hasattr(obj, "py_func") or hasattr(obj, "__wrapped__"):
         mod = getattr(obj, "__module__", None) or package
         qual = getattr(obj, "__qualname__", name)
         return "func", f"{mod}.{qual}"
     return "data", f"{package}.{name}"
 
 
+@cache
+def homes() -> dict[str, str]:
+    """The page that documents each public class and function, by its documented name: of
+    the entry points that export it (the extending floors only if no entry point does), the
+    one whose name is the longest prefix of where it is defined, else the first. Data are
+    documented on every page that exports them (as ``package.name``); modules on the
+    maintainers' pages."""
+    found: dict[str, list[str]] = {}
+    for package in public_packages():
+        for name in importlib.import_module(package).__all__:
+            role, target = canonical(package, name)
+            if role not in ("data", "mod"):
+                found.setdefault(target, []).append(package)
+    out = {}
+    for target, packages in found.items():
+        users = [p for p in packages if p in ENTRY_POINTS] or packages
+        prefixes = [p for p in users if target.startswith(p + ".")]
+        out[target] = max(prefixes, key=len) if prefixes else users[0]
+    return out
+
+
 def _summary(obj: object) -> str:
     """The first paragraph of a docstring, its roles as literals (the table has no module
     context to resolve them in; the linked page has)."""
-    doc = inspect.getdoc(obj) or ""
+    return _summary_text(inspect.getdoc(obj) or "")
+
+
+def _summary_text(doc: str) -> str:
+    """:func:`_summary` of a docstring's text."""
     first = doc.split("\n\n")[0].replace("\n", " ").strip()
     first = re.sub(r":[a-z]+:`~?\.?([^`<]*?)(?: <[^>]*>)?`", lambda m: f"``{m[1]}``", first)
     parts = first.split("``")  # escape reST's markup outside the literals
@@ -77,101 +157,155 @@ def _title(text: str, char: str = "=") -> list[str]:
 
 
 def module_page(name: str) -> str:
-    """The reST page of one module: its docstring and its own members."""
-    mod = importlib.import_module(name)
+    """A maintainers' page of one module: its docstring and its own members, less those
+    documented on a public page."""
     lines = _title(f"``{name}``")
-    if hasattr(mod, "__path__") and hasattr(mod, "__all__"):
-        # a package's public names are documented where they are defined; its table links them
-        # (and what the package itself defines)
-        lines += [f".. automodule:: {name}", "   :members:", "   :ignore-module-all:", ""]
-        lines += package_table(name)
-    else:
-        # the module's own members only: a name it imports is documented at its home
-        lines += [f".. automodule:: {name}", "   :members:", "   :ignore-module-all:", ""]
+    lines += [f".. automodule:: {name}", "   :members:", "   :ignore-module-all:"]
+    public = sorted(t.rpartition(".")[2] for t in homes() if t.rpartition(".")[0] == name)
+    if public:
+        lines.append(f"   :exclude-members: {', '.join(public)}")
+    return "\n".join([*lines, ""]) + "\n"
+
+
+def public_section(package: str, char: str = "-") -> list[str]:
+    """An entry point's docstring, the table of its public names (each linked to where it is
+    documented), and the documentation of those at home here."""
+    mod = importlib.import_module(package)
+    lines = [f".. automodule:: {package}", ""]
+    lines += [f"Import the names below from ``{package}``.", ""]
+    rows, here = [], []
+    for name in sorted(mod.__all__, key=str.lower):
+        role, target = canonical(package, name)
+        obj = getattr(mod, name)
+        if role == "data":
+            here.append((name, role, target))
+            doc = data_doc(package, name)[1]
+            rows.append((f":py:data:`{name} <{target}>`", _summary_text(" ".join(doc))))
+            continue
+        rows.append((f":py:{role}:`{name} <{target}>`", _summary(obj)))
+        if homes().get(target) == package and all(t != target for _, _, t in here):
+            here.append((name, role, target))  # an alias (datasets.open) documented once
+    lines += [".. list-table::", "   :header-rows: 1", "   :widths: 30 70", ""]
+    lines += ["   * - name", "     - what it is"]
+    for ref, text in rows:
+        lines += [f"   * - {ref}", f"     - {text}"]
+    lines.append("")
+    for name, role, target in here:
+        if role == "data":
+            home, doc = data_doc(package, name)
+            # the name relative to the package that automodule made current (a dotted name
+            # would be taken as relative to it too, and registered twice over)
+            lines += [f".. py:data:: {name}", f"   :module: {package}", ""]
+            lines += [f"   {line}" if line else "" for line in doc]
+            lines += ["", f"   Defined in :py:mod:`{home}`.", ""]
+        elif role == "func":
+            lines += [f".. autofunction:: {target}", ""]
+        else:
+            directive = "autoexception" if role == "exc" else "autoclass"
+            lines += [f".. {directive}:: {target}", "   :members:", ""]
+    return lines
+
+
+def entry_page(package: str) -> str:
+    """The reference page of one public entry point."""
+    return "\n".join([*_title(f"``{package}``"), *public_section(package)]) + "\n"
+
+
+def extending_page() -> str:
+    """One page for those who extend the simulator: the seams' choosers, then each floor of
+    ``sim/`` with its public names."""
+    lines = _title("Extending the simulator")
+    lines += [
+        "The simulation is built in floors, each importing only those below it, and a new",
+        "model plugs in at a seam: the one function that chooses among the seam's models",
+        "(:doc:`/how-to/extend` says how). The floors keep their names; each declares its",
+        "public names in ``__all__``.",
+        "",
+        ".. list-table::",
+        "   :header-rows: 1",
+        "   :widths: 30 70",
+        "",
+        "   * - seam",
+        "     - what it chooses",
+    ]
+    for name, (package, what) in SEAMS.items():
+        _, target = canonical(package, name)
+        lines += [f"   * - :py:func:`{name} <{target}>` (``{package}``)", f"     - {what}"]
+    lines.append("")
+    for package in EXTENDING:
+        lines += _title(f"``{package}``", "-")
+        lines += public_section(package)
     return "\n".join(lines) + "\n"
 
 
-def package_table(package: str) -> list[str]:
-    """A table of a package's public names (``__all__``), each linked to its documentation;
-    the package's own data are documented here."""
-    mod = importlib.import_module(package)
-    rows, data = [], []
-    for name in sorted(mod.__all__, key=str.lower):
-        role, target = canonical(package, name)
-        if role == "data":
-            data.append(name)
-        obj = getattr(mod, name)
-        rows.append((f":py:{role}:`{name} <{target}>`", _summary(obj) if role != "data" else ""))
-    out = ["The public names", "----------------", ""]
-    out += [".. list-table::", "   :header-rows: 1", "   :widths: 30 70", ""]
-    out += ["   * - name", "     - what it is"]
-    for ref, text in rows:
-        out += [f"   * - {ref}", f"     - {text}"]
-    out.append("")
-    for name in data:
-        home, doc = data_doc(package, name)
-        # the name relative to the package that automodule made current (a dotted name
-        # would be taken as relative to it too, and registered twice over)
-        out += [f".. py:data:: {name}", f"   :module: {package}", ""]
-        out += [f"   {line}" if line else "" for line in doc]
-        out += ["", f"   Defined in :py:mod:`{home}`.", ""]
-    return out
-
-
 def data_doc(package: str, name: str) -> tuple[str, list[str]]:
-    """Where the package's data ``name`` is defined, and its ``#:`` comment there."""
+    """Where the package's data ``name`` is defined, and its ``#:`` comment there: the
+    deepest module of the package that holds it under that name, else any module of
+    :data:`ROOT` that does."""
     from sphinx.pycode import ModuleAnalyzer
 
     obj = getattr(importlib.import_module(package), name)
-    homes = [
+    homes_ = [
         m
         for m, mod in sorted(sys.modules.items())
-        if m.startswith(package) and getattr(mod, name, None) is obj
+        # (a moved module's deprecated old name, without a spec, is passed over)
+        if m.startswith(ROOT) and mod.__spec__ is not None and getattr(mod, name, None) is obj
     ]
-    for home in sorted(homes, key=lambda m: -m.count(".")):  # the deepest: where it is made
+    homes_.sort(key=lambda m: (not m.startswith(package), -m.count(".")))
+    for home in homes_:
         try:
             docs = ModuleAnalyzer.for_module(home).find_attr_docs()
         except Exception:  # no source to read
             continue
         if ("", name) in docs:
             return home, [line for line in docs[("", name)] if line is not None]
-    return (sorted(homes, key=lambda m: -m.count("."))[0] if homes else package), []
+    return (homes_[0] if homes_ else package), []
 
 
 def write_api(out_dir: Path) -> list[str]:
-    """Write ``out_dir/<module>.rst`` for every module and an index; returns the modules."""
+    """Write the API reference into ``out_dir``: ``index.rst`` and a page per entry point,
+    ``extending.rst``, and the maintainers' ``modules.rst`` with a page per other module;
+    returns the names of the pages in the reference's table of contents."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    names = modules()
+    inner = [m for m in modules() if m not in public_packages()]
+    pages = [*ENTRY_POINTS, "extending", "modules", *inner]
     for old in out_dir.glob("*.rst"):  # a module moved or gone leaves no stale page
-        if old.stem not in names and old.stem != "index":
+        if old.stem not in pages and old.stem != "index":
             old.unlink()
-    for name in names:
+    for name in ENTRY_POINTS:
+        _write(out_dir / f"{name}.rst", entry_page(name))
+    _write(out_dir / "extending.rst", extending_page())
+    for name in inner:
         _write(out_dir / f"{name}.rst", module_page(name))
-    public = public_packages()
+    maintainers = [":orphan:", "", *_title("Every module")]
+    maintainers += [
+        "For maintainers: each module that is not a public entry point, with what it defines",
+        "(less the public names, documented in the :doc:`API reference <index>`). These paths",
+        "are not public: they may move without notice.",
+        "",
+        ".. toctree::",
+        "   :maxdepth: 1",
+        "",
+        *(f"   {n}" for n in inner),
+        "",
+    ]
+    _write(out_dir / "modules.rst", "\n".join(maintainers))
     index = _title("API reference")
     index += [
-        "Generated from the docstrings. The packages below declare their public names in",
-        "``__all__``; the modules under them document everything else the package holds.",
-        "",
-        "Public packages",
-        "---------------",
-        "",
-        ".. toctree::",
-        "   :maxdepth: 1",
-        "",
-        *(f"   {n}" for n in public),
-        "",
-        "Every module",
-        "------------",
+        "One page per public entry point: what it is for, then its public names, the names",
+        "of its ``__all__``. A name is public when it is on one of these pages; anything",
+        "else may move without notice. Those who extend the simulator find its floors and",
+        "seams on one page. (Maintainers: :doc:`every module <modules>`.)",
         "",
         ".. toctree::",
         "   :maxdepth: 1",
         "",
-        *(f"   {n}" for n in names if n not in public),
+        *(f"   {n}" for n in ENTRY_POINTS),
+        "   extending",
         "",
     ]
     _write(out_dir / "index.rst", "\n".join(index))
-    return names
+    return [*ENTRY_POINTS, "extending"]
 
 
 def _write(path: Path, text: str) -> None:

@@ -1,7 +1,7 @@
 """Resolve a docstring's cross-reference the way Python resolves the name.
 
 The docstrings name objects as their modules see them: ``:class:`Sensor``` in a module that
-imports ``Sensor``, ``:func:`sim_tactile.plates.height_at``` by the package that re-exports
+imports ``Sensor``, ``:func:`sim_tactile.plates.surface_of``` by the package that re-exports
 it. The API reference documents each object once, where it is defined. When Sphinx finds no
 target under the written name, this looks the name up in Python (in the module of the
 docstring, then in its class, then up its packages), takes the object it names, and links to
@@ -28,6 +28,8 @@ def _import_path(dotted: str) -> object | None:
             continue
         except Exception:  # a module that fails to import is not a target
             return None
+        if obj.__spec__ is None:  # a moved module's deprecated old name: not a target (the
+            continue  # package's attribute of that name may be: plates.build, the function)
         for attr in parts[cut:]:
             obj = getattr(obj, attr, None)
             if obj is None:

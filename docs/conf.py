@@ -37,6 +37,9 @@ html_title = f"sim_tactile {release}"
 html_static_path: list[str] = []
 
 autodoc_member_order = "bysource"
+# the public names are documented under their entry point, which each page names once: the
+# module a class is defined in is no part of its name for the reader
+add_module_names = False
 # a method without a docstring of its own shows none (not scikit-learn's, for example)
 autodoc_inherit_docstrings = False
 autodoc_typehints = "description"

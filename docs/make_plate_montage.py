@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import LightSource
 
-from sim_tactile.plates import get_plate, height_at
+from sim_tactile.plates import get_plate, surface_of
 
 NAMES = [
     "finger7/ridges-4",
@@ -35,7 +35,7 @@ def main() -> None:
         p = get_plate(name)
         xs = np.arange(-0.021, 0.021, 5e-5)
         ys = np.arange(-0.018, 0.018, 5e-5)
-        z = height_at(p, xs[None, :], ys[:, None])
+        z = surface_of(p).height(xs[None, :], ys[:, None])
         span = float(np.ptp(z)) or 1.0
         rgb = ls.shade(
             z / span, cmap=plt.get_cmap("cividis"), vert_exag=0.004 / 5e-5 * 0.3, blend_mode="soft"

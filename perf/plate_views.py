@@ -10,7 +10,7 @@ import json
 import sys
 
 from sim_tactile.plates import get_plate, preset_names
-from sim_tactile.plates.verify import compare_views
+from sim_tactile.plates.make.verify import compare_views
 
 
 def main() -> int:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 __version__ = "0.1.0"
 
-from .errors import (  # noqa: F401  (re-exported)
+from .errors import (
     ConfigError,
     GeometryError,
     MissingDependencyError,
@@ -17,3 +17,12 @@ from .errors import (  # noqa: F401  (re-exported)
     SimTactileError,
     UnknownNameError,
 )
+
+__all__ = [
+    "ConfigError",
+    "GeometryError",
+    "MissingDependencyError",
+    "PhysicsError",
+    "SimTactileError",
+    "UnknownNameError",
+]

@@ -39,6 +39,7 @@ SUM_SUFFIX = ".sum"
 
 
 def default_root() -> Path:
+    """The cache's folder: ``$SIM_TACTILE_CACHE``, or ``~/.cache/sim_tactile``."""
     env = os.environ.get("SIM_TACTILE_CACHE")
     return Path(env) if env else Path.home() / ".cache" / "sim_tactile"
 
@@ -268,3 +269,10 @@ def forget_process_memos() -> tuple[str, ...]:
     for forget in _MEMOS.values():
         forget()
     return tuple(sorted(_MEMOS))
+
+
+__all__ = [
+    "ArtefactCache",
+    "default_root",
+    "forget_process_memos",
+]

@@ -94,3 +94,20 @@ def require(name: str, extra: str):
         raise MissingDependencyError(
             f"{name} is needed for this feature: pip install 'sim-tactile[{extra}]'"
         ) from exc
+
+
+__all__ = [
+    "CacheError",
+    "CacheWarning",
+    "ConfigError",
+    "GeometryError",
+    "MissingDependencyError",
+    "NeuronStepWarning",
+    "OutputError",
+    "PhysicsError",
+    "SimTactileError",
+    "StoreError",
+    "Terminated",
+    "UnknownNameError",
+    "WorkerError",
+]

@@ -385,3 +385,11 @@ class SpikeTrains:
             f"SpikeTrains(n_channels={self.n_channels}, window=[{self.t_start:g}, "
             f"{self.t_end:g}] s, spikes={int(self.counts().sum())})"
         )
+
+
+__all__ = [
+    "Recording",
+    "SpikeTrains",
+    "TactileDataset",
+    "as_spike_times",
+]

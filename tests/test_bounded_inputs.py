@@ -12,10 +12,16 @@ from pathlib import Path
 import pytest
 
 from sim_tactile.errors import ConfigError
-from sim_tactile.plates import map_files
-from sim_tactile.plates.files import load_plate_file
-from sim_tactile.plates.spec import MAX_FEATURES, MAX_HEIGHTMAP_SAMPLES, Bumps, Grating, Plate
-from sim_tactile.plates.user import load_user_plate
+from sim_tactile.plates.define.spec import (
+    MAX_FEATURES,
+    MAX_HEIGHTMAP_SAMPLES,
+    Bumps,
+    Grating,
+    Plate,
+)
+from sim_tactile.plates.parts import map_files
+from sim_tactile.plates.parts.user import load_user_plate
+from sim_tactile.plates.read.files import load_plate_file
 from sim_tactile.sensors.files import MAX_TAXELS, load_sensor_file
 from sim_tactile.slides.config import MAX_PLATES, config_slide_set, load_config
 from sim_tactile.toml_text import MAX_TEXT_BYTES

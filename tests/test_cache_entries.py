@@ -15,8 +15,8 @@ from sim_tactile import cache as cache_module
 from sim_tactile.cache import SUM_SUFFIX, ArtefactCache
 from sim_tactile.errors import CacheError, CacheWarning
 from sim_tactile.plates import build
-from sim_tactile.plates.build import artefact_key
-from sim_tactile.plates.presets import get_plate
+from sim_tactile.plates.make.build import artefact_key
+from sim_tactile.plates.read.presets import get_plate
 from sim_tactile.sensors import get_sensor
 from sim_tactile.sim.plan.protocol import Protocol
 from sim_tactile.slides import SlideJob, run_slides

@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from sim_tactile.errors import ConfigError
-from sim_tactile.plates.cad_run import kill_session
-from sim_tactile.plates.user import load_user_plate
+from sim_tactile.plates.parts.cad_run import kill_session
+from sim_tactile.plates.parts.user import load_user_plate
 
 #: How long a killed process may take to be gone (it is SIGKILLed; the kernel ends it at
 #: once, this is slack for a loaded machine) [s].

@@ -119,8 +119,8 @@ def _read(call):
 
 
 def check_plate(data: dict) -> None:
-    from sim_tactile.plates.files import plate_from_data, plate_to_data
-    from sim_tactile.plates.spec import Plate
+    from sim_tactile.plates.define.spec import Plate
+    from sim_tactile.plates.read.files import plate_from_data, plate_to_data
 
     plate = _read(lambda: plate_from_data(data, "fuzz"))
     if plate is not None:
@@ -172,7 +172,7 @@ def map_case(draw):
 
 
 def check_map(z: np.ndarray, opts: dict, raw: bytes | None) -> None:
-    from sim_tactile.plates.user import load_user_plate
+    from sim_tactile.plates.parts.user import load_user_plate
 
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "map.npy"
@@ -191,7 +191,7 @@ def check_map(z: np.ndarray, opts: dict, raw: bytes | None) -> None:
 def check_png(counts: np.ndarray, raw: bytes | None) -> None:
     from PIL import Image
 
-    from sim_tactile.plates.user import load_user_plate
+    from sim_tactile.plates.parts.user import load_user_plate
 
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "map.png"
@@ -250,7 +250,7 @@ def test_fuzzed_png_height_maps(counts, raw):
 @FAST
 @given(st.binary(max_size=300) | st.text(max_size=200).map(str.encode))
 def test_fuzzed_bytes_as_toml_files(raw):
-    from sim_tactile.plates.files import load_plate_file
+    from sim_tactile.plates.read.files import load_plate_file
     from sim_tactile.sensors.files import load_sensor_file
     from sim_tactile.slides.config import load_config
 

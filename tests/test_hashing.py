@@ -52,7 +52,7 @@ def test_the_import_closure_is_the_import_graphs():
     runs, following the imports of each module and of the packages each sits in."""
     grimp = pytest.importorskip("grimp", reason="grimp comes with the test extra import-linter")
     graph = grimp.build_graph(PACKAGE, cache_dir=None)
-    for root in (f"{PACKAGE}.sim.slide", f"{PACKAGE}.plates.mjcf", f"{PACKAGE}.spikes"):
+    for root in (f"{PACKAGE}.sim.slide", f"{PACKAGE}.plates.make.mjcf", f"{PACKAGE}.spikes"):
         want, todo = set(), [root]
         while todo:
             m = todo.pop()
@@ -69,9 +69,9 @@ def test_the_import_closure_is_the_import_graphs():
 
 
 def test_code_version_follows_the_source_and_the_libraries():
-    v = code_version(f"{PACKAGE}.plates.spec")
-    assert len(v) == 16 and v == code_version(f"{PACKAGE}.plates.spec")
-    assert v != code_version(f"{PACKAGE}.plates.spec", libraries=("numpy",))
+    v = code_version(f"{PACKAGE}.plates.define.spec")
+    assert len(v) == 16 and v == code_version(f"{PACKAGE}.plates.define.spec")
+    assert v != code_version(f"{PACKAGE}.plates.define.spec", libraries=("numpy",))
     assert v != code_version(f"{PACKAGE}.sim.slide")
     with pytest.raises(ConfigError, match="not a module"):
         code_version(f"{PACKAGE}.no_such_module")

@@ -11,8 +11,8 @@ import pytest
 
 from sim_tactile.errors import ConfigError
 from sim_tactile.plates import get_plate, preset_names
-from sim_tactile.plates.files import load_plate_file, write_plate_file
-from sim_tactile.plates.presets import assets_dir, preset_file
+from sim_tactile.plates.read.files import load_plate_file, write_plate_file
+from sim_tactile.plates.read.presets import assets_dir, preset_file
 from sim_tactile.records import Recording
 
 HERE = Path(__file__).parent

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from sim_tactile.cache import ArtefactCache, atomic_write
-from sim_tactile.plates import build, get_plate, height_at, load_heightmap
-from sim_tactile.plates.build import artefact_key
+from sim_tactile.plates import build, get_plate, load_heightmap, surface_of
+from sim_tactile.plates.make.build import artefact_key
 
 _SCRIPT = """
 import json, sys
@@ -55,7 +55,7 @@ def test_heightmap_artefact_is_the_analytic_map(cache):
     xs, ys, z = load_heightmap("finger7/bumps-3x3", cache=cache)
     plate = get_plate("finger7/bumps-3x3")
     assert z.shape == (len(ys), len(xs))
-    np.testing.assert_array_equal(z, height_at(plate, xs[None, :], ys[:, None]))
+    np.testing.assert_array_equal(z, surface_of(plate).height(xs[None, :], ys[:, None]))
 
 
 def test_key_depends_on_parameters_kind_and_settings():

@@ -14,10 +14,11 @@ import trimesh
 
 from sim_tactile.cache import ArtefactCache
 from sim_tactile.errors import ConfigError
-from sim_tactile.plates import build, height_at, map_mesh
-from sim_tactile.plates.render import HOLE_RGB, preview_png
-from sim_tactile.plates.spec import HeightMap, Plate
-from sim_tactile.plates.user import load_user_plate, parse_ref
+from sim_tactile.plates import build, surface_of
+from sim_tactile.plates.define.spec import HeightMap, Plate
+from sim_tactile.plates.make import map_mesh
+from sim_tactile.plates.make.render import HOLE_RGB, preview_png
+from sim_tactile.plates.parts.user import load_user_plate, parse_ref
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "own_sensor_and_plates"
 #: Heights read back from an STL whose vertices are the samples: its vertices are float32,
@@ -72,14 +73,14 @@ def test_an_off_centre_part_exported_and_imported_again_has_material_everywhere(
     xs, ys = t.grid()
     X, Y = np.meshgrid(xs + 6e-3, ys)
     on_part = (np.abs(X) <= plate.length_m / 2 - 1e-9) & (np.abs(Y) <= plate.width_m / 2 - 1e-9)
-    want = np.where(on_part, height_at(plate, X, Y), 0.0)
+    want = np.where(on_part, surface_of(plate).height(X, Y), 0.0)
     assert on_part.mean() > 0.8
     assert np.max(np.abs(t.z - want)) <= READBACK_TOL_M
     # height_at reads material over the whole part, never NaN inside its footprint
     rng = np.random.default_rng(0)
     px = rng.uniform(-plate.length_m / 2, plate.length_m / 2, 20000) - 6e-3
     py = rng.uniform(-plate.width_m / 2, plate.width_m / 2, 20000)
-    assert np.isfinite(height_at(back, px, py)).all()
+    assert np.isfinite(surface_of(back).height(px, py)).all()
 
 
 @pytest.mark.slow
@@ -95,7 +96,7 @@ def test_the_exported_stl_of_a_map_plate_comes_back_as_the_same_surface(tmp_path
         xs, ys = t.grid()
         X, Y = np.meshgrid(xs, ys)
         on_part = (np.abs(X) <= plate.length_m / 2) & (np.abs(Y) <= plate.width_m / 2)
-        assert np.max(np.abs(t.z - np.where(on_part, height_at(plate, X, Y), 0.0))) <= (
+        assert np.max(np.abs(t.z - np.where(on_part, surface_of(plate).height(X, Y), 0.0))) <= (
             READBACK_TOL_M
         )
 
@@ -121,9 +122,12 @@ def test_a_hole_through_a_part_is_refused_saying_where_unless_intended(tmp_path)
     n_hole = int(np.isnan(z).sum())
     assert n_hole == pytest.approx(np.pi * 5e-3**2 / 5e-5**2, rel=0.02)
     assert any("kept as holes (holes=true)" in n for n in plate.texture.notes)
-    assert np.isnan(height_at(plate, 0.0, 0.0)) and height_at(plate, 7.5e-3, 0.0) == 0.0
+    assert (
+        np.isnan(surface_of(plate).height(0.0, 0.0))
+        and surface_of(plate).height(7.5e-3, 0.0) == 0.0
+    )
     # the corners of the disc's square: beyond its outline, the base
-    assert height_at(plate, 9.9e-3, 9.9e-3) == 0.0
+    assert surface_of(plate).height(9.9e-3, 9.9e-3) == 0.0
 
 
 def test_nan_in_a_map_is_refused_with_where_it_lies_unless_holes_are_intended(tmp_path):
@@ -206,7 +210,7 @@ def test_the_worked_example_parts_have_material_over_their_footprint(function):
     rng = np.random.default_rng(1)
     x = rng.uniform(-0.018, 0.018, 20000)  # the part: 36 mm square
     y = rng.uniform(-0.018, 0.018, 20000)
-    assert np.isfinite(height_at(plate, x, y)).all()
+    assert np.isfinite(surface_of(plate).height(x, y)).all()
 
 
 PINS = """
@@ -236,8 +240,8 @@ def test_an_off_centre_cadquery_part_and_its_hole(tmp_path):
     rng = np.random.default_rng(2)
     x = rng.uniform(-0.030, 0.010, 20000)
     y = rng.uniform(-0.0099, 0.0099, 20000)
-    z = height_at(plate, x, y)
+    z = surface_of(plate).height(x, y)
     assert np.isfinite(z).all() and z.min() >= -1e-12 and z.max() <= 5e-4 + 1e-12
-    assert height_at(plate, 0.0, 0.0) == pytest.approx(5e-4)  # the middle pin
+    assert surface_of(plate).height(0.0, 0.0) == pytest.approx(5e-4)  # the middle pin
     with pytest.raises(ConfigError, match=r"holes through it.*x = -22.0\d\d mm, y = 0.000 mm"):
         load_user_plate(tmp_path / "pins.py:holed")

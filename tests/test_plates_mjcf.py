@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from sim_tactile.errors import GeometryError
-from sim_tactile.plates import build, features, get_plate, preset_names
-from sim_tactile.plates.mjcf import check_convex, geom_counts, plate_spec
-from sim_tactile.plates.probe import ColliderProbe
+from sim_tactile.plates import build, get_plate, preset_names, surface_of
+from sim_tactile.plates.make.mjcf import check_convex, geom_counts, plate_spec
+from sim_tactile.plates.make.probe import ColliderProbe
 
 MM = 1e-3
 DROP_RADIUS_M = 1.5 * MM
@@ -26,7 +26,7 @@ ROLL_FRICTION = (1.0, 0.005, 0.0005)
 
 def _drop_points(plate) -> list[tuple[float, float]]:
     pts = [(-45 * MM, 0.0)]  # flat run-in
-    fs = features(plate)
+    fs = surface_of(plate).features
     if not fs:
         pts.append((0.0, 0.0))
     elif fs[0].kind == "cap":
@@ -75,7 +75,7 @@ def test_mjcf_compiles_and_a_dropped_sphere_settles(name, cache):
     m = mujoco.MjModel.from_xml_string(xml)
     assert mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "plate") >= 0
     counts = geom_counts(m)
-    n_feat = len(features(plate))
+    n_feat = len(surface_of(plate).features)
     assert sum(counts.values()) == n_feat + (4 if counts.get("hfield") else 1)
     probe = ColliderProbe(xml, radius_m=DROP_RADIUS_M)
     for x, y in _drop_points(plate):

@@ -16,12 +16,11 @@ from sim_tactile.plates import (
     Ridges,
     Roughness,
     build,
-    features,
     get_plate,
-    height_at,
     preset_names,
+    surface_of,
 )
-from sim_tactile.plates.spec import MAX_FEATURE_HEIGHT_M
+from sim_tactile.plates.define.spec import MAX_FEATURE_HEIGHT_M
 
 MM = 1e-3
 
@@ -47,15 +46,15 @@ def test_contract_names_exist():
 def test_finger7_dimensions_match_the_paper():
     p = get_plate("finger7/ridges-4")
     assert (p.length_m, p.width_m, p.area_length_m, p.area_width_m) == (0.108, 0.036, 0.036, 0.036)
-    xs = [f.x for f in features(p)]
+    xs = [f.x for f in surface_of(p).features]
     # 4 ridges evenly spread over 36 mm: pitch 9 mm (docs/physics.md: pulses 150 ms apart at 60 mm/s)
     assert np.allclose(np.diff(xs), 9 * MM)
-    assert math.isclose(height_at(p, xs[0], 0.0), 2.5 * MM)
+    assert math.isclose(surface_of(p).height(xs[0], 0.0), 2.5 * MM)
 
 
 def test_multilayer_grating_geometry():
     p = get_plate("multilayer3/grating-9")
-    fs = features(p)
+    fs = surface_of(p).features
     assert len(fs) == 9
     assert np.allclose(np.diff([f.x for f in fs]), 4 * MM)  # 2 mm ridges, 2 mm apart
     f = fs[0]
@@ -77,11 +76,11 @@ def test_roughness_profile_hits_ra_and_is_seeded():
         p = get_plate(name)
         ra = p.texture.ra_m
         xs = np.linspace(-0.0179, 0.0179, 20001)
-        z = height_at(p, xs, 0.0)
+        z = surface_of(p).height(xs, 0.0)
         assert abs(np.mean(np.abs(z - z.mean())) / ra - 1) < 0.05
     r1 = Plate(texture=Roughness(ra_m=1e-5, corr_length_m=1e-4, seed=1))
     r2 = Plate(texture=Roughness(ra_m=1e-5, corr_length_m=1e-4, seed=2))
-    assert not np.array_equal(height_at(r1, xs, 0), height_at(r2, xs, 0))
+    assert not np.array_equal(surface_of(r1).height(xs, 0), surface_of(r2).height(xs, 0))
 
 
 @pytest.mark.parametrize(
@@ -176,3 +175,37 @@ def test_from_params_rejects_unknown_fields():
         Plate.from_params({"texture": {"kind": "waves"}})
     with pytest.raises(ConfigError, match="unexpected keyword"):
         Plate.from_params({"texture": {"kind": "flat", "wobble": 1}})
+
+
+def test_the_old_module_names_still_import_with_a_warning():
+    """For one release every module's name from before the four folders imports (its names
+    are the new module's, read with a DeprecationWarning naming the new path), without
+    loading what the old module did not (MuJoCo for ``mjcf``) until used, and without
+    shadowing the package's functions of the same name (``build``)."""
+    import importlib
+    import subprocess
+    import sys
+
+    import sim_tactile.plates as plates
+    from sim_tactile.plates import _moved
+    from sim_tactile.plates.define import spec
+    from sim_tactile.plates.make import build as build_module
+
+    assert len(_moved.MOVED) == 19
+    for old, folder in _moved.MOVED.items():
+        new = importlib.import_module(f"sim_tactile.plates.{folder}.{old}")
+        stand_in = importlib.import_module(f"sim_tactile.plates.{old}")
+        name = next(n for n in vars(new) if not n.startswith("_"))
+        with pytest.warns(DeprecationWarning, match=rf"plates\.{folder}\.{old}\b"):
+            assert getattr(stand_in, name) is getattr(new, name)
+    with pytest.warns(DeprecationWarning, match="plates.define.spec"):
+        from sim_tactile.plates.spec import Plate as OldPlate
+    assert OldPlate is spec.Plate is Plate
+    with pytest.warns(DeprecationWarning):
+        from sim_tactile.plates.build import artefact_key
+    assert artefact_key is build_module.artefact_key and plates.build is build
+    with pytest.raises(AttributeError, match="no_such_module"):
+        plates.no_such_module  # noqa: B018
+    code = "import sys, sim_tactile.plates.mjcf as m; print('mujoco' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

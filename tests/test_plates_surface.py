@@ -1,9 +1,10 @@
 """One surface per kind of texture: the plate answers its own geometry (its height, the
-kernels' arrays, its scales, its collider margin), and nothing outside plates/ asks the
-texture its kind."""
+kernels' arrays, its scales, its collider margin), and nothing outside the plate's definition
+(plates/define/) asks the texture its kind: not the simulator, not the plate's artefacts."""
 
 from __future__ import annotations
 
+import importlib
 import re
 from pathlib import Path
 
@@ -12,9 +13,8 @@ import pytest
 
 import sim_tactile
 from sim_tactile.plates import Plate, get_plate, surface_of
-from sim_tactile.plates.features import features, height_at
-from sim_tactile.plates.spec import Grating
-from sim_tactile.plates.surface import (
+from sim_tactile.plates.define.spec import Grating
+from sim_tactile.plates.define.surface import (
     QS_MARGIN_M,
     QS_MARGIN_MUJOCO_M,
     FeatureSurface,
@@ -40,11 +40,12 @@ _SWITCH = re.compile(
 
 
 def _switches(root: Path) -> list[str]:
-    """The lines of ``root``'s modules outside plates/ that switch on the texture's kind."""
+    """The lines of ``root``'s modules outside plates/define/ that switch on the texture's
+    kind."""
     out = []
     for p in sorted(root.rglob("*.py")):
         rel = p.relative_to(root).as_posix()
-        if rel.startswith("plates/"):
+        if rel.startswith("plates/define/"):
             continue
         for n, line in enumerate(p.read_text().splitlines(), 1):
             if _SWITCH.search(line.split("#")[0]):
@@ -52,7 +53,7 @@ def _switches(root: Path) -> list[str]:
     return out
 
 
-def test_nothing_outside_plates_switches_on_the_texture_kind():
+def test_nothing_outside_the_definition_switches_on_the_texture_kind():
     assert _switches(ROOT) == []
 
 
@@ -66,9 +67,12 @@ def test_the_switch_finder_finds_each_form(tmp_path):
     ]
     (tmp_path / "sim").mkdir()
     (tmp_path / "sim" / "m.py").write_text("\n".join(lines) + "\n")
-    (tmp_path / "plates").mkdir()
-    (tmp_path / "plates" / "spec.py").write_text(lines[0] + "\n")  # plates/ may
-    assert [s.split(":")[1] for s in _switches(tmp_path)] == ["1", "2", "3", "4"]
+    (tmp_path / "plates" / "define").mkdir(parents=True)
+    (tmp_path / "plates" / "define" / "spec.py").write_text(lines[0] + "\n")  # define/ may
+    (tmp_path / "plates" / "make").mkdir()
+    (tmp_path / "plates" / "make" / "mjcf.py").write_text(lines[1] + "\n")  # make/ may not
+    found = [s.split(":")[:2] for s in _switches(tmp_path)]
+    assert found == [["plates/make/mjcf.py", "1"]] + [["sim/m.py", n] for n in "1234"]
 
 
 @pytest.mark.parametrize(
@@ -122,14 +126,14 @@ def test_the_height_near_the_pad_is_the_whole_height(name):
         whole = s.height(x, y)
         near = s.height(x, y, near=(x_c, 8e-3))
         assert near.tobytes() == whole.tobytes()
-        assert whole.tobytes() == height_at(plate, x, y).tobytes()
+        assert whole.tobytes() == surface_of(plate).height(x, y).tobytes()
 
 
 def test_the_period_has_one_formula():
     """The planner's texture period, the anchored lattice's and the speed-error benchmark's
     are the surface's: the features' smallest column spacing."""
     ridges = get_plate("finger7/ridges-4")
-    xs = sorted({round(f.x, 9) for f in features(ridges)})
+    xs = sorted({round(f.x, 9) for f in surface_of(ridges).features})
     assert surface_of(ridges).period_m == pytest.approx(min(np.diff(xs))) == period_of(ridges)
     one = Plate(texture=Grating(period_m=30e-3, height_m=0.5e-3), area_length_m=0.036)
     assert surface_of(one).period_m is None and period_of(one) == SOLO_PERIOD_M
@@ -138,7 +142,7 @@ def test_the_period_has_one_formula():
 
 def test_the_features_are_computed_once_a_plate():
     """A plate's feature list is kept with its surface: asked again (by the planner, the
-    lattices, the colliders) it is not expanded again, and each caller gets its own list."""
+    lattices, the colliders) it is not expanded again, and every caller gets the one tuple."""
     plate = get_plate("finger7/bumps-6x6")
     calls = []
     texture = plate.texture
@@ -154,6 +158,23 @@ def test_the_features_are_computed_once_a_plate():
     counted = Counting(**{f.name: getattr(texture, f.name) for f in fields(texture) if f.init})
     p = Plate(texture=counted, area_length_m=plate.area_length_m, area_width_m=plate.area_width_m)
     n = len(calls)  # the plate's own validation expands them once
-    a, b = features(p), features(p)
+    a, b = surface_of(p).features, surface_of(p).features
     surface_of(p).walls, surface_of(p).feature_scale_m, surface_of(p).period_m  # noqa: B018
-    assert len(calls) == n + 1 and a == b and a is not b and len(a) == 36
+    assert len(calls) == n + 1 and a is b and isinstance(a, tuple) and len(a) == 36
+
+
+def test_the_old_facade_warns_and_answers_as_the_surface():
+    """``features``, ``height_at`` and ``roughness_profile`` (deprecated for one release) say
+    what replaces them and give the surface's own answers."""
+    facade = importlib.import_module("sim_tactile.plates.features")  # the package's `features`
+    # attribute is the function, as before
+
+    ridges, rough = get_plate("finger7/ridges-4"), get_plate("roughness8/ra-50")
+    x = np.linspace(-0.02, 0.02, 101)
+    with pytest.warns(DeprecationWarning, match=r"surface_of\(plate\)\.height\(x, y\)"):
+        z = facade.height_at(ridges, x, 0.0)
+    assert z.tobytes() == surface_of(ridges).height(x, 0.0).tobytes()
+    with pytest.warns(DeprecationWarning, match=r"surface_of\(plate\)\.features"):
+        assert facade.features(ridges) == list(surface_of(ridges).features)
+    with pytest.warns(DeprecationWarning, match=r"surface_of\(plate\)\.profile"):
+        assert facade.roughness_profile(rough) is surface_of(rough).profile

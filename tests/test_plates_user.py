@@ -1,4 +1,4 @@
-"""Plates from a user's files (sim_tactile.plates.user): a STEP and an STL written by CadQuery
+"""Plates from a user's files (sim_tactile.plates.parts.user): a STEP and an STL written by CadQuery
 here, a CadQuery script, a .npy and a 16-bit PNG height map; each checked against the CAD it
 came from, placed, cached by content; and the bad inputs the issue names refused, with
 nothing written."""
@@ -16,8 +16,8 @@ import pytest
 
 from sim_tactile.cache import ArtefactCache
 from sim_tactile.errors import ConfigError
-from sim_tactile.plates import build, get_plate, height_at
-from sim_tactile.plates.user import RUN_IN_M, load_user_plate, parse_ref
+from sim_tactile.plates import build, get_plate, surface_of
+from sim_tactile.plates.parts.user import RUN_IN_M, load_user_plate, parse_ref
 
 cq = pytest.importorskip("cadquery")
 
@@ -115,7 +115,7 @@ def test_a_cad_grating_becomes_its_height_map_within_the_stated_tolerance(files,
     rng = np.random.default_rng(1)
     X = rng.uniform(-0.0125, 0.0125, 20000)
     Y = rng.uniform(-0.0099, 0.0099, 20000)
-    z = height_at(plate, X, Y)
+    z = surface_of(plate).height(X, Y)
     want = grating_height_m(X, Y)
     # the stated tolerance: exact farther than a sample from a wall, and a wall moves by less
     # than one sample (its sloped sample cell is within the CAD's two levels)
@@ -150,14 +150,14 @@ def test_step_stl_and_script_give_one_plate_and_its_artefacts(files, tmp_path):
 
     mesh = trimesh.load(res.files["stl"])
     assert mesh.is_watertight and mesh.volume > 0
-    from sim_tactile.plates.zbuffer import zbuffer
+    from sim_tactile.plates.parts.zbuffer import zbuffer
 
     xs = np.linspace(-0.0125, 0.0125, 301) + 1.3e-6
     ys = np.linspace(-0.009, 0.009, 101) + 1.7e-6
     top = zbuffer(mesh.vertices * 1e-3, mesh.faces, xs, ys)
     X, Y = np.meshgrid(xs, ys)
     far = _walls_far(step, X, Y, 2 * step.texture.pixel_m)
-    assert np.max(np.abs(top - height_at(step, X, Y))[far]) <= 1e-9
+    assert np.max(np.abs(top - surface_of(step).height(X, Y))[far]) <= 1e-9
     # a second build reads the cache
     assert all(build(step, cache=cache).cached.values())
 
@@ -193,7 +193,7 @@ def test_height_maps_npy_and_16bit_png(tmp_path):
         0.004
     )
     xs, ys = t.grid()
-    assert np.allclose(height_at(plate, xs[None, :], ys[:, None]), t.z, rtol=0, atol=1e-18)
+    assert np.allclose(surface_of(plate).height(xs[None, :], ys[:, None]), t.z, rtol=0, atol=1e-18)
     counts = np.round((z - z.min()) / 1e-8).astype(np.uint16)
     Image.fromarray(counts[::-1]).save(tmp_path / "scan.png")  # the picture's top row is +y
     png = load_user_plate(tmp_path / "scan.png", pixel_m=2e-5, z_scale_m=1e-8)
@@ -278,7 +278,7 @@ def test_an_overhang_may_be_filled_and_is_reported(files):
     plate = load_user_plate(f"{files / 'parts.py'}:mushroom?fill_overhangs=true")
     assert any("filled under the top surface" in n for n in plate.texture.notes)
     # the cap's top, 3 mm over the base, everywhere over the cap (4 mm radius)
-    assert height_at(plate, 0.003, 0.0) == pytest.approx(3e-3, abs=1e-9)
+    assert surface_of(plate).height(0.003, 0.0) == pytest.approx(3e-3, abs=1e-9)
 
 
 @pytest.mark.slow

@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 
 from sim_tactile.plates import get_plate, preset_names
-from sim_tactile.plates.presets import LONG_FAMILY
-from sim_tactile.plates.verify import compare_views
+from sim_tactile.plates.make.verify import compare_views
+from sim_tactile.plates.read.presets import LONG_FAMILY
 
 MM = 1e-3
 #: The issue's tolerance between collision geometry and CAD, away from walls [m].

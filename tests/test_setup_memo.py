@@ -121,12 +121,12 @@ def test_one_call_forgets_every_memo_of_the_process():
     the measured-errors table, roughness profiles, a height map's scales, ...) is empty after
     :func:`forget_process_memos`."""
     from sim_tactile.cache import _MEMOS
-    from sim_tactile.plates import get_plate, roughness_profile
+    from sim_tactile.plates import get_plate, surface_of
     from sim_tactile.sim.plan import measured_errors
 
     setup_memo("x", {"v": 1}, lambda: (np.zeros(3),), ("sim_tactile.cache",))
     measured_errors._table()
-    roughness_profile(get_plate("roughness8/ra-50"))
+    assert surface_of(get_plate("roughness8/ra-50")).profile is not None
     assert len(cache_module.SETUP) == 1 and measured_errors._table.cache_info().currsize == 1
     names = forget_process_memos()
     assert set(names) == set(_MEMOS) and "measured-errors table" in names

@@ -10,7 +10,7 @@ from scipy.signal import find_peaks
 
 from sim_tactile.bench import physics
 from sim_tactile.errors import ConfigError
-from sim_tactile.plates import get_plate, height_at, surface_of
+from sim_tactile.plates import get_plate, surface_of
 from sim_tactile.scene.elastic import compliance_matrix
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import Finger, Sensor, get_sensor
@@ -76,10 +76,10 @@ def test_no_patch_straddles_a_wall_or_a_taxel_edge(x_pad):
     assert cp.sx[-1] - cp.sx[0] >= px - 1e-12 and cp.sy[-1] - cp.sy[0] >= py - 1e-12
     # the plate's height is the same all over each patch (sampled just inside its corners)
     e = 1e-7
-    z0 = height_at(plate, cx + x_pad, cy)
+    z0 = surface_of(plate).height(cx + x_pad, cy)
     for sx in (-1, 1):
         for sy in (-1, 1):
-            z = height_at(plate, cx + x_pad + sx * (hx - e), cy + sy * (hy - e))
+            z = surface_of(plate).height(cx + x_pad + sx * (hx - e), cy + sy * (hy - e))
             np.testing.assert_array_equal(z, z0)
     # each patch lies in a taxel wholly or not at all
     pos, size = s.layout.positions, s.layout.sizes

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from _scenes import scene_of
 
-from sim_tactile.plates import get_plate, height_at
-from sim_tactile.plates.surface import ProfileArrays
+from sim_tactile.plates import get_plate, surface_of
+from sim_tactile.plates.define.surface import ProfileArrays
 from sim_tactile.scene.model import build_scene
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import get_layout, get_sensor
@@ -158,7 +158,7 @@ def test_ridges_and_cylinders_against_mujoco_and_the_height_map(plate, margin, c
         col.depths(d.xpos[bone].copy(), ours)
         assert (np.isfinite(ours) == np.isfinite(ref)).all()
         c = d.xpos[bone] + col.local
-        h = height_at(sc.plate, c[:, 0], c[:, 1])
+        h = surface_of(sc.plate).height(c[:, 0], c[:, 1])
         seen, below = np.isfinite(ref), c[:, 2] < h
         np.testing.assert_allclose(ours[seen & ~below], ref[seen & ~below], rtol=0, atol=atol)
         vertical = h - (c[:, 2] - col.radius)
@@ -234,7 +234,7 @@ def test_the_profile_collider_reads_the_height_map_at_each_node(plate, cache):
         x = col.bone0[0] + qpos[sc.jx] + col.local[:, 0]
         y = col.bone0[1] + col.local[:, 1]
         z = col.bone0[2] + qpos[sc.jz] + col.local[:, 2] - col.radius
-        d = height_at(pl, x, y) - z
+        d = surface_of(pl).height(x, y) - z
         expect = np.where(d >= -col.margin, d, -np.inf)
         np.testing.assert_allclose(got, expect, rtol=0, atol=1e-15)
         assert near == bool(np.isfinite(expect).any())

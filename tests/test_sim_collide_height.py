@@ -13,9 +13,8 @@ import pytest
 from _scenes import scene_of
 
 from sim_tactile.bench.closed_forms import pulse_period
-from sim_tactile.plates import HeightMap, Plate, height_at
-from sim_tactile.plates.features import map_height
-from sim_tactile.plates.surface import QS_MARGIN_M, MapArrays, surface_of
+from sim_tactile.plates import HeightMap, Plate
+from sim_tactile.plates.define.surface import QS_MARGIN_M, MapArrays, map_height, surface_of
 from sim_tactile.sensors import Finger, get_sensor
 from sim_tactile.sim.collide.choose import make_collider, probe_depths
 from sim_tactile.sim.collide.height import (
@@ -140,7 +139,7 @@ def test_the_compiled_height_is_height_at_bit_for_bit(make):
     s = surface_of(plate).arrays
     rng = np.random.default_rng(7)
     x, y = _points(plate, rng)
-    want = height_at(plate, x, y)
+    want = surface_of(plate).height(x, y)
     got = np.array([map_surface_at(a, b, *s) for a, b in zip(x, y, strict=True)])
     _same_bits(got, want)
     inside = (np.abs(x) <= s[2]) & (np.abs(y) <= s[3])
@@ -188,7 +187,7 @@ def test_the_compiled_loop_is_its_numpy_reference_and_height_at(make):
         part.depths_at(q, s)
         assert s.tobytes() == a[sub].tobytes()
         centre = bone + c.local
-        d = height_at(plate, centre[:, 0], centre[:, 1]) - (centre[:, 2] - c.radius)
+        d = surface_of(plate).height(centre[:, 0], centre[:, 1]) - (centre[:, 2] - c.radius)
         want = np.where(d >= -c.margin, d, -np.inf)
         assert a.tobytes() == want.tobytes()
         assert near == bool(np.isfinite(want).any())
@@ -232,7 +231,7 @@ def test_the_map_collider_agrees_with_mujocos_on_a_smooth_map(cache):
         col.depths_at(q, ours)
         ref.depths_at(q, theirs)
         centre = col.bone0 + [q[sc.jx], 0.0, q[sc.jz]] + col.local
-        h = height_at(plate, centre[:, 0], centre[:, 1])
+        h = surface_of(plate).height(centre[:, 0], centre[:, 1])
         clear = centre[:, 2] - col.radius > h
         both = clear & np.isfinite(ours) & np.isfinite(theirs)
         # reported alike, but where the two depths straddle the margin
@@ -342,7 +341,7 @@ def test_the_probe_face_of_a_map_with_holes_carries_the_force_on_its_material():
     sensor = get_sensor("multilayer3x3x2")
     grid = probe_grid(plate, 0.1 * MM)
     p, approach, _ = probe_contact(plate, sensor.with_paper_stack().finger, grid, 1.0)
-    hole = np.isnan(height_at(plate, grid.xy[:, 0], grid.xy[:, 1]))
+    hole = np.isnan(surface_of(plate).height(grid.xy[:, 0], grid.xy[:, 1]))
     assert hole.any() and np.isfinite(p).all() and np.isfinite(approach)
     assert (p[hole] == 0).all() and (p[~hole] > 0).sum() > 10
     assert p.sum() * grid.area_m2 == pytest.approx(1.0, rel=1e-6)

@@ -215,7 +215,7 @@ def test_the_plan_checks_the_repetition_on_the_plates_own_features():
     )
     assert bumps is not None and bumps.y_m == 1e-3  # a grid of bumps: the offset's own
     # a plate whose features do not repeat: one ridge moved
-    from sim_tactile.plates.surface import surface_of
+    from sim_tactile.plates import surface_of
 
     feats = list(surface_of(plate).features)
     feats[len(feats) // 2] = replace(feats[len(feats) // 2], x=feats[len(feats) // 2].x + 1e-4)

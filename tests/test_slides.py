@@ -138,9 +138,9 @@ def test_the_slide_code_is_the_simulations_import_closure():
 
     closure = import_closure(*SLIDE_MODULES)
     for m in (
-        "plates.presets",
-        "plates.spec",
-        "plates.mjcf",
+        "plates.read.presets",
+        "plates.define.spec",
+        "plates.make.mjcf",
         "sim.step.held",
         "sensors.transducers",
     ):

@@ -12,8 +12,8 @@ from conftest import _find_dataset as find_dataset
 
 from sim_tactile.calibrate.motion import biotac_force, clip_level_variation
 from sim_tactile.errors import ConfigError
-from sim_tactile.plates import get_plate, height_at, preset_names
-from sim_tactile.plates.presets import LONG_AREA_M, LONG_FAMILY
+from sim_tactile.plates import get_plate, preset_names, surface_of
+from sim_tactile.plates.read.presets import LONG_AREA_M, LONG_FAMILY
 from sim_tactile.sim.plan.protocol import START_MARGIN_M, Protocol, SlideWindow
 from sim_tactile.slides.config import _protocol
 from sim_tactile.tasks import get_task
@@ -70,10 +70,12 @@ def test_each_long_plate_is_its_short_plate_extended(name):
         assert long.texture == short.texture and long.area_length_m == LONG_AREA_M
         return
     # equal to round-off (a drafted flank's height is computed from the feature's centre)
-    np.testing.assert_allclose(height_at(long, X, Y), height_at(short, X, Y), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        surface_of(long).height(X, Y), surface_of(short).height(X, Y), rtol=0, atol=1e-12
+    )
     if "flat" not in name:
         FX, FY = np.meshgrid(np.linspace(0.05, 0.07, 801), np.linspace(-0.018, 0.018, 145))
-        assert height_at(long, FX, FY).max() > 0
+        assert surface_of(long).height(FX, FY).max() > 0
 
 
 def test_a_v2_slide_stays_on_the_texture_for_its_window():

@@ -9,7 +9,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from sim_tactile.plates import Grating, Plate, height_at
+from sim_tactile.plates import Grating, Plate, surface_of
 from sim_tactile.sensors import Finger
 from sim_tactile.sim import Protocol, press, simulate
 from sim_tactile.sim.plots import plot_traces
@@ -19,7 +19,7 @@ def main(out: Path, quick: bool = True) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     # a plate: a grating of 3 mm period, 0.5 mm high ridges across the slide
     plate = Plate(texture=Grating(period_m=3e-3, height_m=0.5e-3))
-    print("height at the centre [m]:", float(height_at(plate, 0.0, 0.0)))
+    print("height at the centre [m]:", float(surface_of(plate).height(0.0, 0.0)))
 
     # a slide: 60 mm/s at 1 N, the pad crossing the texture (quick: the first 0.3 s)
     protocol = Protocol(speed_m_s=0.06, force_n=1.0, duration_s=0.3 if quick else None)

@@ -10,3 +10,15 @@
 """
 
 from __future__ import annotations
+
+from .._lazy import lazy_exports
+
+#: The public names and the module that defines each (loaded on first use).
+_EXPORTS = {
+    "run_speed_error": ".speed_error",
+    "run_stability": ".stability",
+    "run_sim_real": ".sim_real",
+}
+
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

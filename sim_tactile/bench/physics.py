@@ -40,7 +40,7 @@ import numpy as np
 
 from ..cache import atomic_write
 from ..hashing import code_version, content_hash, file_digest
-from ..plates import Plate, height_at, surface_of
+from ..plates import Plate, surface_of
 from ..scene.elastic import subsurface_weights
 from ..scene.nodes import skin_grid
 from ..sensors import Sensor
@@ -95,7 +95,7 @@ def offsets_m(plate: Plate, n: int) -> tuple[float, ...]:
 def gap_m(plate: Plate, finger, x, y, offset: float) -> np.ndarray:
     """Height of the plate above the pad's undeformed surface at pad coordinates (x, y) [m]
     with the pad ``offset`` along the slide; -1 m outside the pad (never touches)."""
-    z = height_at(plate, x + offset, y) - finger.surface(x, y)
+    z = surface_of(plate).height(x + offset, y) - finger.surface(x, y)
     px, py = finger.patch_m
     inside = (np.abs(x) <= px / 2) & (np.abs(y) <= py / 2)
     return np.where(inside & np.isfinite(z), z, -1.0)
@@ -249,7 +249,7 @@ def clipped_press(cp: ClippedPatches, grid, plate, force_n, offset) -> np.ndarra
     """The taxel loads [N] of the node grid's patches clipped at the plate's walls and the
     taxels' edges (``cp``, :mod:`~sim_tactile.sim.skin.clipped`) with the pad at ``offset``, held
     at ``force_n``."""
-    z_top = float(np.nanmax(height_at(plate, grid.xy[:, 0] + offset, grid.xy[:, 1])))
+    z_top = float(np.nanmax(surface_of(plate).height(grid.xy[:, 0] + offset, grid.xy[:, 1])))
     (_, _, hx, hy, cell, _), cand, p, _ = cp.solve(offset, z_top + 1e-3, force_n)
     return cp.taxel_loads(cell[cand], p * 4 * hx[cand] * hy[cand])
 
@@ -258,7 +258,7 @@ def anchored_press(lat: AnchoredLattice, plate, force_n, offset) -> np.ndarray:
     """The taxel loads [N] of the lattice anchored to the plate's walls (``lat``,
     :mod:`~sim_tactile.sim.skin.anchored`) with the pad at ``offset``, held at ``force_n``."""
     x = np.linspace(-lat.half_x, lat.half_x, 257)
-    top = float(np.nanmax(height_at(plate, x[:, None] + offset, x[None, :] + lat.y0)))
+    top = float(np.nanmax(surface_of(plate).height(x[:, None] + offset, x[None, :] + lat.y0)))
     _, off = lat.solve(offset, top + 1e-3, force_n)
     return lat.taxel_loads(off, np.zeros(lat.taxel_x.size))
 

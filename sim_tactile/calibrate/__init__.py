@@ -276,3 +276,6 @@ def _readout_note(r: Readout) -> str:
         f"groups {groups} (relative to the most often loaded taxel); where a clip starts in "
         "the cycle varies from clip to clip, so each simulated slide draws it"
     )
+
+
+__all__ = ["CALIBRATABLE", "Calibration", "calibrate"]

@@ -185,7 +185,7 @@ def plate_of(plate: str, frame: str | None) -> str:
     """The plate reference of ``--plate`` with ``--plate-frame``'s options."""
     if frame is None:
         return plate
-    from ..plates.user import is_user_plate, parse_ref
+    from ..plates.parts.user import is_user_plate, parse_ref
 
     if not is_user_plate(plate):
         raise ConfigError(

@@ -10,3 +10,19 @@
 The spiking network's NIR graph and the NeuroBench figures live with the network:
 :mod:`sim_tactile.learn.nir`, :mod:`sim_tactile.learn.neurobench`.
 """
+
+from __future__ import annotations
+
+from .._lazy import lazy_exports
+
+#: The public names and the module that defines each (loaded on first use: torch, Tonic and
+#: the data hubs' libraries only when a name that needs them is read).
+_EXPORTS = {
+    "TactileEvents": ".events",
+    "EventLayout": ".layout",
+    "TactileTorchDataset": ".torch_data",
+    "export_parquet": ".hub",
+}
+
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

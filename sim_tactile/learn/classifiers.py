@@ -183,10 +183,12 @@ CLASSIFIERS: Mapping[str, ClassifierSpec] = {s.name: s for s in _SPECS}
 
 
 def classifier_names() -> tuple[str, ...]:
+    """The names of the registered classifiers (:func:`get_classifier` takes them)."""
     return tuple(CLASSIFIERS)
 
 
 def get_classifier(name: str) -> ClassifierSpec:
+    """The registered classifier ``name``; UnknownNameError naming the valid ones."""
     try:
         return CLASSIFIERS[name]
     except KeyError:

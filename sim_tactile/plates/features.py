@@ -1,36 +1,44 @@
-"""A plate's surface: its raised features and its analytic height.
+"""Deprecated: the plate's surface is asked of its :class:`~.define.surface.Surface`
+(:func:`~.define.surface.surface_of`), the one surface API; these three functions go in the
+next release (CHANGELOG, "Breaking").
 
-This is the plate's *definition*: the CAD solid, the MuJoCo collision geometry and the
-preview are all generated from :func:`features` (and :func:`roughness_profile`), and the
-tests check that each of them agrees with :func:`height_at`. Each answer is its
-:func:`~.surface.surface_of`'s, kept per plate in the process.
+- ``features(plate)``: ``surface_of(plate).features`` (a tuple);
+- ``height_at(plate, x, y)``: ``surface_of(plate).height(x, y)``;
+- ``roughness_profile(plate)``: ``surface_of(plate).profile`` (None on a plate that has no
+  roughness, where this function raised ConfigError).
 """
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from ..errors import ConfigError
-from .geometry import Feature
-from .spec import Plate
-from .surface import map_height, surface_of
+from .define.geometry import Feature
+from .define.spec import Plate
+from .define.surface import map_height, surface_of
 
 __all__ = ["features", "height_at", "map_height", "roughness_profile"]
 
 
+def _deprecated(old: str, new: str) -> None:
+    warnings.warn(
+        f"sim_tactile.plates.{old} is deprecated: use {new} (it goes in the next release)",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+
+
 def features(plate: Plate) -> list[Feature]:
-    """The plate's raised features, in a fixed order (x-major). Raises ConfigError if they
-    overlap or leave the textured area. Roughness plates have none (see
-    :func:`roughness_profile`)."""
+    """Deprecated: ``list(surface_of(plate).features)``, the raised features (x-major)."""
+    _deprecated("features(plate)", "surface_of(plate).features")
     return list(surface_of(plate).features)
 
 
 def roughness_profile(plate: Plate) -> tuple[np.ndarray, np.ndarray]:
-    """The sampled roughness profile ``(x, z)`` [m], shape (n,) each, read-only.
-
-    Deterministic: the same parameters give the same bytes in any process (numpy's PCG64
-    and pocketfft are deterministic on one platform).
-    """
+    """Deprecated: ``surface_of(plate).profile``, the roughness profile ``(x, z)`` [m]."""
+    _deprecated("roughness_profile(plate)", "surface_of(plate).profile")
     profile = surface_of(plate).profile
     if profile is None:
         raise ConfigError(f"plate {plate.name or plate.hash} has no roughness texture")
@@ -38,8 +46,6 @@ def roughness_profile(plate: Plate) -> tuple[np.ndarray, np.ndarray]:
 
 
 def height_at(plate: Plate, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:
-    """Analytic top-surface height z(x, y) [m] of the plate; broadcasts ``x`` and ``y``.
-
-    Outside the plate's footprint the result is NaN. The base top is z = 0.
-    """
+    """Deprecated: ``surface_of(plate).height(x, y)``, the top surface's height [m]."""
+    _deprecated("height_at(plate, x, y)", "surface_of(plate).height(x, y)")
     return surface_of(plate).height(x, y)

@@ -8,3 +8,21 @@
   deflection;
 - :mod:`.spline_grid`: a periodic cubic spline read on a tensor grid of points.
 """
+
+from __future__ import annotations
+
+from .._lazy import lazy_exports
+
+#: The public names and the module that defines each (loaded on first use).
+_EXPORTS = {
+    "Scene": ".model",
+    "build_scene": ".model",
+    "taxel_weights": ".model",
+    "SkinGrid": ".nodes",
+    "skin_grid": ".nodes",
+    "compliance_matrix": ".elastic",
+    "layered_compliance_matrix": ".layered",
+}
+
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -119,7 +119,7 @@ def _models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:
     everything they depend on: the plate's MJCF artefact (its parameters and the code that
     writes it), the pad, the node grid, the damping, the margin and this module's source."""
     from ..hashing import code_version, content_hash
-    from ..plates.build import artefact_key
+    from ..plates.make.build import artefact_key
 
     key = content_hash(
         {

@@ -33,6 +33,7 @@ from .transducers import (
 
 
 def sensor_names() -> list[str]:
+    """The names of the preset sensors (:func:`get_sensor` takes them)."""
     return list(PRESETS)
 
 

@@ -20,7 +20,7 @@ compiled kernel's cache stamp) follows only what that module imports.
 
 from __future__ import annotations
 
-import importlib
+from .._lazy import lazy_exports
 
 #: The public names and the module that defines each.
 _EXPORTS = {
@@ -38,16 +38,4 @@ _EXPORTS = {
 }
 
 __all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value  # the next look-up finds it directly
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plates import Plate, roughness_profile, surface_of
+from ..plates import Plate, surface_of
 
 
 def micro_pressure_profile(
@@ -33,7 +33,7 @@ def micro_pressure_profile(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(x, p) the micro pressure [Pa] felt at depth ``depth_m`` by a taxel of length
     ``length_m`` along the slide, on the profile's grid x [m]."""
-    x, z = roughness_profile(plate)
+    x, z = surface_of(plate).profile
     n = len(x)
     m = 2 * n  # zero padding: the profile does not wrap around
     dx = x[1] - x[0]

@@ -34,7 +34,7 @@ import numpy as np
 from .._jit import njit
 from ..cache import memoized
 from ..errors import ConfigError, PhysicsError
-from ..plates import Plate, get_plate, height_at, surface_of
+from ..plates import Plate, get_plate, surface_of
 from ..records import Recording
 from ..scene.elastic import subsurface_weights
 from ..scene.layered import layered_subsurface_weights
@@ -80,7 +80,7 @@ def probe_contact(plate: Plate, finger: Finger, grid: SkinGrid, force_n: float):
     sensor's surface less the tallest feature) and the skin's description. A node where a
     height map holds no material (NaN) is out of reach."""
     skin = _skin(grid.lattice, grid.pitch_m, finger)
-    pen = height_at(plate, grid.xy[:, 0], grid.xy[:, 1])
+    pen = surface_of(plate).height(grid.xy[:, 0], grid.xy[:, 1])
     pen = np.where(np.isnan(pen), -np.inf, pen)
     p, dz = skin.solve_force(pen - pen.max(), force_n / grid.area_m2)
     return p, float(dz), skin.describe()

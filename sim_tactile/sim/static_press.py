@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import _validate as v
 from ..errors import ConfigError, PhysicsError
-from ..plates import Plate, get_plate, height_at, surface_of
+from ..plates import Plate, get_plate, surface_of
 from ..scene.model import build_scene
 from ..scene.nodes import skin_grid
 from ..sensors.layouts import Layout, dense_layout
@@ -115,7 +115,7 @@ def press(
     px, py = finger.patch_m
     half = readout_pitch_m / 2
     layout = dense_layout(readout_pitch_m, (px / 2 - half, py / 2 - half), depth_m=depth_m)
-    heights = height_at(plate, grid.xy[:, 0], grid.xy[:, 1]) - grid.z
+    heights = surface_of(plate).height(grid.xy[:, 0], grid.xy[:, 1]) - grid.z
     z0 = APPROACH_CLEARANCE_M + max(0.0, float(np.nanmax(heights)))
     margin = surface_of(plate).margin_m
     scene = build_scene(

@@ -8,7 +8,7 @@
                                  # or plate files ("my-plate.toml", relative to this file),
                                  # parts and height maps ("knurl.py:make", "part.step?up=+y",
                                  # "scan.npy?pixel_m=1e-5", or a table {file = "part.stl",
-                                 # units = "mm", rotate_deg = 90}: sim_tactile.plates.user)
+                                 # units = "mm", rotate_deg = 90}: sim_tactile.plates.parts.user)
     sensor = "grid3x3"           # a sensor (its layout, rate, transducer and pad): a preset's
                                  # name or a sensor file ("my4x4.toml", relative to this file)
     slides_per_plate = 100       # [2, 100000]
@@ -56,7 +56,7 @@ from pathlib import Path
 from .. import _validate as v
 from ..errors import ConfigError
 from ..plates import get_plate, preset_names
-from ..plates.user import is_user_plate, parse_ref
+from ..plates.parts.user import is_user_plate, parse_ref
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
 from ..sensors.files import load_sensor_file
 from ..sim.plan.fidelity import FIDELITIES
@@ -215,7 +215,7 @@ def _beside(value: str, base_dir: Path | None) -> Path:
 def _plate(value, base_dir: Path | None) -> str:
     """A preset plate's name, a plate file's absolute path (``.toml``, relative to the
     configuration file's folder), or the reference of a user's part or height map
-    (:mod:`~sim_tactile.plates.user`: a string, or a table with its ``file`` and options)
+    (:mod:`~sim_tactile.plates.parts.user`: a string, or a table with its ``file`` and options)
     with its path made absolute, checked (a script runs here, once)."""
     opts = {}
     if isinstance(value, dict):

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..datasets.store import PARAM_NAMES, StoreSpec, config_hash
-from ..plates.surface import surface_of
+from ..plates.define.surface import surface_of
 from ..records import TactileDataset
 from .jobs import SlideJob, slide_code_version
 from .slide_set import SlideSet, class_name

@@ -20,7 +20,7 @@ from .. import _validate as v
 from ..errors import ConfigError
 from ..hashing import derive_seed
 from ..plates import get_plate, is_plate_file, preset_names
-from ..plates.user import is_user_plate, parse_ref
+from ..plates.parts.user import is_user_plate, parse_ref
 from ..records import TactileDataset
 from ..sensors import Finger, Sensor, get_sensor, sensor_names
 from ..sensors.calibration import Calibration, calibrated

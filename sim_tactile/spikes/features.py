@@ -33,6 +33,7 @@ from .._validate import positive
 from ..errors import ConfigError
 from ..records import SpikeTrains
 
+#: The spike features :class:`SpikeFeatures` computes per channel, by name.
 FEATURES = (
     "count",
     "rate_hz",

@@ -25,6 +25,8 @@ from ..errors import ConfigError
 from ..records import SpikeTrains
 from . import distances as D
 
+#: How the per-channel distances of two samples combine into one: their sum, mean, root mean
+#: square or maximum, or ``"none"`` (one distance per channel).
 COMBINE = ("sum", "mean", "rms", "max", "none")
 
 

@@ -216,7 +216,7 @@ def taxel_key(fig, ax, n: int, names: Sequence[str]) -> None:
 
 def plot_plates(plates: Sequence[Plate], class_names: Sequence[str], out: Path):
     """Top view of each plate's surface height (the analytic definition the simulation used)."""
-    from ..plates import height_at
+    from ..plates import surface_of
 
     n = len(plates)
     cols = min(5, n)
@@ -231,7 +231,7 @@ def plot_plates(plates: Sequence[Plate], class_names: Sequence[str], out: Path):
         hx, hy = 0.5 * p.area_length_m + 3e-3, 0.5 * p.area_width_m + 3e-3
         x = np.linspace(-hx, hx, 360)
         y = np.linspace(-hy, hy, 240)
-        z = height_at(p, x[None, :], y[:, None]) * 1e3
+        z = surface_of(p).height(x[None, :], y[:, None]) * 1e3
         low = float(np.nanmin(z)) if np.isfinite(z).any() else 0.0
         span = float(np.nanmax(z)) - low if np.isfinite(z).any() else 0.0  # NaN: off the plate
         im = ax.imshow(
@@ -292,7 +292,7 @@ def recorded_plates(setup: dict) -> list[Plate | None]:
     or this process's loaded plate is taken) and kept only if it gives the recorded plate;
     else None (a store holds the samples: ``SlideStore.plates``)."""
     from ..plates import get_plate
-    from ..plates.surface import samples_apart
+    from ..plates.define.surface import samples_apart
 
     out: list[Plate | None] = []
     for ref, params in zip(setup.get("plates", []), setup.get("plate_params", []), strict=False):

@@ -4,7 +4,7 @@ A collider answers one question, ``depths_at``
 (:meth:`~.primitive.PrimitiveCollider.depths_at`): with the finger's joints at ``qpos``, how
 deep is each skin node in the plate (``-inf`` where no plate geom lies within the node's
 margin), and is any node that close. :func:`~.choose.make_collider` chooses one, in one place (the plate's
-:func:`~sim_tactile.plates.surface.surface_of` says whether it is sampled):
+:func:`~sim_tactile.plates.define.surface.surface_of` says whether it is sampled):
 
 - :class:`~.primitive.PrimitiveCollider`: a compiled narrow phase for plates of features: boxes,
   spherical caps, upright cylinders and drafted ridges (which MuJoCo holds as convex meshes).
@@ -19,3 +19,18 @@ margin), and is any node that close. :func:`~.choose.make_collider` chooses one,
   none of them takes (a mesh that is not a drafted ridge of the plate's features, a rotated
   plate). No preset plate steps it.
 """
+
+from __future__ import annotations
+
+from ..._lazy import lazy_exports
+
+#: The public names and the module that defines each (loaded on first use).
+_EXPORTS = {
+    "PrimitiveCollider": ".primitive",
+    "SurfaceCollider": ".height",
+    "MujocoCollider": ".reference",
+    "make_collider": ".choose",
+}
+
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

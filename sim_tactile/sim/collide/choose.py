@@ -9,7 +9,7 @@ from __future__ import annotations
 from numba.extending import overload
 
 from ..._jit import njit
-from ...plates.surface import surface_of
+from ...plates.define.surface import surface_of
 from .height import SurfaceCollider, SurfaceProbe, surface_depths
 from .primitive import PrimitiveCollider, PrimitiveProbe, depths_kernel
 from .reference import MujocoCollider

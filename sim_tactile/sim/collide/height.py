@@ -1,20 +1,20 @@
 """The collider of the sampled plates: each skin node's depth below the plate's surface at
 its centre, in one compiled loop (:func:`surface_depths`) over the surface's arrays
-(:attr:`~sim_tactile.plates.surface.Surface.arrays`), whose class says which surface it is:
+(:attr:`~sim_tactile.plates.define.surface.Surface.arrays`), whose class says which surface it is:
 
-- a rough plate (:class:`~sim_tactile.plates.surface.ProfileArrays`): a profile z(x)
+- a rough plate (:class:`~sim_tactile.plates.define.surface.ProfileArrays`): a profile z(x)
   (linear between its samples) across its textured area, on its base. MuJoCo's height-field
   collider gave about four contacts per node there (26 160 for the iCub's 6231 nodes on
   rough-ra100), filled its contact buffer and stopped the slide, and it measured each
   sphere's distance to the nearest facet, where the skin model and the reference it is
   measured against take the height map's depth;
-- a height map (:class:`~sim_tactile.plates.surface.MapArrays`): heights sampled on a grid
+- a height map (:class:`~sim_tactile.plates.define.surface.MapArrays`): heights sampled on a grid
   over (at least) the textured area, bilinear between them, NaN where there is no material,
   on its base. MuJoCo's height-field collider had served it: several contacts a node, at
   most 50 a pair.
 
 Each point's height (:func:`surface_at`) is the surface's own numpy height
-(:meth:`~sim_tactile.plates.surface.Surface.height`) bit for bit (tested): the one compiled
+(:meth:`~sim_tactile.plates.define.surface.Surface.height`) bit for bit (tested): the one compiled
 copy of it. :mod:`~sim_tactile.sim.collide.choose` chooses the collider.
 """
 
@@ -27,7 +27,7 @@ import numpy as np
 from numba.extending import overload
 
 from ..._jit import njit
-from ...plates.surface import MapArrays, ProfileArrays, Surface, surface_of
+from ...plates.define.surface import MapArrays, ProfileArrays, Surface, surface_of
 
 
 class SurfaceProbe(NamedTuple):
@@ -43,7 +43,7 @@ class SurfaceProbe(NamedTuple):
 class SurfaceCollider:
     """The skin's probe spheres (centres ``local`` in the bone's frame, ``radius``,
     ``margin``) against a sampled plate's ``surface`` (one with
-    :attr:`~sim_tactile.plates.surface.Surface.arrays`), bound to the finger's joints
+    :attr:`~sim_tactile.plates.define.surface.Surface.arrays`), bound to the finger's joints
     (:meth:`bind`). A node's depth is the surface height at its centre less its lowest point,
     reported (else -inf) within its margin, as MuJoCo reports a contact; where the surface is
     NaN (off the plate, no material) nothing is near."""
@@ -100,7 +100,7 @@ class SurfaceCollider:
 
     def y_invariant(self, bone_y: float) -> bool:
         """Whether every node's depth is independent of its y for the bone at ``bone_y``
-        (:meth:`~sim_tactile.plates.surface.Surface.y_invariant` at the nodes): then nodes
+        (:meth:`~sim_tactile.plates.define.surface.Surface.y_invariant` at the nodes): then nodes
         with equal x, z, radius and margin get bit-identical depths."""
         return self.surface.y_invariant(bone_y + self.local[:, 1])
 
@@ -155,7 +155,7 @@ def interp_at(q, xp, fp, left, right):
 @njit
 def profile_surface_at(x, y, px, pz, ax, ay, sx, sy):
     """A rough plate's surface height at (x, y), as
-    :meth:`ProfileSurface.height <sim_tactile.plates.surface.Surface.height>` gives it: the
+    :meth:`ProfileSurface.height <sim_tactile.plates.define.surface.Surface.height>` gives it: the
     profile (:func:`interp_at`) over the textured area ``|x| <= ax, |y| <= ay``, the base (0)
     elsewhere on the plate, NaN beyond ``sx, sy``."""
     if abs(x) > sx or abs(y) > sy:
@@ -167,7 +167,7 @@ def profile_surface_at(x, y, px, pz, ax, ay, sx, sy):
 
 @njit
 def map_height_at(x, y, z, pixel):
-    """:func:`~sim_tactile.plates.surface.map_height` at one point, in its operation order
+    """:func:`~sim_tactile.plates.define.surface.map_height` at one point, in its operation order
     (the same number bit for bit, tested): the cell by ``floor``, clipped to the map's edge
     cells, and the bilinear blend of its corners, along x first."""
     ny, nx = z.shape
@@ -185,7 +185,7 @@ def map_height_at(x, y, z, pixel):
 @njit
 def map_surface_at(x, y, z, pixel, ax, ay, sx, sy):
     """A height-map plate's surface height at (x, y), as
-    :meth:`MapSurface.height <sim_tactile.plates.surface.Surface.height>` gives it: the map
+    :meth:`MapSurface.height <sim_tactile.plates.define.surface.Surface.height>` gives it: the map
     over its span ``|x| <= ax, |y| <= ay`` (NaN where it holds no material), the base (0)
     elsewhere on the plate, NaN beyond ``sx, sy``."""
     if abs(x) > sx or abs(y) > sy:

@@ -25,7 +25,7 @@ import mujoco
 import numpy as np
 
 from ..._jit import njit
-from ...plates import features
+from ...plates import surface_of
 from .height import report_depth
 from .shapes import cylinder_distance, ridge_distance
 
@@ -67,7 +67,7 @@ class PrimitiveCollider:
     A node's depth is its sphere's signed distance to the nearest plate geom, exact (tested
     against MuJoCo's collider), but where its centre lies over an upright geom's footprint and
     below that geom's top surface: there it is the depth below the top surface at the centre,
-    as the plate's height map has it (:func:`~sim_tactile.plates.height_at`), which the skin
+    as the plate's height map has it (:meth:`~sim_tactile.plates.Surface.height`), which the skin
     model and the references it is measured against take."""
 
     compiled = True
@@ -171,7 +171,7 @@ class PrimitiveCollider:
                 mat[k] = d.geom_xmat[g].reshape(3, 3)
                 continue
             if t == _PRISM and fs is None and plate is not None:
-                fs = features(plate)  # once, for every mesh geom
+                fs = surface_of(plate).features  # once, for every mesh geom
             ridge = _drafted_ridge(m, d, g, fs) if t == _PRISM else None
             if ridge is None:
                 return None
@@ -268,7 +268,7 @@ def _half_extents(kind: np.ndarray, mat: np.ndarray, size: np.ndarray) -> np.nda
 
 def _drafted_ridge(m: mujoco.MjModel, d: mujoco.MjData, g: int, fs):
     """A mesh geom that is one of the plate's drafted ridges (its features ``fs``; by the
-    geom's name ``fNNNN``, as :func:`~sim_tactile.plates.mjcf.plate_spec` names it) as ``(pos,
+    geom's name ``fNNNN``, as :func:`~sim_tactile.plates.make.mjcf.plate_spec` names it) as ``(pos,
     mat, size, top)``: its mid-height centre in the world, the plate body's frame (unrotated),
     its bottom half-widths and half-height, its top half-width. None if it is not one, or the
     plate is rotated."""

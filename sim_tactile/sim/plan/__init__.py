@@ -4,3 +4,21 @@ physics (:mod:`.measured_errors`), and the lines of the grids that follow the pl
 (:mod:`.lattices`). Nothing here loads MuJoCo or numba (an import-linter contract forbids
 both, and a test imports the planner in a fresh process), so a slide can be described and
 planned without the simulator."""
+
+from __future__ import annotations
+
+from ..._lazy import lazy_exports
+
+#: The public names and the module that defines each (loaded on first use).
+_EXPORTS = {
+    "Protocol": ".protocol",
+    "SlideWindow": ".protocol",
+    "ProbeRig": ".rig",
+    "Fidelity": ".fidelity",
+    "choose_fidelity": ".fidelity",
+    "StepOptions": ".options",
+    "Slide": ".slide",
+}
+
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -8,7 +8,7 @@
 
 ``auto`` (default) picks L1 with the coarsest node pitch and time step that resolve the
 scene: the pitch is at most 1/2.5 of the smallest feature width or gap (the plate's
-:attr:`~sim_tactile.plates.surface.Surface.feature_scale_m`; a height map's read off its samples) and half the smallest taxel; the time
+:attr:`~sim_tactile.plates.define.surface.Surface.feature_scale_m`; a height map's read off its samples) and half the smallest taxel; the time
 step lets each feature take at least 20 steps to cross and stays within the skin-bone
 coupling's stability limit. It warns when the taxels are coarser than the texture,
 when a forced pitch or time step is too coarse, and when the plate's roughness lies below what
@@ -40,8 +40,8 @@ import math
 from dataclasses import asdict, dataclass, field
 
 from ... import _validate as v
-from ...plates.spec import Plate
-from ...plates.surface import surface_of
+from ...plates.define.spec import Plate
+from ...plates.define.surface import surface_of
 from ...scene.nodes import skin_grid
 from .lattices import anchor_refusals, anchored_cells, skin_refusals, static_cells
 from .measured_errors import (

@@ -1,5 +1,5 @@
 """The planning geometry of the grids that follow the plate's walls (the plate's
-:attr:`~sim_tactile.plates.surface.Surface.walls`): which lines cut the
+:attr:`~sim_tactile.plates.define.surface.Surface.walls`): which lines cut the
 patches of the clipped grid (:mod:`~sim_tactile.sim.skin.clipped`), which lines make the
 lattice anchored to the walls (:mod:`~sim_tactile.sim.skin.anchored`), how many cells each
 has, and which scenes they serve. The planner (:mod:`.fidelity`) counts cells and asks for
@@ -14,8 +14,8 @@ import math
 import numpy as np
 
 from ...errors import ConfigError
-from ...plates.spec import Plate
-from ...plates.surface import surface_of
+from ...plates.define.spec import Plate
+from ...plates.define.surface import surface_of
 from ...scene.nodes import SkinGrid
 
 #: Lines closer than this to one already there are not added [m]: a patch thinner than it
@@ -102,7 +102,7 @@ def check_clippable(level: str, finger, quasi_static: bool = True) -> None:
 # ---------------------------------------------------------------- the anchored lattice
 def period_of(plate: Plate) -> float:
     """The period [m] along the slide over which the lattice repeats: the texture's
-    (:attr:`~sim_tactile.plates.surface.Surface.period_m`), or :data:`SOLO_PERIOD_M` for a
+    (:attr:`~sim_tactile.plates.define.surface.Surface.period_m`), or :data:`SOLO_PERIOD_M` for a
     single column."""
     return surface_of(plate).period_m or SOLO_PERIOD_M
 

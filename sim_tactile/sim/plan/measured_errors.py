@@ -184,7 +184,7 @@ def stand_in(plate):
     of a ``textures20-long`` preset (the same features under the pad, on a longer strip), or
     None. Only the preset itself is matched (by its content, not its name alone)."""
     from ...errors import UnknownNameError
-    from ...plates.presets import LONG_FAMILY, get_plate
+    from ...plates.read.presets import LONG_FAMILY, get_plate
 
     name = plate.name or ""
     if not name.startswith(LONG_FAMILY):

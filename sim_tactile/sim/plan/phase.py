@@ -24,8 +24,8 @@ import numpy as np
 
 from ...cache import memoized
 from ...errors import ConfigError
-from ...plates.spec import Plate
-from ...plates.surface import surface_of
+from ...plates.define.spec import Plate
+from ...plates.define.surface import surface_of
 from .protocol import Protocol, SlideWindow
 
 #: Reach beyond the pad's patch [m] within which the plate must repeat for the table to

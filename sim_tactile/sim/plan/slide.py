@@ -20,8 +20,8 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
-from ...plates.spec import Plate
-from ...plates.surface import Surface, surface_of
+from ...plates.define.spec import Plate
+from ...plates.define.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
 from .fidelity import Fidelity, choose_fidelity, solved_spectrally
 from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, keyed
@@ -80,7 +80,7 @@ class Slide:
 
     @property
     def surface(self) -> Surface:
-        """The plate's surface (:func:`~sim_tactile.plates.surface.surface_of`): what the
+        """The plate's surface (:func:`~sim_tactile.plates.define.surface.surface_of`): what the
         planner asks of the plate."""
         return surface_of(self.plate)
 

@@ -49,8 +49,8 @@ import numpy as np
 
 from ..._jit import njit
 from ...errors import PhysicsError
-from ...plates.spec import Plate
-from ...plates.surface import surface_of
+from ...plates.define.spec import Plate
+from ...plates.define.surface import surface_of
 from ..plan.lattices import PAD_SHAPE_CODES, check_anchorable, period_lines, row_lines
 from .clipped import rect_entry
 from .contact import MAX_ITER, REFRESH, TOL_REL

@@ -42,8 +42,8 @@ from scipy.linalg import lu_factor, lu_solve
 
 from ..._jit import njit
 from ...errors import PhysicsError
-from ...plates.spec import Plate
-from ...plates.surface import surface_of
+from ...plates.define.spec import Plate
+from ...plates.define.surface import surface_of
 from ...scene.elastic import subsurface_weights
 from ...scene.nodes import SkinGrid
 from ..plan.lattices import merge_lines, static_lines

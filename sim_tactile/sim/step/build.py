@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ...plates import Plate, height_at
+from ...plates import Plate, surface_of
 from ...scene.model import build_scene
 from ...scene.nodes import SkinGrid, skin_grid
 from ..collide.choose import make_collider
@@ -94,4 +94,4 @@ def runner_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache)
 
 
 def _plate_heights(plate: Plate, grid: SkinGrid, x: float, y: float) -> np.ndarray:
-    return height_at(plate, grid.xy[:, 0] + x, grid.xy[:, 1] + y) - grid.z
+    return surface_of(plate).height(grid.xy[:, 0] + x, grid.xy[:, 1] + y) - grid.z

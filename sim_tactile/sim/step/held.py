@@ -20,7 +20,7 @@ the taxel loads there. One step, two implementations with the same interface
     (ridges across the slide), or the pad lies inside a rough profile's y extent, a node's
     depth does not depend on its y; the collider computes one node per distinct (x, z,
     radius, margin), the rest are copies (bit-identical). A height map never reduces
-    (:meth:`~sim_tactile.plates.surface.Surface.y_invariant`): its collider computes every
+    (:meth:`~sim_tactile.plates.define.surface.Surface.y_invariant`): its collider computes every
     node;
   - **mirror** halving: when, in addition, the node grid is symmetric about the pad's centre
     line (nodes at y and -y alike), the depth map, and so the unique contact solution, are

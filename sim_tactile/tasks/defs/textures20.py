@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from ...plates import preset_names
-from ...plates.presets import LONG_FAMILY
+from ...plates.read.presets import LONG_FAMILY
 from ...sim.plan.protocol import Protocol
 from ...slides import SlideSet
 from ..registry import BenchScene, TaskSpec, register

@@ -20,9 +20,9 @@ from typing import Literal
 
 import numpy as np
 
-from .. import _validate as v
-from ..errors import ConfigError
-from ..hashing import content_hash
+from ... import _validate as v
+from ...errors import ConfigError
+from ...hashing import content_hash
 from .geometry import Feature, bump_features, grating_features, ridge_features
 
 #: Tallest feature a plate may carry [m]: the finger pads of the scenes are at most 10 mm

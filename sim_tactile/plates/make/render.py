@@ -14,8 +14,8 @@ import math
 
 import numpy as np
 
-from .features import height_at
-from .spec import HeightMap, Plate, Roughness
+from ..define.spec import Plate
+from ..define.surface import Surface, surface_of
 
 #: Raster step of the preview [m].
 PREVIEW_STEP_M = 1e-4
@@ -26,12 +26,12 @@ MAX_PREVIEW_CELLS = 1_000_000
 HOLE_RGB = (0.85, 0.10, 0.55)
 
 
-def _axes(plate: Plate) -> tuple[np.ndarray, np.ndarray]:
+def _axes(plate: Plate, surface: Surface) -> tuple[np.ndarray, np.ndarray]:
     """The raster's x and y [m]: every PREVIEW_STEP_M, or a height map's samples."""
     half_x = min(plate.length_m, plate.area_length_m + 0.012) / 2
     half_y = plate.width_m / 2
-    t = plate.texture
-    if not isinstance(t, HeightMap):
+    t = surface.height_map
+    if t is None:
         return (
             np.arange(-half_x, half_x + 1e-12, PREVIEW_STEP_M),
             np.arange(-half_y, half_y + 1e-12, PREVIEW_STEP_M),
@@ -58,10 +58,11 @@ def preview_png(plate: Plate, *, dpi: int = 110) -> bytes:
     from matplotlib.colors import LightSource, Normalize
     from matplotlib.patches import Patch
 
-    rough = isinstance(plate.texture, Roughness)
+    surface = surface_of(plate)
+    rough = surface.profile is not None
     unit, scale = ("um", 1e6) if rough else ("mm", 1e3)
-    xs, ys = _axes(plate)
-    z = height_at(plate, xs[None, :], ys[:, None]) * scale
+    xs, ys = _axes(plate, surface)
+    z = surface.height(xs[None, :], ys[:, None]) * scale
     holes = np.isnan(z)
     lo, hi = (float(np.min(z[~holes])), float(np.max(z[~holes]))) if not holes.all() else (0, 0)
     norm = Normalize(lo, hi) if hi > lo else Normalize(lo - 0.5, lo + 0.5)  # a flat plate
@@ -80,8 +81,8 @@ def preview_png(plate: Plate, *, dpi: int = 110) -> bytes:
     ext = (xs[0] * 1e3, xs[-1] * 1e3, ys[0] * 1e3, ys[-1] * 1e3)
     ax0.imshow(rgb, origin="lower", extent=ext, interpolation="nearest")
     if holes.any():
-        t = plate.texture
-        n = f" ({int(np.isnan(t.z).sum())} samples)" if isinstance(t, HeightMap) else ""
+        t = surface.height_map
+        n = f" ({int(np.isnan(t.z).sum())} samples)" if t is not None else ""
         ax0.legend(
             handles=[Patch(color=HOLE_RGB, label=f"no material{n}")],
             loc="upper right",

@@ -14,7 +14,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from ..errors import GeometryError
+from ...errors import GeometryError
 
 #: Default probe radius [m].
 PROBE_RADIUS_M = 1e-6

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cache import register_memo
+from ...cache import register_memo
 from .geometry import Feature
 
 #: The scales of the maps seen in this process, by their samples' SHA-256 and pixel.

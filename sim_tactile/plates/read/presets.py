@@ -1,5 +1,5 @@
 """The preset plates, by their released names (``sim-tactile plates list``): each a plate
-file of the project's ``assets/plates`` (:mod:`~sim_tactile.plates.files`; installed as ``sim_tactile.assets``),
+file of the project's ``assets/plates`` (:mod:`~sim_tactile.plates.read.files`; installed as ``sim_tactile.assets``),
 in the order of its ``index.toml``. Every dimension a paper leaves open was chosen as this
 module says, once, and is listed in the manual's plate table; the files hold the numbers.
 
@@ -35,10 +35,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..errors import UnknownNameError
-from ..toml_text import asset_data, asset_path
+from ...errors import UnknownNameError
+from ...toml_text import asset_data, asset_path
+from ..define.spec import Plate
 from .files import plate_from_data
-from .spec import Plate
 
 MM = 1e-3
 
@@ -75,20 +75,20 @@ def preset_names() -> list[str]:
 def is_plate_file(ref: str | Path) -> bool:
     """Whether ``ref`` names a file (a plate file, ``.toml``, or a user's CAD, script or
     height map, :mod:`.user`) rather than a preset."""
-    from .user import is_user_plate
+    from ..parts.user import is_user_plate
 
     return str(ref).lower().endswith(".toml") or is_user_plate(ref)
 
 
 def get_plate(name: str | Path) -> Plate:
     """The preset plate called ``name`` (e.g. ``"finger7/ridges-4"``), the plate of a plate
-    file (a path ending in ``.toml``, :mod:`~sim_tactile.plates.files`), or of a user's STEP, STL, CadQuery
+    file (a path ending in ``.toml``, :mod:`~sim_tactile.plates.read.files`), or of a user's STEP, STL, CadQuery
     script or height map (a reference of :mod:`.user`, e.g. ``"knurl.py:make"``)."""
     if str(name).lower().endswith(".toml"):
         from .files import load_plate_file
 
         return load_plate_file(name)
-    from .user import is_user_plate, load_user_plate
+    from ..parts.user import is_user_plate, load_user_plate
 
     if is_user_plate(name):
         return load_user_plate(str(name))

@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..cache import memoized
+from ...cache import memoized
 from . import scales
 from .geometry import Feature
 from .spec import HeightMap, Plate, Roughness
@@ -82,6 +82,8 @@ class Surface:
     profile: tuple[np.ndarray, np.ndarray] | None = None
     #: its arithmetic mean deviation Ra [m] (None: no micro-roughness)
     ra_m: float | None = None
+    #: the height map whose samples the surface is (None: not a sampled surface)
+    height_map: HeightMap | None = None
 
     def __init__(self, plate: Plate) -> None:
         self.plate = plate
@@ -233,23 +235,23 @@ class MapSurface(Surface):
         ex, ey = t.extent_m
         z = np.ascontiguousarray(t.z, dtype=np.float64)
         self.arrays = MapArrays(z, float(t.pixel_m), ex / 2, ey / 2, self._off_x, self._off_y)
-        self._texture = t
+        self.height_map = t
 
     def _top(self, x, y, near):
         a = self.arrays
         on_map = (np.abs(x) <= a.ax) & (np.abs(y) <= a.ay)
-        return np.where(on_map, map_height(x, y, self._texture.z, self._texture.pixel_m), 0.0)
+        return np.where(on_map, map_height(x, y, self.height_map.z, self.height_map.pixel_m), 0.0)
 
     @property
     def feature_scale_m(self) -> float | None:
-        return scales.map_scales(self._texture)[0]
+        return scales.map_scales(self.height_map)[0]
 
     @property
     def period_m(self) -> float | None:
-        return scales.map_scales(self._texture)[1]
+        return scales.map_scales(self.height_map)[1]
 
     def map_samples(self) -> dict[str, np.ndarray]:
-        return {self._texture.sha256: self._texture.z}
+        return {self.height_map.sha256: self.height_map.z}
 
 
 @memoized("plate surfaces", maxsize=128)

@@ -17,10 +17,10 @@ import mujoco
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from ..errors import GeometryError
-from .features import features, roughness_profile
-from .geometry import Feature
-from .spec import HeightMap, Plate, Roughness
+from ...errors import GeometryError
+from ..define.geometry import Feature
+from ..define.spec import HeightMap, Plate
+from ..define.surface import Surface, surface_of
 
 #: Largest height error allowed when the height field is made coarser than the profile: a
 #: fifth of the 0.01 mm agreement demanded between collider and CAD [m], and at most a tenth
@@ -73,13 +73,14 @@ def plate_spec(plate: Plate) -> mujoco.MjSpec:
     cls.geom.rgba = _RGBA
     body = spec.worldbody.add_body(name="plate")
     L, W, T = plate.length_m / 2, plate.width_m / 2, plate.thickness_m
-    if isinstance(plate.texture, Roughness):
-        _add_roughness(spec, body, cls, plate)
-    elif isinstance(plate.texture, HeightMap):
-        _add_heightmap(spec, body, cls, plate)
+    surface = surface_of(plate)
+    if surface.profile is not None:
+        _add_roughness(spec, body, cls, plate, surface)
+    elif surface.height_map is not None:
+        _add_heightmap(spec, body, cls, plate, surface.height_map)
     else:
         _add_box(body, cls, "base", (-L, -W, -T), (L, W, 0.0))
-    for i, f in enumerate(features(plate)):
+    for i, f in enumerate(surface.features):
         name = f"f{i:04d}"
         if f.kind == "box":
             body.add_geom(
@@ -135,20 +136,20 @@ def hfield_profile(px: np.ndarray, pz: np.ndarray, max_error_m: float = HFIELD_M
     return px, pz
 
 
-def _add_roughness(spec, body, cls, plate: Plate) -> None:
-    """The roughness profile as a two-row height field (:func:`_add_field`)."""
-    tol = min(HFIELD_MAX_ERROR_M, HFIELD_MAX_ERROR_RA * plate.texture.ra_m)
-    px, pz = hfield_profile(*roughness_profile(plate), max_error_m=tol)
+def _add_roughness(spec, body, cls, plate: Plate, surface: Surface) -> None:
+    """The surface's roughness profile as a two-row height field (:func:`_add_field`)."""
+    tol = min(HFIELD_MAX_ERROR_M, HFIELD_MAX_ERROR_RA * surface.ra_m)
+    px, pz = hfield_profile(*surface.profile, max_error_m=tol)
     area = (plate.area_length_m / 2, plate.area_width_m / 2)
     _add_field(spec, body, cls, plate, np.stack([pz, pz]), "roughness", area)
 
 
-def _add_heightmap(spec, body, cls, plate: Plate) -> None:
+def _add_heightmap(spec, body, cls, plate: Plate, height_map: HeightMap) -> None:
     """A height map's samples as the field, one elevation each (MuJoCo's rows run along +y,
     as the map's do); samples without material lie on the field's floor."""
-    z = np.asarray(plate.texture.z)
+    z = np.asarray(height_map.z)
     floor = float(np.nanmin(z))
-    half = (plate.texture.extent_m[0] / 2, plate.texture.extent_m[1] / 2)
+    half = (height_map.extent_m[0] / 2, height_map.extent_m[1] / 2)
     _add_field(spec, body, cls, plate, np.where(np.isnan(z), floor, z), "heightmap", half)
 
 

@@ -24,9 +24,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import ConfigError
-from ..toml_text import read_file, write_file
-from .spec import Plate
+from ...errors import ConfigError
+from ...toml_text import read_file, write_file
+from ..define.spec import Plate
 
 FORMAT = 1
 

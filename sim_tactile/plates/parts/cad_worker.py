@@ -1,7 +1,7 @@
 """The separate process that reads a user's STEP file or runs a user's CadQuery script and
 writes the part's tessellation (vertices in the part's own units, triangles) as a ``.npz``.
 
-Run only by :mod:`.user`, as ``python -m sim_tactile.plates.cad_worker KIND SOURCE OUT
+Run only by :mod:`.user`, as ``python -m sim_tactile.plates.parts.cad_worker KIND SOURCE OUT
 [FUNCTION]`` with ``KIND`` ``step`` or ``script``, under a time limit (:mod:`.cad_run`: in its own session, killed whole at the limit). A
 script is code: it runs here, never in the caller's process, and only when the user names
 it. This process makes itself the reaper of its orphans and, before it exits, kills every
@@ -62,7 +62,7 @@ def main(argv: list[str]) -> int:
 
 
 def _main(argv: list[str]) -> int:
-    from .cad import STL_ANGULAR_TOLERANCE_RAD, STL_TOLERANCE_MM
+    from .cad_run import STL_ANGULAR_TOLERANCE_RAD, STL_TOLERANCE_MM
 
     kind, source, out = argv[:3]
     function = argv[3] if len(argv) > 3 else "plate"

@@ -50,8 +50,9 @@ from urllib.parse import unquote
 
 import numpy as np
 
-from ..cache import register_memo
-from ..errors import ConfigError
+from ...cache import register_memo
+from ...errors import ConfigError
+from ..define.spec import HeightMap, Plate
 from . import map_files
 from .mesh_map import (
     DEFAULT_PIXEL_M,
@@ -61,7 +62,6 @@ from .mesh_map import (
     describe_nan,
     sample_part,
 )
-from .spec import HeightMap, Plate
 
 SUFFIXES = {
     ".stl": "stl",
@@ -346,7 +346,7 @@ def _run_worker(src: Source, path: Path, where: str):
         cmd = [
             sys.executable,
             "-m",
-            "sim_tactile.plates.cad_worker",
+            "sim_tactile.plates.parts.cad_worker",
             src.kind,
             str(path.resolve()),
             str(out),

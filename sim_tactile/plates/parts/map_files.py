@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError
-from .spec import MAX_HEIGHTMAP_SAMPLES
+from ...errors import ConfigError
+from ..define.spec import MAX_HEIGHTMAP_SAMPLES
 
 #: The largest file read as a part or a height map [bytes]: the largest map (16 M float64
 #: samples, 128 MB) with its header, or a binary STL of 2.6 M triangles (50 bytes each), far

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .spec import Plate
+from ..define.spec import Plate
 
 M_TO_MM = 1000.0
 MAX_STL_CELLS = 250_000
@@ -74,7 +74,7 @@ def stl_bytes(plate: Plate) -> bytes:
     """Binary STL of :func:`map_solid` [mm]; checked closed."""
     import trimesh
 
-    from ..errors import GeometryError
+    from ...errors import GeometryError
 
     v, f = map_solid(plate)
     mesh = trimesh.Trimesh(v, f, process=True, validate=True)

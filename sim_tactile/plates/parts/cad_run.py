@@ -8,6 +8,9 @@ every descendant of it (found through ``/proc`` on Linux, where the worker also 
 the reaper of its orphans, so that a grandchild that started a session of its own still
 descends from it) is stopped, until no new one appears, and then all are killed. Where
 ``/proc`` is missing, the process group is killed.
+
+It also holds the tolerances every CAD solid is tessellated with, a user's part in the worker
+as a plate's STL (:mod:`sim_tactile.plates.make.cad`): they sit here, below both.
 """
 
 from __future__ import annotations
@@ -18,6 +21,11 @@ import subprocess
 import time
 from pathlib import Path
 
+#: STL tessellation: linear tolerance [mm] and angular tolerance [rad]. docs/physics.md: the
+#: angular one controls curved features; 0.15 rad gives a sag of R (1 - cos 0.075) = 5.6 um
+#: on a 2 mm hemisphere, the linear one caps it at 5 um.
+STL_TOLERANCE_MM = 0.005
+STL_ANGULAR_TOLERANCE_RAD = 0.15
 #: How much of the worker's stderr is read back for its reason [bytes].
 STDERR_TAIL_BYTES = 65536
 #: Rounds of stopping new processes before the kill (each finds the children forked since).

@@ -14,7 +14,7 @@ from typing import Literal
 
 import numpy as np
 
-from ..errors import ConfigError
+from ...errors import ConfigError
 
 #: Slack when checking that a feature stays inside the textured area [m].
 FIT_TOL_M = 1e-9

@@ -14,12 +14,12 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy import ndimage
 
-from ..cache import ArtefactCache
+from ...cache import ArtefactCache
+from ..define.spec import Plate
+from ..define.surface import surface_of
+from ..parts.zbuffer import zbuffer
 from .build import build
-from .features import height_at
 from .probe import ColliderProbe
-from .spec import Plate, Roughness
-from .zbuffer import zbuffer
 
 MM = 1e-3
 #: "Away from walls": farther than this from any jump or slope steeper than 60 degrees [m].
@@ -47,11 +47,12 @@ class ViewReport:
 
 def away_from_walls(plate: Plate, X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     """True where the analytic surface has no jump or steep slope within the clearance."""
-    z0 = height_at(plate, X, Y)
+    height = surface_of(plate).height
+    z0 = height(X, Y)
     ok = np.ones(X.shape, bool)
     for ang in np.linspace(0, 2 * np.pi, 16, endpoint=False):
         for r in (WALL_CLEARANCE_M / 3, WALL_CLEARANCE_M):
-            z = height_at(plate, X + r * np.cos(ang), Y + r * np.sin(ang))
+            z = height(X + r * np.cos(ang), Y + r * np.sin(ang))
             ok &= np.abs(z - z0) <= STEEP_SLOPE * r
     return ok
 
@@ -77,20 +78,21 @@ def compare_views(plate: Plate, *, cache: ArtefactCache | None = None) -> ViewRe
     res = build(plate, kinds=("stl", "mjcf"), cache=cache)
     stl = res.files["stl"].read_bytes()
     probe = ColliderProbe(res.files["mjcf"].read_text())
-    if isinstance(plate.texture, Roughness):
+    surface = surface_of(plate)
+    if surface.profile is not None:
         return _compare_roughness(plate, stl, probe)
     hx, hy = plate.area_length_m / 2 + 1 * MM, plate.area_width_m / 2 - 0.1 * MM
     xs = np.arange(-hx, hx, FINE_STEP_M) + 1.3e-6  # offsets keep nodes off feature edges
     ys = np.arange(-hy, hy, FINE_STEP_M) + 1.7e-6
     X, Y = np.meshgrid(xs, ys)
-    z_an = height_at(plate, X, Y)
+    z_an = surface.height(X, Y)
     z_stl = stl_heights(stl, xs, ys)
     xc = np.arange(-hx, hx, PROBE_STEP_M) + 2.3e-6
     yc = np.arange(-hy, hy, PROBE_STEP_M) + 3.1e-6
     Xc, Yc = np.meshgrid(xc, yc)
     z_col = probe.heights(Xc, Yc)
     z_stl_c = stl_heights(stl, xc, yc)
-    z_an_c = height_at(plate, Xc, Yc)
+    z_an_c = surface.height(Xc, Yc)
     peak = float(np.nanmax(z_an))
     top = np.unravel_index(np.argmax(z_an), z_an.shape)  # where the definition peaks
     ok = away_from_walls(plate, X, Y)
@@ -122,14 +124,15 @@ def compare_views(plate: Plate, *, cache: ArtefactCache | None = None) -> ViewRe
 
 
 def _compare_roughness(plate: Plate, stl: bytes, probe: ColliderProbe) -> ViewReport:
+    surface = surface_of(plate)
     half = plate.area_length_m / 2 - WALL_CLEARANCE_M
     xs = np.linspace(-half, half, 20001)
     ys = np.array([-5 * MM, 0.0, 7 * MM])
-    z_an = height_at(plate, xs[None, :], ys[:, None])
+    z_an = surface.height(xs[None, :], ys[:, None])
     z_stl = stl_heights(stl, xs, ys)
     xc = np.linspace(-half, half, 1501)
     z_col = probe.heights(xc, 0.0)
-    z_an_c = height_at(plate, xc, 0.0)
+    z_an_c = surface.height(xc, 0.0)
     return ViewReport(
         name=plate.name or plate.hash,
         counts={},
@@ -144,7 +147,7 @@ def _compare_roughness(plate: Plate, stl: bytes, probe: ColliderProbe) -> ViewRe
         },
         checked_fraction=1.0,
         ra_m={
-            "target": plate.texture.ra_m,
+            "target": surface.ra_m,
             "analytic": max(_ra(r) for r in z_an),
             "analytic_min": min(_ra(r) for r in z_an),
             "stl": max(_ra(r) for r in z_stl),

@@ -12,17 +12,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import GeometryError
-from .features import features, roughness_profile
-from .geometry import Feature
-from .spec import Plate, Roughness
+from ...errors import GeometryError
+from ..define.geometry import Feature
+from ..define.spec import Plate
+from ..define.surface import surface_of
+from ..parts.cad_run import STL_ANGULAR_TOLERANCE_RAD, STL_TOLERANCE_MM
 
 M_TO_MM = 1000.0
-#: STL tessellation: linear tolerance [mm] and angular tolerance [rad]. docs/physics.md: the
-#: angular one controls curved features; 0.15 rad gives a sag of R (1 - cos 0.075) = 5.6 um
-#: on a 2 mm hemisphere, the linear one caps it at 5 um.
-STL_TOLERANCE_MM = 0.005
-STL_ANGULAR_TOLERANCE_RAD = 0.15
 
 
 def _cq():
@@ -73,9 +69,10 @@ def build_solid(plate: Plate):
     s = M_TO_MM
     L, W, T = plate.length_m * s, plate.width_m * s, plate.thickness_m * s
     base = cq.Workplane("XY").box(L, W, T, centered=(True, True, False)).translate((0, 0, -T))
-    if isinstance(plate.texture, Roughness):
-        return _roughness_solid(plate, base)
-    feats = features(plate)
+    surface = surface_of(plate)
+    if surface.profile is not None:
+        return _roughness_solid(plate, surface.profile, base)
+    feats = surface.features
     if not feats:
         return base.val()
     comp = cq.Compound.makeCompound([_feature_solid(f) for f in feats])
@@ -106,12 +103,12 @@ def _profile_prism(px_mm, pz_mm, floor_mm: float, x_ends_mm: tuple[float, float]
     return cq.Shape.cast(BRepPrimAPI_MakePrism(face, gp_Vec(0, 2 * half_w_mm, 0)).Shape())
 
 
-def _roughness_solid(plate: Plate, base):
+def _roughness_solid(plate: Plate, profile: tuple[np.ndarray, np.ndarray], base):
     """One prism when the textured area spans the plate's width (the presets); otherwise the
-    base with a pocket under the textured area, filled by the profile prism."""
+    base with a pocket under the textured area, filled by the profile prism ``(x, z)`` [m]."""
     cq = _cq()
     s = M_TO_MM
-    px, pz = roughness_profile(plate)
+    px, pz = profile
     px_mm, pz_mm = px * s, pz * s
     L, T = plate.length_m * s / 2, plate.thickness_m * s
     if plate.area_width_m >= plate.width_m:

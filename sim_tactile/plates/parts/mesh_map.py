@@ -35,8 +35,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConfigError
-from .spec import MAX_FEATURE_HEIGHT_M, MAX_HEIGHTMAP_SAMPLES
+from ...errors import ConfigError
+from ..define.spec import MAX_FEATURE_HEIGHT_M, MAX_HEIGHTMAP_SAMPLES
 from .zbuffer import zbuffer
 
 #: A user plate's footprint, each side [m].

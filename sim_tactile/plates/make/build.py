@@ -13,13 +13,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cache import ArtefactCache, atomic_write
-from ..errors import ConfigError
-from ..hashing import code_version
-from . import features as _features
-from .presets import get_plate
-from .spec import Plate
+from ...cache import ArtefactCache, atomic_write
+from ...errors import ConfigError
+from ...hashing import code_version
+from ..define.spec import Plate
+from ..define.surface import surface_of
+from ..parts.cad_run import STL_ANGULAR_TOLERANCE_RAD, STL_TOLERANCE_MM
+from ..read.presets import get_plate
 
+#: The artefacts :func:`~sim_tactile.plates.build` makes by default: STL and STEP (mm), MJCF
+#: and the preview PNG.
 KINDS = ("stl", "step", "mjcf", "png")
 ALL_KINDS = (*KINDS, "heightmap")
 _EXT = {"stl": "stl", "step": "step", "mjcf": "xml", "png": "png", "heightmap": "npy"}
@@ -30,33 +33,35 @@ HEIGHTMAP_STEP_M = 5e-5
 #: The module that makes each kind of artefact, and the libraries whose versions it depends
 #: on: the artefact's code version is the source of everything that module imports.
 _MAKERS = {
-    "stl": ("cad", ("cadquery",)),
-    "step": ("cad", ("cadquery",)),
-    "map_stl": ("map_mesh", ("cadquery", "trimesh", "numpy")),
-    "map_step": ("map_mesh", ("cadquery", "trimesh", "numpy")),
-    "mjcf": ("mjcf", ("mujoco", "numpy", "scipy")),
-    "png": ("render", ("matplotlib", "numpy")),
-    "heightmap": ("features", ("numpy",)),
+    "stl": ("make.cad", ("cadquery",)),
+    "step": ("make.cad", ("cadquery",)),
+    "map_stl": ("make.map_mesh", ("cadquery", "trimesh", "numpy")),
+    "map_step": ("make.map_mesh", ("cadquery", "trimesh", "numpy")),
+    "mjcf": ("make.mjcf", ("mujoco", "numpy", "scipy")),
+    "png": ("make.render", ("matplotlib", "numpy")),
+    "heightmap": ("define.surface", ("numpy",)),
 }
+#: the package the makers' names are relative to
+_PLATES = __package__.rpartition(".")[0]
 
 
 def _code_version(kind: str) -> str:
     module, libraries = _MAKERS[kind]
-    return code_version(f"{__package__}.{module}", libraries=libraries)
+    return code_version(f"{_PLATES}.{module}", libraries=libraries)
+
+
+_CAD_SETTINGS = {"units": "mm", "tol_mm": STL_TOLERANCE_MM, "ang_rad": STL_ANGULAR_TOLERANCE_RAD}
+#: What else an artefact of each kind depends on (in its key): the tessellation, the raster.
+_SETTINGS = {"stl": _CAD_SETTINGS, "step": _CAD_SETTINGS, "heightmap": {"step_m": HEIGHTMAP_STEP_M}}
 
 
 def _settings(kind: str) -> dict:
-    if kind in ("stl", "step"):
-        from .cad import STL_ANGULAR_TOLERANCE_RAD, STL_TOLERANCE_MM
-
-        return {"units": "mm", "tol_mm": STL_TOLERANCE_MM, "ang_rad": STL_ANGULAR_TOLERANCE_RAD}
-    if kind == "heightmap":
-        return {"step_m": HEIGHTMAP_STEP_M}
-    return {}
+    return _SETTINGS.get(kind, {})
 
 
 def artefact_key(plate: Plate, kind: str) -> str:
-    maker = f"map_{kind}" if kind in ("stl", "step") and plate.texture.kind == "heightmap" else kind
+    sampled = kind in ("stl", "step") and surface_of(plate).height_map is not None
+    maker = f"map_{kind}" if sampled else kind
     return ArtefactCache.key(
         {
             "plate": plate.params(),
@@ -81,7 +86,7 @@ def _heightmap_bytes(plate: Plate) -> bytes:
     import io
 
     xs, ys = heightmap_grid(plate)
-    z = _features.height_at(plate, xs[None, :], ys[:, None])
+    z = surface_of(plate).height(xs[None, :], ys[:, None])
     buf = io.BytesIO()
     np.save(buf, z.astype(np.float64), allow_pickle=False)
     return buf.getvalue()
@@ -149,7 +154,7 @@ def build(
     solid = None
     for k in missing:
         t = time.perf_counter()
-        if k in ("stl", "step") and plate.texture.kind == "heightmap":
+        if k in ("stl", "step") and surface_of(plate).height_map is not None:
             from . import map_mesh
 
             data = map_mesh.stl_bytes(plate) if k == "stl" else map_mesh.step_bytes(plate)
