@@ -1,0 +1,312 @@
+"""The batched contact solve (torch, CPU or GPU) against the numpy solve, pose for pose, on
+real poses of every task scene whose skin is solved spectrally.
+
+    python perf/bench_batched_solve.py [--scenes icub-grating,icub-boxes,finger7-v2]
+        [--poses 512] [--batches 1,8,64,512] [--tols 1e-10,1e-4] [--dtypes float64,float32]
+        [--devices cpu,cuda] [--threads 1] [--min-poses 64] [--cold]
+        [--save-poses DIR | --load-poses DIR] [--json]
+
+**The poses.** For each scene, one slide of the task (its first slide on the plate named
+in :data:`SCENES`) is prepared (scene, approach, press) by the package's own driver, then
+slid at the protocol's speed for ``--poses`` steps of its held step. Every contact solve
+that held step asks of its spectral skin is recorded: the node depths (n,), the pressures'
+total, and the solver's last pressures, the warm start it had (the slide's own). A pose is
+then the problem a driver stepping slides in lockstep hands to the batched solve: its
+depths, its total and its warm start. ``--cold`` adds rows without warm starts (the phases
+of a phase table solved afresh). ``--save-poses DIR`` writes them as ``DIR/<scene>.npz``
+(with the skin's kernel table); ``--load-poses DIR`` reads them back, so that the benchmark
+runs where only numpy, scipy, numba and torch are installed (a GPU machine without MuJoCo
+or CadQuery).
+
+**The solves.** Each pose is solved by the numpy solve
+(:class:`~sim_tactile.sim.skin.contact.spectral.Spectral`, numba-compiled vector work,
+scipy's pocketfft), one at a time from its warm start, and by
+:class:`~sim_tactile.sim.skin.contact.batched.BatchedSpectral` in batches of B poses, for
+each tolerance, dtype (``float32`` only at tolerances of at least ``FLOAT32_MIN_TOL``) and
+device (``cuda`` where torch sees a GPU; one warm-up batch of each size first, so cuFFT's
+plans are made). A batch size B solves ``max(B, --min-poses)`` poses (at most
+``--poses``) in batches of B. torch runs on ``--threads`` CPU threads (1: per core, as the
+numpy solve).
+
+**What it prints**, one row per scene, tolerance, device, dtype and B: the microseconds
+per pose of the numpy solve and of the batched solve (wall time over the poses), the
+speed-up, the mean iterations a pose took in each (the batched solve's of its own start;
+``steps``: the lockstep iterations of the batch, which runs to its slowest pose),
+``products``: the FFT products per pose (the numpy solve takes one per iteration and some
+more, the batched one also takes the deflections again after a projection moved a node),
+and ``max_rel_l1``: the largest ``sum |p - p_numpy| / sum p_numpy`` over the poses (about
+the tolerance or below: tested). Expected, on one x86 core: the numpy solve of the iCub's
+265 x 23 lattice at 1e-10 takes a few ms a pose; the batched solve on the CPU is slower
+per pose at B = 1 (torch's per-call costs) and near the numpy solve from B = 8 on (the
+same FFTs and vector work, in unfused passes); on a GPU it is launch-bound at small B and
+gains with B up to some hundreds of poses, where it should beat one CPU core 20 to 50
+times. ``--json`` prints one JSON document with every row instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+#: Scene name -> (task, plate, what it stands for): the task scenes whose skin the planner
+#: solves spectrally (the iCub's plates on the 265 x 23 and 93 x 67 lattices, and
+#: finger7-v2's curved pad, whose nodes in reach fill a block of its 89 x 65 lattice).
+SCENES = {
+    "icub-grating": ("textures20-icub60-v2", "textures20-long/grating-1.5mm"),
+    "icub-boxes": ("textures20-icub60-v2", "textures20-long/boxes-4.5mm"),
+    "icub-hemispheres": ("textures20-icub60-v2", "textures20-long/hemispheres-3.0mm"),
+    "finger7-v2": ("finger7-v2", "finger7/bumps-3x3"),
+}
+
+
+def record_poses(scene: str, n: int) -> dict:
+    """``n`` real contact problems of ``scene`` (see the module docstring): ``pen`` (n, N),
+    ``total`` (n,) (NaN where the pad is held at its height: position control, the plain
+    solve), ``warm`` (n, N), the skin's ``table`` and ``tol``."""
+    from sim_tactile.sim import prepare
+    from sim_tactile.sim.skin.models import SpectralSkin
+    from sim_tactile.tasks import get_task
+
+    task, plate = SCENES[scene]
+    job = next(j for j in get_task(task).get_data.jobs(seed=0) if j.plate.name == plate)
+    pressed = prepare(
+        job.plate,
+        job.sensor,
+        protocol=job.protocol,
+        finger=job.finger,
+        fidelity=job.fidelity,
+        seed=job.seed,
+        pitch_m=job.pitch_m,
+    )
+    runner = pressed.runner
+    skin = runner.skin
+    if not isinstance(skin, SpectralSkin):
+        raise SystemExit(f"{scene}: its skin is not solved spectrally ({skin.describe()})")
+    solver = skin.solver
+    calls: list[tuple[np.ndarray, float, np.ndarray]] = []
+
+    def recorder(real, held):
+        def solve(pen, *total):
+            last_pen, last_total, _ = solver._last
+            t = total[0] if held else None
+            repeat = last_pen is not None and t == last_total and np.array_equal(pen, last_pen)
+            if not repeat:  # (a repeated problem returns the last answer: no solve)
+                calls.append((pen.copy(), np.nan if t is None else float(t), solver.p.copy()))
+            return real(pen, *total)
+
+        return solve
+
+    skin.solve_force = recorder(skin.solve_force, True)
+    skin.solve = recorder(skin.solve, False)
+    proto = pressed.protocol
+    z_vel = 0.0 if proto.force_control == "position" else None
+    while len(calls) < n:
+        runner.step(force_cmd=proto.force_n, slide_v=proto.speed_m_s, z_vel=z_vel)
+    pen, total, warm = (np.array(x) for x in zip(*calls[:n], strict=True))
+    return {"pen": pen, "total": total, "warm": warm, "table": solver.table, "tol": solver.tol}
+
+
+def numpy_solves(poses: dict, tol: float, cold: bool) -> tuple[np.ndarray, np.ndarray, float]:
+    """Each pose by the numpy solve from its warm start (a fresh start where ``cold``):
+    ``(p, iterations, seconds per pose)``."""
+    from sim_tactile.sim.skin.contact.spectral import Spectral
+
+    sp = Spectral(poses["table"], tol=tol)
+    out, its, wall = [], [], 0.0
+    for k, (pen, total, warm) in enumerate(
+        zip(poses["pen"], poses["total"], poses["warm"], strict=True)
+    ):
+        sp.p = np.zeros(sp.n) if cold else warm.copy()
+        sp._last = (None, None, None)
+        t0 = time.perf_counter()
+        p, _ = sp.solve(pen) if np.isnan(total) else sp.solve_force(pen, total)
+        if k > 0:  # (the first compiles and warms the caches)
+            wall += time.perf_counter() - t0
+        out.append(p)
+        its.append(sp.iterations)
+    return np.array(out), np.array(its), wall / max(1, len(out) - 1)
+
+
+def batched_solves(poses, tol, cold, device, dtype, B, count, compile=False):
+    """The first ``count`` poses in batches of ``B``: ``(p, iterations, seconds per pose,
+    lockstep iterations per batch, products per pose)``."""
+    import torch
+
+    from sim_tactile.sim.skin.contact.batched import BatchedSpectral
+    from sim_tactile.sim.skin.contact.spectral import Spectral
+
+    bs = BatchedSpectral(
+        Spectral(poses["table"]), device=device, dtype=dtype, tol=tol, compile=compile
+    )
+    pen, total, warm = poses["pen"], poses["total"], poses["warm"]
+    held = not np.isnan(total).any()
+
+    def run(lo, hi):
+        w = None if cold else warm[lo:hi]
+        if held:
+            p, _, it = bs.solve_force(pen[lo:hi], total[lo:hi], w)
+        else:
+            p, it = bs.solve(pen[lo:hi], w)
+        return p, it
+
+    run(0, min(B, count))  # warm-up: cuFFT's plans, torch's caches
+    out, its, steps, products = [], [], [], 0
+    sync = torch.cuda.synchronize if device.startswith("cuda") else (lambda: None)
+    sync()
+    t0 = time.perf_counter()
+    for lo in range(0, count, B):
+        p, it = run(lo, min(lo + B, count))
+        out.append(p)
+        its.append(it)
+        steps.append(bs.steps)
+        products += bs.products
+    sync()
+    wall = time.perf_counter() - t0
+    return (
+        np.concatenate(out),
+        np.concatenate(its),
+        wall / count,
+        float(np.mean(steps)),
+        products / count,
+    )
+
+
+def rel_l1(a: np.ndarray, b: np.ndarray) -> float:
+    """The largest ``sum |a - b| / sum b`` over the rows."""
+    return float((np.abs(a - b).sum(axis=1) / np.abs(b).sum(axis=1)).max())
+
+
+def measure(scene: str, poses: dict, a) -> list[dict]:
+    from sim_tactile.sim.skin.contact.batched import FLOAT32_MIN_TOL
+    from sim_tactile.sim.skin.contact.spectral import TOL
+
+    rows = []
+    ny, nx = poses["table"].shape
+    for cold in (False, True) if a.cold else (False,):
+        truth = numpy_solves(poses, TOL, cold)[0]  # the reference
+        for tol in (float(t) for t in a.tols.split(",")):
+            ref, ref_its, ref_s = numpy_solves(poses, tol, cold)
+            for device in a.device_list:
+                for dtype in a.dtypes.split(","):
+                    if dtype == "float32" and tol < FLOAT32_MIN_TOL:
+                        continue
+                    for B in (int(b) for b in a.batches.split(",")):
+                        count = min(len(ref), max(B, a.min_poses))
+                        if B > len(ref):
+                            continue
+                        p, its, s, steps, prods = batched_solves(
+                            poses, tol, cold, device, dtype, B, count, a.compile
+                        )
+                        row = {
+                            "scene": scene,
+                            "lattice": f"{nx} x {ny}",
+                            "start": "cold" if cold else "warm",
+                            "tol": tol,
+                            "device": device,
+                            "dtype": dtype,
+                            "B": B,
+                            "poses": count,
+                            "numpy_us": 1e6 * ref_s,
+                            "batched_us": 1e6 * s,
+                            "speedup": ref_s / s,
+                            "numpy_iterations": float(ref_its[:count].mean()),
+                            "iterations": float(its.mean()),
+                            "steps": steps,
+                            "products": prods,
+                            "max_rel_l1": rel_l1(p, ref[:count]),
+                            "numpy_error": rel_l1(ref[:count], truth[:count]),
+                            "error": rel_l1(p, truth[:count]),
+                        }
+                        rows.append(row)
+                        if not a.json:
+                            print(_line(row), flush=True)
+    return rows
+
+
+def _line(r: dict) -> str:
+    return (
+        f"| {r['scene']} | {r['lattice']} | {r['start']} | {r['tol']:g} | {r['device']} | "
+        f"{r['dtype']} | {r['B']} | {r['numpy_us']:.0f} | {r['batched_us']:.0f} | "
+        f"{r['speedup']:.2f}x | {r['numpy_iterations']:.1f} | {r['iterations']:.1f} | "
+        f"{r['steps']:.1f} | {r['products']:.1f} | {r['max_rel_l1']:.1e} | "
+        f"{r['numpy_error']:.1e} | {r['error']:.1e} |"
+    )
+
+
+HEADER = (
+    "| scene | lattice | start | tol | device | dtype | B | numpy [us/pose] | batched "
+    "[us/pose] | speed-up | numpy iterations | iterations | steps | products | max rel L1 | "
+    "numpy error | error |\n" + "|---" * 17 + "|"
+)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenes", default="icub-grating,icub-boxes,finger7-v2")
+    ap.add_argument("--poses", type=int, default=512, help="poses recorded per scene")
+    ap.add_argument("--batches", default="1,8,64,512")
+    ap.add_argument("--min-poses", type=int, default=64, help="poses solved at least per B")
+    ap.add_argument("--tols", default="1e-10,1e-4")
+    ap.add_argument("--dtypes", default="float64,float32")
+    ap.add_argument("--devices", default=None, help="default: cpu, and cuda where there is one")
+    ap.add_argument("--threads", type=int, default=1, help="torch's CPU threads")
+    ap.add_argument("--cold", action="store_true", help="also solve without warm starts")
+    ap.add_argument("--compile", action="store_true", help="torch.compile the vector work")
+    ap.add_argument("--save-poses", default=None, help="write the poses to this folder")
+    ap.add_argument("--load-poses", default=None, help="read the poses from this folder")
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args(argv)
+    import torch
+
+    torch.set_num_threads(a.threads)
+    a.device_list = (
+        a.devices.split(",")
+        if a.devices
+        else ["cpu"] + (["cuda"] if torch.cuda.is_available() else [])
+    )
+    machine = _machine(torch, a)
+    if not a.json:
+        print(machine, flush=True)
+        print(HEADER, flush=True)
+    rows = []
+    for scene in a.scenes.split(","):
+        if a.load_poses:
+            with np.load(Path(a.load_poses) / f"{scene}.npz") as z:
+                poses = {k: z[k] for k in z.files}
+            poses["pen"], poses["total"], poses["warm"] = (
+                poses[k][: a.poses] for k in ("pen", "total", "warm")
+            )
+        else:
+            poses = record_poses(scene, a.poses)
+        if a.save_poses:
+            Path(a.save_poses).mkdir(parents=True, exist_ok=True)
+            np.savez_compressed(Path(a.save_poses) / f"{scene}.npz", **poses)
+        rows += measure(scene, poses, a)
+    if a.json:
+        print(json.dumps({"machine": machine, "rows": rows}))
+    return 0
+
+
+def _machine(torch, a) -> str:
+    commit = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"],
+        capture_output=True,
+        text=True,
+        cwd=Path(__file__).parent,
+    ).stdout.strip()
+    gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() else "no GPU"
+    return (
+        f"{os.cpu_count()} CPUs, {gpu}; torch {torch.__version__} on {a.threads} CPU "
+        f"thread(s); commit {commit or '?'}"
+    )
+
+
+if __name__ == "__main__":
+    sys.exit(main())
