@@ -28,19 +28,33 @@ plans are made). A batch size B solves ``max(B, --min-poses)`` poses (at most
 ``--poses``) in batches of B. torch runs on ``--threads`` CPU threads (1: per core, as the
 numpy solve).
 
-**What it prints**, one row per scene, tolerance, device, dtype and B: the microseconds
-per pose of the numpy solve and of the batched solve (wall time over the poses), the
-speed-up, the mean iterations a pose took in each (the batched solve's of its own start;
-``steps``: the lockstep iterations of the batch, which runs to its slowest pose),
-``products``: the FFT products per pose (the numpy solve takes one per iteration and some
-more, the batched one also takes the deflections again after a projection moved a node),
-and ``max_rel_l1``: the largest ``sum |p - p_numpy| / sum p_numpy`` over the poses (about
-the tolerance or below: tested). Expected, on one x86 core: the numpy solve of the iCub's
-265 x 23 lattice at 1e-10 takes a few ms a pose; the batched solve on the CPU is slower
-per pose at B = 1 (torch's per-call costs) and near the numpy solve from B = 8 on (the
-same FFTs and vector work, in unfused passes); on a GPU it is launch-bound at small B and
-gains with B up to some hundreds of poses, where it should beat one CPU core 20 to 50
-times. ``--json`` prints one JSON document with every row instead.
+**What it prints**: the machine line (CPUs, GPU, torch, threads, commit), then one table
+row per scene, start (``warm``: each pose from its slide's last pressures; ``cold``),
+tolerance, device, dtype and B:
+
+- ``numpy [us/pose]``, ``batched [us/pose]``: wall time per pose, and the ``speed-up`` of
+  the batched solve (numpy over batched);
+- ``numpy iterations``, ``iterations``: the mean iterations of a pose in each (the batched
+  solve counts those of the start that converged, as the numpy solve does); ``steps``: the
+  lockstep iterations of a batch (it runs to its slowest pose); ``products``: the batched
+  solve's FFT products per pose (one an iteration, plus the deflections taken again every
+  16 iterations and after a projection moved a node, plus one for the pad's shift);
+- ``max rel L1``: the largest ``sum |p - p_numpy| / sum p_numpy`` over the poses, against
+  the numpy solve at the same tolerance (a few times the tolerance: tested); ``numpy
+  error`` and ``error``: the same against the numpy solve at the reference tolerance
+  (1e-10), of the numpy solve and of the batched one at the row's tolerance (float32 holds
+  a tolerance where its error is near the numpy solve's).
+
+Expected, measured on 2 shared x86 cores (so only roughly): the numpy solve of the iCub's
+265 x 23 grating takes some 50 iterations and tens of ms a pose at 1e-10 (20 iterations at
+1e-4); the batched solve on one CPU thread is 2 to 5 times slower per pose (torch's
+unfused passes against numba's fused loops; its FFTs cost about the same), float32 about
+as fast as the numpy solve. On a GPU it is bound by kernel launches at small B and should
+gain with B up to some hundreds of poses; an eager torch solve of this problem took 150 to
+190 us a pose at B = 512 on an H200 (issue 47), against some 5 ms for one CPU core.
+``--compile`` runs the vector work through ``torch.compile`` (a first call compiles for a
+minute or two; on a GPU it should cut the element-wise kernels several-fold). ``--json``
+prints one JSON document with every row instead.
 """
 
 from __future__ import annotations

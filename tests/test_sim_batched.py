@@ -182,18 +182,23 @@ def test_the_gpu_path_run_on_the_cpu_gives_the_same_answers(torch):
     np.testing.assert_allclose(dz2, dz1, rtol=1e-12)
 
 
-def test_a_pose_that_cycles_from_both_starts_takes_the_numpy_solves_last_start(torch, monkeypatch):
+@pytest.mark.parametrize("check_every", [1, batched.CHECK_EVERY])
+def test_a_pose_that_cycles_from_both_starts_takes_the_numpy_solves_last_start(
+    torch, monkeypatch, check_every
+):
     """Where the plain iteration cycles from the warm and the uniform starts, the pose takes
     the last start (few nodes join at a time) in the numpy solve; made to happen here by
-    calling every iteration a cycle."""
+    calling every iteration a cycle. On a GPU (``check_every`` > 1) a pose whose start
+    failed waits for the host's next look to take its next start."""
     monkeypatch.setattr(batched, "CYCLE_CHANGE", -1.0)
     monkeypatch.setattr(batched, "CYCLE_ITER", 1)
     skin, _, _, total = scene("icub-boxes")
     pens = depths("icub-boxes", [0.2e-3, 0.9e-3])
     warm, _ = Spectral(skin.solver.table).solve_force(pens[1], total)
     bs = batched.BatchedSpectral(skin)
+    bs.check_every = check_every
     p, _, _ = bs.solve_force(pens, total, warm=np.array([warm, warm]))
-    assert bs.steps == 2  # one iteration from each start, then the numpy solve's last
+    assert bs.steps == 2 * check_every  # one iteration from each start, then the last
     for k in range(2):
         q, _ = Spectral(skin.solver.table).solve_force(pens[k], total)
         assert rel_l1(p[k : k + 1], q[None])[0] < AGREE * TOL

@@ -33,11 +33,11 @@ Where it differs from the numpy solve, and why (the answers agree to the toleran
   earlier or later (near the tolerance).
 
 On a GPU the host learns which poses are done every :data:`CHECK_EVERY` iterations (a
-pose that converges in between keeps its answer: it is taken when it converges), and the
-batch shrinks to the poses still running when they are half of it or fewer, in powers of
-two (cuFFT's plans are kept by batch size). In ``float32`` the rounding floor is
-:data:`ROUNDING_FLOAT32` and the tolerance must be at least
-:data:`FLOAT32_MIN_TOL`.
+pose that converges in between keeps its answer: it is taken when it converges; one whose
+start failed in between waits for its next start till then), and the batch shrinks to the
+poses still running when they are half of it or fewer, in powers of two (cuFFT's plans are
+kept by batch size). In ``float32`` the rounding floor is :data:`ROUNDING_FLOAT32` and the
+tolerance must be at least :data:`FLOAT32_MIN_TOL`.
 
 torch is imported when a solver is made, not when this module is imported.
 """
@@ -81,7 +81,7 @@ DTYPES = ("float64", "float32")
 
 class _Product:
     """``C p`` of each row of a ``(b, ny * nx)`` tensor on one lattice
-    (:func:`._cg_torch.product`; the kernel's transform is the numpy solver's, cast to the
+    (``_cg_torch.product``; the kernel's transform is the numpy solver's, cast to the
     dtype), with the numpy solve of that lattice (``ref``) and a count of the rows it
     multiplied (the poses' products)."""
 
@@ -108,7 +108,7 @@ class _Rows:
 
     NAMES = (
         "rows pen ok flat total gap_tol P T U g_old delta scale stuck it budget start stale done "
-        "fallback p_out it_out"
+        "failed fallback p_out it_out"
     ).split()
 
     def keep(self, idx) -> None:
@@ -296,6 +296,9 @@ class BatchedSpectral:
             self._iterate(s, prod, held)
             if step % self.check_every and step < limit:
                 continue
+            if self.check_every > 1 and bool(s.failed.any()):
+                self._restart(s, s.failed, held)
+                s.failed = torch.zeros_like(s.failed)
             done = s.done.squeeze(1)
             n_live = int((~done).sum())
             if n_live == 0:
@@ -325,7 +328,7 @@ class BatchedSpectral:
 
     def _rows(self, prod, pen, total, warm) -> _Rows:
         """The batch's first state: each pose from its warm start where it has one in reach,
-        else from the uniform start (:func:`._cg_torch.starts`, on the device)."""
+        else from the uniform start (``_cg_torch.starts``, on the device)."""
         torch, dev, dt = self.torch, self.device, self.dtype
         B = pen.shape[0]
         held = total is not None
@@ -350,7 +353,7 @@ class BatchedSpectral:
         s.budget = torch.where(has_warm, min(WARM_ITER, self.max_iter), self.max_iter).int()
         s.start = torch.where(has_warm, 0, 1).int()
         s.stale = column(True, torch.bool)
-        s.done, s.fallback = column(False, torch.bool), column(False, torch.bool)
+        s.done, s.failed, s.fallback = (column(False, torch.bool) for _ in range(3))
         return s
 
     @staticmethod
@@ -415,13 +418,16 @@ class BatchedSpectral:
         s.stale = stale
         stuck = torch.where(change > CYCLE_CHANGE, s.stuck + 1, 0)
         s.stuck = torch.where(go & ~conv, stuck, s.stuck)
-        new = conv & ~s.done
+        new = conv & ~(s.done | s.failed)
         s.p_out = torch.where(new, P, s.p_out)
         s.it_out = torch.where(new, s.it, s.it_out)
         s.done = s.done | new
         fail = ~s.done & ((s.stuck >= CYCLE_ITER) | (s.it >= s.budget))
-        if self.check_every > 1 or bool(fail.any()):  # (on a GPU without asking)
-            self._restart(s, fail, held)
+        if self.check_every == 1:
+            if bool(fail.any()):
+                self._restart(s, fail, held)
+        else:  # on a GPU the host restarts them at its next look (they wait till then)
+            s.failed = s.failed | fail
 
     def _refresh(self, s: _Rows, prod: _Product, need) -> None:
         """``U = C P`` on the rows ``need``: those alone on the CPU, the whole batch on a GPU
