@@ -4,15 +4,23 @@ real poses of every task scene whose skin is solved spectrally.
     python perf/bench_batched_solve.py [--scenes icub-grating,icub-boxes,finger7-v2]
         [--poses 512] [--batches 1,8,64,512] [--tols 1e-10,1e-4] [--dtypes float64,float32]
         [--devices cpu,cuda] [--threads 1] [--min-poses 64] [--cold]
-        [--save-poses DIR | --load-poses DIR] [--json]
+        [--save-poses DIR [--record-only] | --load-poses DIR] [--compile] [--json]
+
+On a GPU machine without MuJoCo or CadQuery, record the poses where the package is whole
+and carry them over::
+
+    python perf/bench_batched_solve.py --save-poses poses --record-only    # here
+    python perf/bench_batched_solve.py --load-poses poses --json           # there
 
 **The poses.** For each scene, one slide of the task (its first slide on the plate named
 in :data:`SCENES`) is prepared (scene, approach, press) by the package's own driver, then
-slid at the protocol's speed for ``--poses`` steps of its held step. Every contact solve
-that held step asks of its spectral skin is recorded: the node depths (n,), the pressures'
-total, and the solver's last pressures, the warm start it had (the slide's own). A pose is
-then the problem a driver stepping slides in lockstep hands to the batched solve: its
-depths, its total and its warm start. ``--cold`` adds rows without warm starts (the phases
+slid at the protocol's speed until its spectral skin has been asked ``--poses`` contact
+solves. Each is recorded: the node depths (n,), the pressures' total (NaN where the pad
+is held at its height, under position control, as finger7-v2 slides: the plain solve), and
+the solver's last pressures, the warm start it had (the slide's own; a problem equal to the
+last one, which the numpy solve answers from memory, is skipped). A pose is then the
+problem a driver stepping slides in lockstep hands to the batched solve: its depths, its
+total and its warm start. ``--cold`` adds rows without warm starts (the phases
 of a phase table solved afresh). ``--save-poses DIR`` writes them as ``DIR/<scene>.npz``
 (with the skin's kernel table); ``--load-poses DIR`` reads them back, so that the benchmark
 runs where only numpy, scipy, numba and torch are installed (a GPU machine without MuJoCo
@@ -23,8 +31,9 @@ or CadQuery).
 scipy's pocketfft), one at a time from its warm start, and by
 :class:`~sim_tactile.sim.skin.contact.batched.BatchedSpectral` in batches of B poses, for
 each tolerance, dtype (``float32`` only at tolerances of at least ``FLOAT32_MIN_TOL``) and
-device (``cuda`` where torch sees a GPU; one warm-up batch of each size first, so cuFFT's
-plans are made). A batch size B solves ``max(B, --min-poses)`` poses (at most
+device (``--devices``; by default ``cuda`` where torch sees a GPU, else ``cpu``: the numpy
+solve is the CPU's column; one warm-up batch of each size first, so cuFFT's plans are
+made). A batch size B solves ``max(B, --min-poses)`` poses (at most
 ``--poses``) in batches of B. torch runs on ``--threads`` CPU threads (1: per core, as the
 numpy solve).
 
@@ -269,11 +278,12 @@ def main(argv=None) -> int:
     ap.add_argument("--min-poses", type=int, default=64, help="poses solved at least per B")
     ap.add_argument("--tols", default="1e-10,1e-4")
     ap.add_argument("--dtypes", default="float64,float32")
-    ap.add_argument("--devices", default=None, help="default: cpu, and cuda where there is one")
+    ap.add_argument("--devices", default=None, help="default: cuda where there is one, else cpu")
     ap.add_argument("--threads", type=int, default=1, help="torch's CPU threads")
     ap.add_argument("--cold", action="store_true", help="also solve without warm starts")
     ap.add_argument("--compile", action="store_true", help="torch.compile the vector work")
     ap.add_argument("--save-poses", default=None, help="write the poses to this folder")
+    ap.add_argument("--record-only", action="store_true", help="save the poses, solve none")
     ap.add_argument("--load-poses", default=None, help="read the poses from this folder")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
@@ -281,9 +291,7 @@ def main(argv=None) -> int:
 
     torch.set_num_threads(a.threads)
     a.device_list = (
-        a.devices.split(",")
-        if a.devices
-        else ["cpu"] + (["cuda"] if torch.cuda.is_available() else [])
+        a.devices.split(",") if a.devices else ["cuda" if torch.cuda.is_available() else "cpu"]
     )
     machine = _machine(torch, a)
     if not a.json:
@@ -302,7 +310,8 @@ def main(argv=None) -> int:
         if a.save_poses:
             Path(a.save_poses).mkdir(parents=True, exist_ok=True)
             np.savez_compressed(Path(a.save_poses) / f"{scene}.npz", **poses)
-        rows += measure(scene, poses, a)
+        if not a.record_only:
+            rows += measure(scene, poses, a)
     if a.json:
         print(json.dumps({"machine": machine, "rows": rows}))
     return 0

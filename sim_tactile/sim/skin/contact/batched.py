@@ -391,8 +391,7 @@ class BatchedSpectral:
         torch = self.torch
         s.it += 1
         need = (s.stale | (s.it % REFRESH_EVERY == 0)) & ~s.done
-        if bool(need.any()):
-            self._refresh(s, prod, need)
+        self._refresh(s, prod, need)
         onf, c, g, G, t, s.g_old, umax = self._gradient(
             s.P, s.U, s.pen, s.T, s.delta, s.g_old, held
         )
@@ -430,13 +429,19 @@ class BatchedSpectral:
             s.failed = s.failed | fail
 
     def _refresh(self, s: _Rows, prod: _Product, need) -> None:
-        """``U = C P`` on the rows ``need``: those alone on the CPU, the whole batch on a GPU
-        (the same batch size every time: cuFFT keeps one plan)."""
-        if self.check_every == 1 and not bool(need.all()):
-            idx = need.squeeze(1).nonzero().squeeze(1)
-            s.U.index_copy_(0, idx, prod(s.P.index_select(0, idx)))
-        else:
+        """``U = C P`` on the rows ``need`` (one look of the host): those rows alone, on a
+        GPU padded to a power of two of them (cuFFT keeps a plan per batch size)."""
+        idx = need.squeeze(1).nonzero().squeeze(1)
+        k, rows = idx.numel(), need.shape[0]
+        if k == 0:
+            return
+        size = k if self.check_every == 1 else min(rows, 1 << (k - 1).bit_length())
+        if size == rows:
             s.U = self.torch.where(need, prod(s.P), s.U)
+        else:
+            pad = idx[:1].expand(size - k)  # (rows done twice, kept once)
+            u = prod(s.P.index_select(0, self.torch.cat([idx, pad])))
+            s.U.index_copy_(0, idx, u[:k])
         s.stale = s.stale & ~need
 
     def _restart(self, s: _Rows, fail, held: bool) -> None:
