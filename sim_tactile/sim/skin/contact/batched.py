@@ -32,11 +32,12 @@ Where it differs from the numpy solve, and why (the answers agree to the toleran
   the answers are not the numpy solve's bit for bit, and a pose can stop an iteration
   earlier or later (near the tolerance).
 
-On a GPU the host learns which poses are done every :data:`CHECK_EVERY` iterations (a
-pose that converges in between keeps its answer: it is taken when it converges; one whose
-start failed in between waits for its next start till then), and the batch shrinks to the
-poses still running when they are half of it or fewer, in powers of two (cuFFT's plans are
-kept by batch size). In ``float32`` the rounding floor is :data:`ROUNDING_FLOAT32` and the
+On a GPU the host looks at the batch once an iteration, to take the stale rows' deflections
+again (those rows alone, padded to a power of two of them: cuFFT keeps a plan per batch
+size), and learns which poses are done every :data:`CHECK_EVERY` iterations (a pose that
+converges in between keeps its answer: it is taken when it converges; one whose start
+failed in between waits for its next start till then); the batch shrinks to the poses
+still running when they are half of it or fewer, in powers of two. In ``float32`` the rounding floor is :data:`ROUNDING_FLOAT32` and the
 tolerance must be at least :data:`FLOAT32_MIN_TOL`.
 
 torch is imported when a solver is made, not when this module is imported.
@@ -61,9 +62,9 @@ from .spectral import (
     _mean_gap,
 )
 
-#: Iterations between the host's looks at the batch on a GPU (which poses are done, whether
-#: the batch can shrink): each look waits for the GPU to finish its queue. On the CPU the
-#: host looks after every iteration (it costs nothing there).
+#: Iterations between the host's looks at the batch on a GPU (which poses are done, which
+#: failed a start, whether the batch can shrink): each look waits for the GPU to finish its
+#: queue. On the CPU the host looks after every iteration (it costs nothing there).
 CHECK_EVERY = 8
 #: The tightest tolerance in ``float32``: there a change of the pressures below this share of
 #: their sum is near the rounding of the deflections (24 bits; measured on the iCub's poses
@@ -126,8 +127,8 @@ class BatchedSpectral:
     ``device``: ``cpu``, ``cuda`` or ``cuda:N`` (:func:`~.device.require_device`: a GPU
     asked for and absent is a ConfigError). ``dtype``: ``float64`` (the reference) or
     ``float32``. ``tol``: replaces the skin's tolerance. ``compile``: the iteration's
-    element-wise work through ``torch.compile`` (fewer kernels on a GPU; the first calls
-    compile for some seconds).
+    element-wise work through ``torch.compile`` (fewer kernels on a GPU, untried there; the
+    first call compiles for a minute or more: 100 s on a busy CPU).
 
     After a call, ``steps`` is the number of lockstep iterations the batch ran and
     ``products`` the FFT products it took, counted per pose."""
