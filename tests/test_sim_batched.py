@@ -186,8 +186,8 @@ def test_the_gpu_path_run_on_the_cpu_gives_the_same_answers(torch):
     between iterate on (their answers were taken), the deflections are taken again for the
     whole batch and the batch shrinks in powers of two: the same answers."""
     skin, _, _, total = scene("icub-boxes")
-    pens = depths("icub-boxes", np.arange(5) * 0.3e-3)
-    _, _, _, warm = numpy_chain(skin, pens, [total] * 5, TOL)
+    pens = depths("icub-boxes", np.arange(4) * 0.3e-3)
+    _, _, _, warm = numpy_chain(skin, pens, [total] * 4, TOL)
     warm[2] = 0.0  # (a pose from the uniform start: it takes longest)
     cpu = batched.BatchedSpectral(skin)
     p1, dz1, its1 = cpu.solve_force(pens, total, warm=warm)
@@ -258,7 +258,7 @@ def test_nothing_touching_is_no_load_in_the_plain_solve(torch):
     skin, _, _, _ = scene("icub-boxes")
     pens = depths("icub-boxes", [0.0, 0.3e-3])
     pens[1] = np.where(np.isfinite(pens[1]), -1e-4, -np.inf)  # above the plate
-    p, its = batched.BatchedSpectral(skin).solve(pens)
+    p, its = batched.BatchedSpectral(skin, tol=1e-4).solve(pens)
     assert p[0].sum() > 0 and not p[1].any() and its[1] == 0
 
 
