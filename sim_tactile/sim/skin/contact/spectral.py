@@ -69,6 +69,7 @@ def _load_fft() -> None:
     _LOADED = True
     _DIRECT = _direct_works()
 
+
 #: Convergence of the conjugate-gradient iteration: the pressures' change in one iteration,
 #: summed over the nodes, relative to their sum (Polonsky and Keer's criterion). At 1e-10
 #: the taxel loads agree with the dense solve to about 1e-8 (tested at 1e-6).
@@ -493,4 +494,3 @@ def _direct_works() -> bool:
         return bool(np.array_equal(s.apply(p), s.apply_public(p)))
     except Exception:  # noqa: BLE001  (another binding's signature: the public path)
         return False
-
