@@ -296,7 +296,9 @@ def run_slides(
     (each distinct warning with its count)."""
     cache = cache or ArtefactCache.default()
     keys = [j.key() for j in jobs]
-    recs: list[Recording | None] = [cached_slide(cache, k) for k in keys]
+    recs: list[Recording | None] = [
+        cached_slide(cache, j, k) for j, k in zip(jobs, keys, strict=True)
+    ]
     todo = [i for i, r in enumerate(recs) if r is None]
     warns: Counter[str] = Counter(
         str(w) for r in recs if r is not None for w in r.meta.get("warnings") or ()
