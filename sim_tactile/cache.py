@@ -3,29 +3,40 @@
 An artefact's key is the content hash (:func:`sim_tactile.hashing.content_hash`) of its whole
 description: what it is made from (e.g. a plate's canonical parameters), its kind and
 settings, and the version of the code that makes it (:func:`sim_tactile.hashing.code_version`).
-Files are written to a temporary name in the same directory, flushed and renamed, so a reader
-sees a whole file or none, and an interrupted build leaves nothing behind.
 
-Every entry proves what it is: beside ``<key>.<ext>`` lies ``<key>.<ext>.sum``, written after
-it, which holds the key the entry was stored under and the SHA-256 and size of its bytes.
-:meth:`ArtefactCache.get` serves an entry only when both agree with the key asked for and with
-the bytes on disk; an entry that was altered, truncated, moved under another key or cannot be
-read is discarded with a :class:`~sim_tactile.errors.CacheWarning` naming the file, and made
-again. An entry whose checksum is not there yet is a miss and is left alone: another process
-may be between its two writes. A cache that cannot be written (a full disk, a read-only folder) raises
-:class:`~sim_tactile.errors.CacheError` in one line; a read-only cache whose entries are all
-there is read as usual.
+An entry is a folder, ``<key[:2]>/<key>.<ext>.d/``, holding the artefact ``<key>.<ext>`` and
+its checksum ``<key>.<ext>.sum`` (the key it was stored under, the SHA-256 and size of its
+bytes). Both are written into a fresh temporary folder beside it, which is then renamed into
+place: a reader sees the whole entry, artefact and checksum of one writer, or none. Two
+processes that make the same artefact at once each build their own folder; the first rename
+wins and the second keeps the entry it finds whole (an artefact's bytes are a function of
+its content: :func:`npz_bytes`), so neither warns of corruption. An interrupted writer
+leaves its temporary folder, never a half entry.
+
+:meth:`ArtefactCache.get` serves an entry only when its checksum agrees with the key asked
+for and with the bytes on disk; an entry that was altered, truncated, moved under another
+key, left without its checksum or cannot be read is discarded with a
+:class:`~sim_tactile.errors.CacheWarning` naming the file, and made again. What an entry
+holds is for its kind to check further (a cached slide names its own key, plate and seed:
+:func:`~sim_tactile.slides.jobs.cached_slide`). A cache that cannot be written (a full disk,
+a read-only folder) raises :class:`~sim_tactile.errors.CacheError` in one line; a read-only
+cache whose entries are all there is read as usual.
 
 Location: ``$SIM_TACTILE_CACHE`` if set, else ``~/.cache/sim_tactile``.
 """
 
 from __future__ import annotations
 
+import errno
 import hashlib
+import io
 import json
 import os
+import shutil
 import tempfile
+import uuid
 import warnings
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
@@ -36,6 +47,11 @@ from .hashing import code_version, content_hash
 
 #: The suffix of an entry's checksum file.
 SUM_SUFFIX = ".sum"
+#: The suffix of an entry's folder.
+ENTRY_SUFFIX = ".d"
+#: The time stamp of every member of an .npz written by :func:`npz_bytes` (the zip format's
+#: earliest): its bytes then depend on its arrays only.
+NPZ_DATE_TIME = (1980, 1, 1, 0, 0, 0)
 
 
 def default_root() -> Path:
@@ -60,9 +76,27 @@ def atomic_write(path: Path, data: bytes) -> None:
         raise
 
 
+def npz_bytes(arrays: dict) -> bytes:
+    """The bytes of an uncompressed ``.npz`` of ``arrays`` (name -> array; what
+    :func:`numpy.savez` writes and :func:`numpy.load` reads, without pickle), a function of
+    the arrays alone: every member carries :data:`NPZ_DATE_TIME` (``numpy.savez`` stamps
+    each with the wall clock, so two writes of the same arrays differed)."""
+    import numpy as np
+
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
+        for name, value in arrays.items():
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=NPZ_DATE_TIME)
+            info.external_attr = 0o644 << 16
+            with zf.open(info, "w", force_zip64=True) as f:
+                np.lib.format.write_array(f, np.asanyarray(value), allow_pickle=False)
+    return buf.getvalue()
+
+
 @dataclass(frozen=True)
 class ArtefactCache:
-    """Artefacts under ``root/<key[:2]>/<key>.<ext>``."""
+    """Artefacts under ``root/<key[:2]>/<key>.<ext>.d/<key>.<ext>`` (see the module
+    docstring)."""
 
     root: Path
 
@@ -75,36 +109,43 @@ class ArtefactCache:
         """The key of an artefact: the content hash of its whole description."""
         return content_hash(description)
 
+    def entry(self, key: str, ext: str) -> Path:
+        """The folder of the entry ``key``, ``ext``."""
+        return Path(self.root) / key[:2] / f"{key}.{ext}{ENTRY_SUFFIX}"
+
     def path(self, key: str, ext: str) -> Path:
-        return Path(self.root) / key[:2] / f"{key}.{ext}"
+        """The artefact's file in its entry."""
+        return self.entry(key, ext) / f"{key}.{ext}"
 
     def get(self, key: str, ext: str) -> Path | None:
         """The entry's path if it is there and proves to be the one stored under ``key``,
         else None (a damaged entry is discarded, with a warning naming it)."""
         p = self.path(key, ext)
-        if not p.is_file():
+        if not p.parent.is_dir():
             return None
         bad = _check_entry(p, key)
         if bad is None:
             return p
-        if bad == _NO_SUM:
-            # a writer between its two writes (another worker filling the same fresh cache),
-            # or one that died there: a miss, left in place; the next put replaces it whole.
-            # Deleting it here pulled a finished entry from under the worker that had just
-            # written it.
-            return None
         warnings.warn(f"cache entry {p}: {bad}; it is made again", CacheWarning, stacklevel=2)
         self.discard(key, ext)
         return None
 
     def put(self, key: str, ext: str, data: bytes) -> Path:
-        """Store ``data`` under ``key`` (the bytes, then their checksum); raises CacheError
-        when the cache cannot be written."""
+        """Store ``data`` under ``key``: the bytes and their checksum, written into a
+        temporary folder renamed into place as one. Where a whole entry of ``key`` is there
+        already (another process made it meanwhile), it is kept and this one dropped.
+        Returns the artefact's path; raises CacheError when the cache cannot be written."""
         p = self.path(key, ext)
         record = {"key": key, "sha256": hashlib.sha256(data).hexdigest(), "size": len(data)}
         try:
-            atomic_write(p, data)
-            atomic_write(_sum_path(p), json.dumps(record).encode())
+            p.parent.parent.mkdir(parents=True, exist_ok=True)
+            tmp = Path(tempfile.mkdtemp(dir=p.parent.parent, prefix=f".{p.name}.", suffix=".tmp"))
+            try:
+                atomic_write(tmp / p.name, data)
+                atomic_write(_sum_path(tmp / p.name), json.dumps(record).encode())
+                _install(tmp, p, key)
+            finally:
+                shutil.rmtree(tmp, ignore_errors=True)  # (gone where it was renamed)
         except OSError as exc:
             raise CacheError(
                 f"the cache cannot be written: {os_error_message(exc, p)} (set "
@@ -113,16 +154,39 @@ class ArtefactCache:
         return p
 
     def discard(self, key: str, ext: str) -> None:
-        """Remove an entry and its checksum (nothing if they are not there)."""
-        p = self.path(key, ext)
-        for f in (_sum_path(p), p):
-            try:
-                f.unlink(missing_ok=True)
-            except OSError:  # a read-only cache: the entry is not served, nothing more
-                pass
+        """Remove an entry, its artefact and checksum as one (nothing if it is not there)."""
+        _set_aside(self.entry(key, ext))
 
 
-_NO_SUM = "no checksum beside it"
+#: How often :func:`_install` tries to replace a damaged entry that others replace too.
+_INSTALL_TRIES = 4
+
+
+def _install(tmp: Path, p: Path, key: str) -> None:
+    """Rename the entry folder ``tmp`` to ``p``'s folder. One already there is kept when it
+    is whole (another writer's, of the same content), else set aside and replaced."""
+    for _ in range(_INSTALL_TRIES):
+        try:
+            os.rename(tmp, p.parent)
+            return
+        except OSError as exc:
+            if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+                raise
+        if _check_entry(p, key) is None:
+            return
+        _set_aside(p.parent)
+    raise OSError(errno.EBUSY, "other writers kept replacing the entry", str(p.parent))
+
+
+def _set_aside(entry: Path) -> None:
+    """Remove the entry folder ``entry`` as one: renamed away first (a reader then finds
+    the whole entry or none), then deleted."""
+    gone = entry.with_name(f".{entry.name}.{uuid.uuid4().hex[:12]}.gone")
+    try:
+        os.rename(entry, gone)
+    except OSError:  # not there, or a read-only cache: the entry is not served, nothing more
+        return
+    shutil.rmtree(gone, ignore_errors=True)
 
 
 def _sum_path(p: Path) -> Path:
@@ -134,7 +198,7 @@ def _check_entry(p: Path, key: str) -> str | None:
     try:
         record = json.loads(_sum_path(p).read_bytes())
     except FileNotFoundError:
-        return _NO_SUM
+        return "no checksum beside it"
     except (OSError, ValueError) as exc:
         return f"its checksum file cannot be read ({type(exc).__name__})"
     if not isinstance(record, dict) or record.get("key") != key:

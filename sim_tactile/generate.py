@@ -10,7 +10,10 @@ only, never on the number of workers, the backend or the order of completion.
 Only the parent process writes: workers (processes or Ray tasks) simulate and send back the
 samples, so a cluster needs no shared file system. A slide is written data first, checksum
 last; ``--resume`` checks every written slide against its checksum, writes again the ones
-that fail and simulates the rest. The configuration file's format:
+that fail and simulates the rest. What a store cannot hold is refused before anything is
+made (:func:`~sim_tactile.datasets.store.check_fits`), and the store is written through its
+open folder (:class:`~sim_tactile.datasets.fs.FolderHold`): moved or removed mid-run, the
+run stops in one line and the old path is not made again. The configuration file's format:
 :mod:`sim_tactile.slides.config`.
 """
 
@@ -22,6 +25,7 @@ import sys
 import time
 from collections import Counter
 from collections.abc import Callable
+from contextlib import ExitStack
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
@@ -31,7 +35,7 @@ import numpy as np
 from . import _validate as v
 from .cache import default_root
 from .datasets.export import spec_from_tactile
-from .datasets.fs import StoreLock, fs_errors, no_empty_folders_left
+from .datasets.fs import FolderHold, StoreLock, fs_errors, no_empty_folders_left
 from .datasets.integrity import (
     chunk_files,
     compare_index,
@@ -42,6 +46,7 @@ from .datasets.integrity import (
 from .datasets.store import (
     DataGroup,
     SlideWriter,
+    check_fits,
     config_hash,
     create_store,
     open_data,
@@ -140,9 +145,14 @@ def resolve(target: str, *, quick: bool, seed: int | None, data=None, log=None, 
 def _describe_existing(out: Path) -> str:
     try:
         root = open_root(out)
-        groups = [root[p] for p in root.attrs.get("parts") or []] or [root]
+        parts = root.attrs.get("parts") or []
+        groups = [open_data(root[p], out / p, f"{out}/{p}") for p in parts] or [
+            open_data(root, out, str(out))
+        ]  # checked first: what its attributes claim is what it holds
         n = sum(int(g.attrs["n_slides"]) for g in groups)
-        done = sum(int((read_checksums(g["checksum"], str(out))[0] != 0).sum()) for g in groups)
+        done = sum(
+            int((read_checksums(g.arrays["checksum"], str(out))[0] != 0).sum()) for g in groups
+        )
     except StoreError as exc:
         return str(exc)
     except Exception:  # a damaged store: saying so is enough here
@@ -261,6 +271,19 @@ def _open_or_create(out: Path, plans: list[Plan], root_attrs: dict, resume: bool
     return root, groups, repaired
 
 
+def _through(hold: FolderHold, plans: list[Plan], groups: list[DataGroup]):
+    """The store's root group opened again through ``hold`` (:class:`FolderHold`), and each
+    checked data group's ``group`` with it: every write from now on goes into the folder that
+    was opened and checked, wherever it is moved. Returns the root group."""
+    import zarr
+
+    with reading(str(hold.path), "its zarr.json"):
+        root = zarr.open_group(hold.root, mode="r+")
+        for plan, dg in zip(plans, groups, strict=True):
+            dg.group = root[plan.group] if plan.group else root
+    return root
+
+
 @dataclass
 class _Run:
     """The bookkeeping of one ``generate`` call."""
@@ -278,6 +301,8 @@ class _Run:
     #: the signal that stopped the run (SIGTERM), None for Ctrl-C or none
     signal: str | None = None
     repaired: list[str] = field(default_factory=list)
+    #: the store's folder, held open while it is written
+    hold: FolderHold | None = None
 
 
 _KEPT = "every slide written so far is kept: run the same command with --resume to continue"
@@ -288,7 +313,8 @@ def _recheck_written(groups: list[DataGroup], run: _Run, resumed: bool, out: Pat
     checksum and mark the ones that fail (or whose checksum chunk is unreadable) to be
     written again. Fills ``run.todo``."""
     for k, (plan, dg) in enumerate(zip(run.plans, groups, strict=True)):
-        w = SlideWriter(dg.group, out, dg.index["lengths"], _KEPT)
+        guard = None if run.hold is None else run.hold.check
+        w = SlideWriter(dg.group, out, dg.index["lengths"], _KEPT, guard=guard)
         run.writers.append(w)
         run.warns.append(Counter())
         n = plan.spec.n_slides
@@ -380,6 +406,8 @@ def generate(
     plans, root_attrs = resolve(
         target, quick=quick, seed=seed, data=data, log=log, sensor_config=sensor_config
     )
+    for plan in plans:  # what a store cannot hold is refused before anything is made
+        check_fits(plan.spec, f"{target}" + (f" ({plan.group})" if plan.group else ""))
     total = sum(p.spec.n_slides for p in plans)
     StoreLock.probe(out)  # refused before the workers start (the lock below is what counts)
     simulated = any(p.jobs is not None for p in plans)
@@ -392,12 +420,15 @@ def generate(
         else make_backend(fn, workers=1)
     )
     try:
-        with no_empty_folders_left(out), StoreLock(out):
+        with no_empty_folders_left(out), StoreLock(out), ExitStack() as held:
             resumed = out.exists()
             root, groups, repaired = _open_or_create(out, plans, root_attrs, resume, log)
-            run = _Run(plans, repaired=repaired)
+            hold = held.enter_context(FolderHold(out))  # written through its folder from now on
+            root = _through(hold, plans, groups)
+            run = _Run(plans, repaired=repaired, hold=hold)
             try:
                 _fill(runner, run, groups, resumed, out, total, simulated, progress, log)
+                hold.check()  # the last slide too went into the store at --out
             except BaseException as exc:
                 if isinstance(exc, KeyboardInterrupt):
                     run.interrupted = True
@@ -409,7 +440,8 @@ def generate(
                         "same command with --resume to continue"
                     )
                 runner.close(cancel=True)
-                _record_run(root, run, backend, runner.workers, address, t_start, out, log)
+                if hold.follows or not hold.moved():  # never a file at a vacated path
+                    _record_run(root, run, backend, runner.workers, address, t_start, out, log)
                 raise
             runner.close(cancel=True)
             _record_run(root, run, backend, runner.workers, address, t_start, out)

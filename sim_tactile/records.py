@@ -76,19 +76,19 @@ class Recording:
 
     def to_npz(self) -> bytes:
         """The recording as the bytes of an .npz with ``data``, ``times``, ``taxels`` and
-        ``meta_json`` (what :meth:`save` writes and :meth:`load` reads)."""
-        import io
+        ``meta_json`` (what :meth:`save` writes and :meth:`load` reads): a function of the
+        recording alone (no time stamp inside, :func:`~sim_tactile.cache.npz_bytes`)."""
+        from .cache import npz_bytes
 
-        buf = io.BytesIO()
         meta = dict(self.meta, units=self.units)
-        np.savez(
-            buf,
-            data=self.data,
-            times=self.times,
-            taxels=self.taxels,
-            meta_json=np.array(json.dumps(meta, sort_keys=True)),
+        return npz_bytes(
+            {
+                "data": self.data,
+                "times": self.times,
+                "taxels": self.taxels,
+                "meta_json": np.array(json.dumps(meta, sort_keys=True)),
+            }
         )
-        return buf.getvalue()
 
     def save(self, path: str | Path) -> Path:
         """Write :meth:`to_npz` to ``path`` (atomically)."""

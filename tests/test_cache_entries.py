@@ -5,14 +5,18 @@ that names the file. A cache that cannot be written says so in one line."""
 from __future__ import annotations
 
 import errno
+import hashlib
 import io
+import json
 import shutil
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from sim_tactile import cache as cache_module
-from sim_tactile.cache import SUM_SUFFIX, ArtefactCache
+from sim_tactile.cache import SUM_SUFFIX, ArtefactCache, npz_bytes
 from sim_tactile.errors import CacheError, CacheWarning
 from sim_tactile.plates import build
 from sim_tactile.plates.make.build import artefact_key
@@ -58,7 +62,9 @@ def test_an_entry_moved_under_another_key_is_refused(tmp_path):
     (pa, sa), (pb, sb) = _entry(cache, KEY_A), _entry(cache, KEY_B)
     pb.parent.mkdir(parents=True, exist_ok=True)
     shutil.copy(pa, pb)  # the bytes alone: no checksum for b
-    assert cache.get(KEY_B, "bin") is None
+    with pytest.warns(CacheWarning, match="no checksum"):
+        assert cache.get(KEY_B, "bin") is None
+    pb.parent.mkdir(parents=True, exist_ok=True)
     shutil.copy(pa, pb)
     shutil.copy(sa, sb)  # with a's checksum file: it names a's key
     with pytest.warns(CacheWarning, match="another key"):
@@ -185,10 +191,190 @@ def test_a_reader_leaves_a_writers_entry_between_its_two_writes_in_place(tmp_pat
 
 
 def test_an_entry_left_without_its_checksum_is_made_again(tmp_path):
+    """An entry is renamed into place whole, artefact and checksum together: one without its
+    checksum was damaged (nobody is between two writes), so it is discarded and made again."""
     cache = ArtefactCache(tmp_path)
     p, s = _entry(cache, KEY_A)
     p.parent.mkdir(parents=True, exist_ok=True)
-    p.write_bytes(b"cut short")  # a writer that died between its two writes
-    assert cache.get(KEY_A, "bin") is None
+    p.write_bytes(b"cut short")
+    with pytest.warns(CacheWarning, match="no checksum beside it"):
+        assert cache.get(KEY_A, "bin") is None
     assert cache.put(KEY_A, "bin", b"whole") == p
     assert cache.get(KEY_A, "bin") == p and p.read_bytes() == b"whole"
+
+
+def test_two_writers_of_one_entry_leave_one_whole_entry(tmp_path, monkeypatch):
+    """Two processes making the same artefact at once, their writes interleaved: A writes its
+    bytes, B writes its entry whole, then A writes its checksum. The entry and its checksum
+    were two files replaced one at a time, so A's checksum sat beside B's bytes and the next
+    reader warned of corruption and made the entry again; now each writer's pair is renamed
+    into place as one, and the entry the reader finds is whole (B's, the first in place)."""
+    a, b = ArtefactCache(tmp_path), ArtefactCache(tmp_path)
+    real = cache_module.atomic_write
+    order = []
+
+    def interleaved(path, data):
+        real(path, data)
+        if not order:  # A's first file is written: B runs whole now
+            order.append("a bytes")
+            b.put(KEY_A, "bin", b"made by b, with b's wall time")
+            order.append("b whole")
+
+    monkeypatch.setattr(cache_module, "atomic_write", interleaved)
+    a.put(KEY_A, "bin", b"made by a, with a's wall time")
+    monkeypatch.setattr(cache_module, "atomic_write", real)
+    assert order == ["a bytes", "b whole"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CacheWarning)
+        p = a.get(KEY_A, "bin")
+    assert p is not None and p.read_bytes() == b"made by b, with b's wall time"
+    assert not [q for q in tmp_path.rglob("*") if q.name.startswith(".")]  # no temporaries
+
+
+def test_npz_bytes_are_a_function_of_the_arrays(monkeypatch):
+    """numpy.savez stamps each member with the wall clock (two writes a few seconds apart
+    differ); the cache's .npz does not, and reads back as numpy's does."""
+    import time
+
+    arrays = {"x": np.arange(6.0).reshape(2, 3), "s": np.array("text")}
+    first = npz_bytes(arrays)
+    later = time.time() + 3600
+    monkeypatch.setattr(time, "time", lambda: later)
+    monkeypatch.setattr(time, "localtime", lambda t=None: time.gmtime(later))
+    assert npz_bytes(arrays) == first
+    with np.load(io.BytesIO(first), allow_pickle=False) as z:
+        assert z["x"].tolist() == arrays["x"].tolist() and str(z["s"]) == "text"
+
+
+def _forge_checksum(cache: ArtefactCache, src_key: str, key: str, ext: str) -> Path:
+    """Copy the entry ``src_key`` under ``key`` with a checksum file made valid for it, as a
+    forger would; returns the copy's path."""
+    (pa, _), (pb, sb) = _entry(cache, src_key, ext), _entry(cache, key, ext)
+    pb.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copy(pa, pb)
+    data = pb.read_bytes()
+    record = {"key": key, "sha256": hashlib.sha256(data).hexdigest(), "size": len(data)}
+    sb.write_text(json.dumps(record))
+    return pb
+
+
+@pytest.mark.slow
+def test_a_slide_entry_with_a_forged_checksum_is_simulated_again(tmp_path):
+    """An entry copied under another job's key with its checksum file made valid for that key
+    passed every check of the cache and was served as the other job's slide. The entry names
+    its own key, plate and seed: it is refused, with a warning naming the file, and the slide
+    simulated again."""
+    cache = ArtefactCache(tmp_path)
+    jobs = _jobs()
+    recs, _ = run_slides(jobs, cache=cache, workers=1)
+    forged = _forge_checksum(cache, jobs[0].key(), jobs[1].key(), SLIDE_EXT)
+    with pytest.warns(CacheWarning, match=str(forged)):
+        again, stats = run_slides(jobs, cache=cache, workers=1)
+    assert stats["slides_simulated"] == 1 and stats["slides_cached"] == 1
+    assert again[1].data.tobytes() == recs[1].data.tobytes()
+
+
+def _fake_entry(job: SlideJob, **meta) -> bytes:
+    """A cached slide's bytes for ``job`` (no physics), its meta as the simulation writes it,
+    changed by ``meta``."""
+    from sim_tactile.records import Recording
+    from sim_tactile.slides.jobs import entry_bytes
+
+    taxels = job.sensor.layout.positions
+    own = {"plate": job.plate.name, "plate_hash": job.plate.hash, "seed": job.seed}
+    rec = Recording(np.zeros((3, len(taxels))), np.arange(3.0), taxels, meta={**own, **meta})
+    return entry_bytes(rec, job.key())
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        ({}, None),
+        ({"seed": 99}, "holds the slide of seed 99, not 5"),
+        ({"plate_hash": "0" * 16, "plate": "other"}, "holds a slide of another plate"),
+    ],
+)
+def test_a_cached_slide_names_its_own_plate_and_seed(tmp_path, change, words):
+    from sim_tactile.slides.jobs import cached_slide
+
+    cache = ArtefactCache(tmp_path)
+    job = _jobs()[0]
+    cache.put(job.key(), SLIDE_EXT, _fake_entry(job, **change))
+    if words is None:
+        assert cache.get(job.key(), SLIDE_EXT) is not None
+        assert cached_slide(cache, job).meta["slide_key"] == job.key()
+        return
+    with pytest.warns(CacheWarning, match=words):
+        assert cached_slide(cache, job) is None
+    assert cache.get(job.key(), SLIDE_EXT) is None  # discarded
+
+
+def test_a_cached_slide_holds_no_wall_time():
+    from sim_tactile.records import Recording
+    from sim_tactile.slides.jobs import TIMING_KEYS, entry_bytes
+
+    job = _jobs()[0]
+    taxels = job.sensor.layout.positions
+    rec = Recording(np.zeros((2, 9)), np.arange(2.0), taxels, meta={"wall_s": 1.5})
+    timed = Recording(rec.data, rec.times, taxels, meta={"wall_s": 2.5, "slide_wall_s": 1.0})
+    assert entry_bytes(rec, job.key()) == entry_bytes(timed, job.key())
+    with np.load(io.BytesIO(entry_bytes(rec, job.key()))) as z:
+        assert not set(TIMING_KEYS) & set(json.loads(str(z["meta_json"])))
+
+
+#: One process of the concurrent-writers test: simulates the first job of :func:`_jobs` into
+#: its own cache (argv[2]) and prints the entry's path, then, once the other process is
+#: ready too (files in argv[3]), simulates it again into the shared cache (argv[1]).
+_WRITER = """
+import sys, time
+from pathlib import Path
+from sim_tactile.cache import ArtefactCache
+from sim_tactile.plates.presets import get_plate
+from sim_tactile.sensors import get_sensor
+from sim_tactile.sim.plan.protocol import Protocol
+from sim_tactile.slides import SlideJob, SlideWorker
+from sim_tactile.slides.jobs import SLIDE_EXT
+
+proto = Protocol(duration_s=0.15, rate_hz=100.0, speed_jitter=0.05)
+job = SlideJob(get_plate("finger7/ridges-2"), get_sensor("grid3x3"), proto, seed=5, fidelity="L0")
+SlideWorker(sys.argv[2])(job)
+print(ArtefactCache(Path(sys.argv[2])).path(job.key(), SLIDE_EXT), flush=True)
+ready = Path(sys.argv[3])
+(ready / Path(sys.argv[2]).name).touch()
+t0 = time.monotonic()
+while len(list(ready.iterdir())) < 2 and time.monotonic() - t0 < 120:
+    time.sleep(0.001)
+SlideWorker(sys.argv[1])(job)
+"""
+
+
+@pytest.mark.slow
+def test_two_processes_writing_one_slide_leave_an_entry_the_next_run_reads(tmp_path):
+    """Two runs on one slide cache simulate the same slide at once. An entry's bytes held the
+    wall time of its simulation (and the .npz its members' time stamps), so the two wrote
+    different bytes, and a checksum could end up beside the other's bytes: the next run
+    warned of corruption and simulated again. The bytes are now the slide's content (the
+    same in both processes) and an entry is replaced as one: the next run reads it."""
+    import subprocess
+    import sys
+
+    shared, ready = tmp_path / "shared", tmp_path / "ready"
+    ready.mkdir()
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", _WRITER, str(shared), str(tmp_path / f"own{k}"), str(ready)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for k in range(2)
+    ]
+    outs = [p.communicate(timeout=600) for p in procs]
+    for p, (_, err) in zip(procs, outs, strict=True):
+        assert p.returncode == 0 and "CacheWarning" not in err, err
+    own = [Path(out.strip()).read_bytes() for out, _ in outs]
+    assert own[0] == own[1]  # the same slide, the same bytes, whoever made it and when
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CacheWarning)
+        _, stats = run_slides(_jobs()[:1], cache=ArtefactCache(shared), workers=1)
+    assert stats["slides_cached"] == 1 and stats["slides_simulated"] == 0

@@ -56,7 +56,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     else:
         from ..datasets import export
 
-        res = export(args.store, args.out, part=args.part, format=fmt)
+        res = export(args.store, args.out, part=args.part, format=fmt, log=log)
     emit(args, res, lambda: f"{res['slides']} slides -> {res['out']}/")
     return 0
 

@@ -3,7 +3,8 @@
 :func:`export` writes a store as plain files in one of :data:`FORMATS`.
 
 An export is built in a temporary folder beside ``--out`` and renamed when whole: a failure
-(a damaged slide, a full disk, a read-only folder) leaves nothing behind. A new format is
+(a damaged slide, a full disk, a read-only folder) leaves nothing behind, and the folder of a
+killed export is removed by the next export to the same place. A new format is
 one function ``(SlideStore, folder) -> {kind: file name}`` added to :data:`FORMATS`.
 """
 
@@ -113,12 +114,18 @@ FORMATS: dict[str, Callable[[SlideStore, Path], dict[str, str]]] = {"numpy": wri
 
 
 def export(
-    path: str | Path, out: str | Path, *, part: str | None = None, format: str = "numpy"
+    path: str | Path,
+    out: str | Path,
+    *,
+    part: str | None = None,
+    format: str = "numpy",
+    log: Callable[[str], None] | None = None,
 ) -> dict:
     """Write a complete data set as plain files into the new (or empty) folder ``out``, in
     ``format`` (:data:`FORMATS`; ``numpy``: :func:`write_numpy`). A suite's store exports
     each part into ``out/<part>/``. Everything is checked before it is copied, and the
-    export is built beside ``out`` and renamed when whole: on any failure nothing is left."""
+    export is built beside ``out`` and renamed when whole: on any failure nothing is left,
+    and the temporary folder a killed export left is removed (with a note to ``log``)."""
     writer = FORMATS.get(format)
     if writer is None:
         raise ConfigError(f"--format {format!r} is not valid; valid: {', '.join(FORMATS)}")
@@ -132,7 +139,7 @@ def export(
     for st in stores.values():
         st.require_complete(" before exporting")
     docs = {}
-    with building(out) as tmp:
+    with building(out, log) as tmp:
         for name, st in stores.items():
             folder = tmp / name if suite else tmp
             folder.mkdir(exist_ok=True)

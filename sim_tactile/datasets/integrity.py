@@ -56,6 +56,8 @@ MAX_SLIDES = 10**8
 MAX_TIME = 10**8
 MAX_CHANNELS = 10**6
 MAX_SLIDE_VALUES = 10**8  # samples x channels of one slide (400 MB)
+#: the index arrays' chunks hold this many slides (fewer where the data set is smaller)
+INDEX_CHUNK = 65536
 #: names a store's metadata may use as a folder: a part of a suite, an array
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,199}")
 
@@ -239,7 +241,24 @@ def check_data_attrs(attrs: dict, where: str) -> dict:
     need = {f"{a}/zarr.json" for a in ("data", "checksum", *INDEX_DTYPES)}
     if not need <= set(integ["files"]) or not set(INDEX_DTYPES) <= set(integ["values"]):
         raise _bad(where, "integrity", integ, "a digest of every array")
+    _check_claimed_slides(attrs, where)
     return attrs
+
+
+def _check_claimed_slides(attrs: dict, where: str) -> None:
+    """``n_slides`` against the chunk files of ``lengths`` the store recorded when it was
+    made: every one is written (a slide's length is at least 1, never the fill value 0), so
+    a store of ``n`` slides records exactly ``ceil(n / INDEX_CHUNK)`` of them. A claim of
+    more slides than the store holds is refused here, before any array is read (a store
+    claiming 10^8 slides had its readers read for minutes, and print thousands of lines)."""
+    n = attrs["n_slides"]
+    want = {f"lengths/c/{k}" for k in range(math.ceil(n / INDEX_CHUNK))}
+    got = {k for k in attrs["integrity"]["files"] if k.startswith("lengths/")} - {
+        "lengths/zarr.json"
+    }
+    if got != want:
+        held = f"{len(got)} chunk file(s) of lengths recorded, for {len(want)} expected"
+        raise _bad(where, "n_slides", n, held)
 
 
 def chunk_files(folder: Path, name: str) -> dict[str, str]:
@@ -273,14 +292,20 @@ def check_files(folder: Path, attrs: dict, where: str) -> dict[str, str]:
 
 
 def array_layout(attrs: dict) -> dict[str, tuple[tuple, tuple | None, str]]:
-    """``name -> (shape, chunks or None (any), dtype)`` of a data set's arrays."""
+    """``name -> (shape, chunks or None (any), dtype)`` of a data set's arrays: their chunks
+    as the writer makes them, so a crafted chunk grid cannot make a reader read millions of
+    chunks."""
     n, t, c = attrs["n_slides"], attrs["n_time"], len(attrs["channel_names"])
     out: dict[str, tuple[tuple, tuple | None, str]] = {
         "data": ((n, t, c), (1, t, c), "float32"),
         "checksum": ((n,), (1,), "uint64"),
     }
+    rows = min(n, INDEX_CHUNK) or None  # (an empty data set's chunks: any)
     for name, dtype in INDEX_DTYPES.items():
-        out[name] = ((n, len(PARAM_NAMES)) if name == "params" else (n,), None, dtype)
+        if name == "params":
+            out[name] = ((n, len(PARAM_NAMES)), rows and (rows, len(PARAM_NAMES)), dtype)
+        else:
+            out[name] = ((n,), rows and (rows,), dtype)
     return out
 
 

@@ -37,9 +37,13 @@ holding the store's lock (:class:`~.fs.StoreLock`).
 
 from __future__ import annotations
 
+import os
 import platform
+import re
 import shutil
+import stat
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from glob import escape
 from pathlib import Path
@@ -47,12 +51,17 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from ..errors import MissingDependencyError, StoreError
+from ..errors import ConfigError, MissingDependencyError, StoreError
 from .fs import fs_errors, take, temp_name
 from .integrity import (
     FORMAT,
     FORMAT_VERSION,
+    INDEX_CHUNK,
     INDEX_DTYPES,
+    MAX_CHANNELS,
+    MAX_SLIDE_VALUES,
+    MAX_SLIDES,
+    MAX_TIME,
     PARAM_NAMES,
     REMAKE_HINT,
     check_arrays,
@@ -76,6 +85,7 @@ __all__ = [
     "DataGroup",
     "SlideWriter",
     "StoreSpec",
+    "check_fits",
     "check_slide",
     "config_hash",
     "create_store",
@@ -86,9 +96,6 @@ __all__ = [
     "set_attrs",
     "slide_digest",
 ]
-
-#: per-slide arrays written when the store is created (chunks of this many slides)
-_INDEX_CHUNK = 65536
 
 
 def zarr_module():
@@ -184,7 +191,7 @@ class StoreSpec:
 def _create_group(root, folder: Path, path: str, spec: StoreSpec) -> None:
     g = root.create_group(path) if path else root
     n, t, c = spec.n_slides, spec.n_time, len(spec.channel_names)
-    idx = (min(n, _INDEX_CHUNK),)
+    idx = (min(n, INDEX_CHUNK),)
     g.create_array("data", shape=(n, t, c), dtype="float32", chunks=(1, t, c), fill_value=np.nan)
     # 8 bytes a chunk: compressing them would only cost time
     g.create_array(
@@ -212,17 +219,68 @@ def _create_group(root, folder: Path, path: str, spec: StoreSpec) -> None:
     g.attrs.put(sealed({**spec.attrs(), "integrity": integrity}))
 
 
+#: the temporary name Zarr's local store writes a file under before renaming it
+#: (``<name>.<hex digits>.partial``, 32 of them; ``zarr.json`` becomes ``zarr.<hex>.partial``)
+_ZARR_PARTIAL = re.compile(r".+\.[0-9a-f]+\.partial")
+
+
 def remove_partial_chunks(path: str | Path) -> int:
-    """Remove the chunk files a killed writer left half written (Zarr writes each chunk to
+    """Remove the files a killed writer left half written (Zarr writes each chunk to
     ``<chunk>.<hex>.partial`` and renames it; ``kill -9`` between the two leaves the
-    temporary file, which no read uses). The caller holds the store's lock, so no writer is
-    between the two now. Returns how many were removed."""
+    temporary file, which no read uses). Only files of that name, in the store's own
+    folders: never a folder (a killed export's temporary folder inside the store is not
+    the store's), nothing in a hidden folder. The caller holds the store's lock, so no
+    writer is between the two now. Returns how many were removed."""
     n = 0
     with fs_errors(Path(path)):
-        for stale in Path(path).rglob("*.partial"):
-            stale.unlink(missing_ok=True)
-            n += 1
+        for folder, dirs, files in os.walk(path):
+            dirs[:] = [d for d in dirs if not d.startswith(".")]  # the store's are never hidden
+            for name in files:
+                f = Path(folder) / name
+                if _ZARR_PARTIAL.fullmatch(name) and stat.S_ISREG(f.lstat().st_mode):
+                    f.unlink(missing_ok=True)
+                    n += 1
     return n
+
+
+def check_fits(spec: StoreSpec, where: str) -> None:
+    """Refuse, before anything is created, a data set that a store cannot hold: the bounds
+    every reader checks (:mod:`.integrity`: slides, samples, channels, samples x channels of
+    one slide, the chunk of one slide), each named with its limit and the configuration's
+    values; then the attributes the store would hold, checked as a reader checks them. A
+    ConfigError (``where``: the data set, for messages)."""
+    n, t, c = spec.n_slides, spec.n_time, len(spec.channel_names)
+    window = f"{t / spec.rate_hz:.4g} s at {spec.rate_hz:g} Hz"
+    shorter = "shorten protocol.duration_s or lower protocol.rate_hz"
+    limits = (
+        (n, MAX_SLIDES, "slides", f"{n:,} slides", "fewer plates or slides_per_plate"),
+        (t, MAX_TIME, "samples a slide", f"{t:,} samples a slide ({window})", shorter),
+        (c, MAX_CHANNELS, "channels", f"{c:,} channels", "a sensor with fewer taxels"),
+        (len(spec.class_names), MAX_SLIDES, "classes", f"{len(spec.class_names):,} classes", ""),
+        (
+            t * c,
+            MAX_SLIDE_VALUES,
+            f"values a slide ({MAX_SLIDE_VALUES * 4 / 1e6:,.0f} MB)",
+            f"{t:,} samples ({window}) x {c} channels = {t * c:,} values a slide",
+            shorter,
+        ),
+    )
+    for value, limit, unit, what, remedy in limits:
+        if value > limit:
+            raise ConfigError(
+                f"{where}: {what}; a store holds at most {limit:,} {unit}"
+                + (f": {remedy}" if remedy else "")
+                + "; nothing was created"
+            )
+    names = ("data", "checksum", *INDEX_DTYPES)
+    files = {f"{k}/zarr.json": "" for k in names}
+    files.update({f"lengths/c/{k}": "" for k in range(-(-n // INDEX_CHUNK))})
+    integrity = {"files": files, "values": dict.fromkeys(INDEX_DTYPES, "")}
+    try:
+        check_data_attrs(sealed({**spec.attrs(), "integrity": integrity}), where)
+    except StoreError as exc:  # what a reader would refuse: this configuration's fault
+        what = str(exc).split(": the store's metadata is damaged")[0]
+        raise ConfigError(f"{what}: a store cannot hold it; nothing was created") from None
 
 
 def create_store(path: str | Path, specs: dict[str, StoreSpec], root_attrs: dict) -> None:
@@ -233,6 +291,8 @@ def create_store(path: str | Path, specs: dict[str, StoreSpec], root_attrs: dict
     store still there is a dead writer's, and is removed."""
     zarr = zarr_module()
     path = Path(path)
+    for name, spec in specs.items():  # before anything is created
+        check_fits(spec, f"{path}/{name}" if name else f"{path}")
     with fs_errors(path):
         path.parent.mkdir(parents=True, exist_ok=True)
         for stale in path.parent.glob(f".{escape(path.name)}.*.creating"):
@@ -280,14 +340,21 @@ def read_checksums(arr, where: str) -> tuple[np.ndarray, dict[int, str]]:
 class SlideWriter:
     """Writes slides into a data set's group (one process writes; workers only simulate).
     ``where``: the store's path as the user named it, ``hint``: what to do when the file
-    system refuses a write (for messages)."""
+    system refuses a write (for messages), ``guard``: called before each write, raises to
+    stop it (``generate``'s check that the store is still at ``where``)."""
 
     def __init__(
-        self, group, where: str | Path, lengths: np.ndarray | None = None, hint: str = ""
+        self,
+        group,
+        where: str | Path,
+        lengths: np.ndarray | None = None,
+        hint: str = "",
+        guard: Callable[[], None] | None = None,
     ) -> None:
         self.group = group
         self.where = str(where)
         self.hint = hint
+        self.guard = guard
         self.key = str(group.attrs["config_hash"])
         self.data = group["data"]
         self.checksum = group["checksum"]
@@ -307,12 +374,16 @@ class SlideWriter:
         if want[0] < self.n_time:  # pad a shorter slide with the fill value
             row = np.full((self.n_time, self.n_channels), np.nan, np.float32)
             row[: want[0]] = x
+        if self.guard is not None:
+            self.guard()
         with fs_errors(self.where, self.hint):
             self.data[i] = row  # the data chunk first...
             self.checksum[i] = np.uint64(slide_digest(x, i, self.key))  # ...then its mark
 
     def clear(self, i: int) -> None:
         """Mark slide ``i`` absent (before it is written again)."""
+        if self.guard is not None:
+            self.guard()
         with fs_errors(self.where, self.hint):
             self.checksum[i] = np.uint64(0)
 

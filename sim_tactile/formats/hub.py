@@ -159,7 +159,7 @@ def export_parquet(
     stores = [(p or "default", open_store(path, p)) for p in names]
     for _, st in stores:
         st.require_complete(" before exporting")
-    with building(out) as tmp:  # renamed to ``out`` when whole; removed on any failure
+    with building(out, log) as tmp:  # renamed to ``out`` when whole; removed on any failure
         infos = [_write_config(st, tmp, name, rows_per_shard, log) for name, st in stores]
         (tmp / "README.md").write_text(card_text(infos, __version__))
         doc = croissant_metadata(infos, tmp, __version__)

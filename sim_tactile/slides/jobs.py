@@ -119,35 +119,61 @@ class SlideWorker:
         t0 = time.perf_counter()
         cache = ArtefactCache(self.cache_root)
         key = slide_key(job)
-        rec = cached_slide(cache, key)
+        rec = cached_slide(cache, job, key)
         if rec is not None:  # with the warnings its simulation gave (kept in its meta)
             warns = tuple(str(w) for w in rec.meta.get("warnings") or ())
             return SlideOutcome(rec, warns, time.perf_counter() - t0, True)
         res = simulate_slide(job, cache)
         if self.write:
-            cache.put(key, SLIDE_EXT, res.recording.to_npz())
+            cache.put(key, SLIDE_EXT, entry_bytes(res.recording, key))
         return SlideOutcome(res.recording, tuple(res.warnings), time.perf_counter() - t0, False)
 
 
 #: The slide cache's file kind.
 SLIDE_EXT = "slide.npz"
+#: The keys of a recording's meta that hold wall-clock times: left out of a cached slide
+#: (two simulations of one slide differ in them alone, and an entry's bytes are its content)
+TIMING_KEYS = ("wall_s", "slide_wall_s")
 
 
-def cached_slide(cache: ArtefactCache, key: str) -> Recording | None:
-    """The slide cached under ``key`` (its entry checked against the key and its checksum,
-    :meth:`~sim_tactile.cache.ArtefactCache.get`), or None: absent, or damaged and discarded
-    with a warning naming the file (the slide is then simulated again)."""
+def entry_bytes(rec: Recording, key: str) -> bytes:
+    """The bytes a slide is cached as: its recording without wall times
+    (:data:`TIMING_KEYS`), its meta naming the slide's key (``slide_key``), as an .npz
+    without time stamps: the same slide gives the same bytes in any process, at any time."""
+    meta = {k: v for k, v in rec.meta.items() if k not in TIMING_KEYS}
+    meta["slide_key"] = key
+    return Recording(rec.data, rec.times, rec.taxels, rec.units, meta).to_npz()
+
+
+def cached_slide(cache: ArtefactCache, job: Slide, key: str | None = None) -> Recording | None:
+    """The slide of ``job`` (its key: ``key``, else :meth:`SlideJob.key`) from the cache, or
+    None: absent, or damaged and discarded with a warning naming the file (the slide is
+    then simulated again). The entry is checked against its key and checksum
+    (:meth:`~sim_tactile.cache.ArtefactCache.get`), then what it holds against the job: its
+    own key, plate and seed (a checksum file forged for an entry copied under another key
+    passes the first check, never this one)."""
+    key = key or slide_key(job)
     hit = cache.get(key, SLIDE_EXT)
     if hit is None:
         return None
     try:
-        return Recording.load(hit)
+        rec = Recording.load(hit)
+        why = _not_the_jobs(rec.meta, job, key)
     except (SimTactileError, OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-        warnings.warn(
-            f"cache entry {hit} cannot be read as a slide ({type(exc).__name__}); it is "
-            "simulated again",
-            CacheWarning,
-            stacklevel=2,
-        )
-        cache.discard(key, SLIDE_EXT)
-        return None
+        why = f"cannot be read as a slide ({type(exc).__name__})"
+    if why is None:
+        return rec
+    warnings.warn(f"cache entry {hit} {why}; it is simulated again", CacheWarning, stacklevel=2)
+    cache.discard(key, SLIDE_EXT)
+    return None
+
+
+def _not_the_jobs(meta: dict, job: Slide, key: str) -> str | None:
+    """None if a cached slide's meta names ``job``'s key, plate and seed, else how not."""
+    if meta.get("slide_key") != key:
+        return f"holds the slide of another key ({str(meta.get('slide_key'))[:16]}...)"
+    if meta.get("plate_hash") != job.plate.hash:
+        return f"holds a slide of another plate ({meta.get('plate')!r})"
+    if meta.get("seed") != job.seed:
+        return f"holds the slide of seed {meta.get('seed')!r}, not {job.seed}"
+    return None

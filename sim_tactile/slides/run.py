@@ -21,7 +21,7 @@ from .. import _validate as v
 from ..cache import ArtefactCache
 from ..errors import ConfigError, SimTactileError, WorkerError, require
 from ..records import Recording
-from .jobs import SlideJob, SlideOutcome, SlideWorker, cached_slide
+from .jobs import SlideJob, SlideOutcome, SlideWorker, cached_slide, slide_key
 
 #: The backends ``generate --backend`` takes.
 BACKENDS = ("local", "ray")
@@ -295,8 +295,10 @@ def run_slides(
     time, 0 when all were cached), ``slides_simulated``, ``slides_cached``, ``sim_warnings``
     (each distinct warning with its count)."""
     cache = cache or ArtefactCache.default()
-    keys = [j.key() for j in jobs]
-    recs: list[Recording | None] = [cached_slide(cache, k) for k in keys]
+    keys = [slide_key(j) for j in jobs]
+    recs: list[Recording | None] = [
+        cached_slide(cache, j, k) for j, k in zip(jobs, keys, strict=True)
+    ]
     todo = [i for i, r in enumerate(recs) if r is None]
     warns: Counter[str] = Counter(
         str(w) for r in recs if r is not None for w in r.meta.get("warnings") or ()

@@ -25,6 +25,10 @@ APPROACH_CLEARANCE_M = 0.3e-3
 START_MARGIN_M = 2e-3
 #: The slide's speed ramps up over this time [s] at the start of each stroke.
 SPEED_RAMP_S = 0.02
+#: The longest window a slide may record [s]: ``duration_s``'s cap, and the default window's
+#: (the time to cross the texture) too, so a slow speed cannot run a slide for hours or ask
+#: for billions of samples.
+MAX_DURATION_S = 600.0
 
 #: How the press force is held during press, settle and slide (``Protocol.force_control``):
 #:
@@ -79,7 +83,7 @@ class Protocol:
         v.in_range("speed_m_s", self.speed_m_s, 0.0, 1.0, unit="m/s")
         v.in_range("force_n", self.force_n, 1e-3, 50.0, lo_open=False, unit="N")
         if self.duration_s is not None:
-            v.in_range("duration_s", self.duration_s, 1e-3, 600.0, unit="s")
+            v.in_range("duration_s", self.duration_s, 1e-3, MAX_DURATION_S, unit="s")
         if self.rate_hz is not None:
             v.in_range("rate_hz", self.rate_hz, 1.0, 100_000.0, unit="Hz")
         v.in_range("press_s", self.press_s, 0.0, 10.0, unit="s")
@@ -153,8 +157,13 @@ class SlideWindow:
     def window_s(
         cls, area_lengths_m, pad_length_m: float, speed_m_s: float, rate_hz: float
     ) -> float:
-        """A window [s] that covers the crossing of the longest of the areas, whole samples."""
-        t = max(cls.crossing_s(a, pad_length_m, speed_m_s) for a in area_lengths_m)
+        """A window [s] that covers the crossing of the longest of the areas, whole samples
+        (at most :data:`MAX_DURATION_S`, as an explicit ``duration_s``)."""
+        if speed_m_s <= 0:
+            raise ConfigError("speed_m_s = 0 needs a duration_s")
+        longest = max(area_lengths_m)
+        t = cls.crossing_s(longest, pad_length_m, speed_m_s)
+        _default_duration(t, f"a {longest:g} m textured area", speed_m_s)
         return math.ceil(t * rate_hz) / rate_hz
 
     @classmethod
@@ -195,5 +204,22 @@ class SlideWindow:
             if speed == 0:
                 raise ConfigError("speed_m_s = 0 needs a duration_s")
             length = sum(abs(b - a) for a, b, _ in strokes)
-            n = max(1, math.ceil(length / max(speed, 1e-9) * rate))
+            what = f"plate {plate.name or plate.hash}'s textured area"
+            if len(strokes) > 1:
+                what += f" {len(strokes)} times"
+            t = _default_duration(length / speed, what, speed)
+            n = max(1, math.ceil(t * rate))
         return cls(x_start, x_end, x_limit, tuple(strokes), n)
+
+
+def _default_duration(t_s: float, what: str, speed_m_s: float) -> float:
+    """``t_s``, a slide's default window (the time to cross ``what`` at ``speed_m_s``), if
+    it obeys :data:`MAX_DURATION_S` as an explicit ``duration_s`` must; else a ConfigError
+    naming the speed, the window and the cap."""
+    if not t_s <= MAX_DURATION_S:  # (also NaN and inf)
+        raise ConfigError(
+            f"speed_m_s = {speed_m_s:g} m/s takes {t_s:.4g} s to cross {what} (the default "
+            f"duration); valid: at most {MAX_DURATION_S:g} s, as for duration_s: raise "
+            "speed_m_s or give duration_s"
+        )
+    return t_s

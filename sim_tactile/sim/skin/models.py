@@ -34,13 +34,12 @@ block updates then take their general formulas (``symmetric=False``).
 
 from __future__ import annotations
 
-import io
 import warnings
 import zipfile
 
 import numpy as np
 
-from ...cache import SETUP, setup_memo
+from ...cache import SETUP, npz_bytes, setup_memo
 from ...errors import CacheWarning, ConfigError
 from ...hashing import array_digest, blas_kernel, code_version, content_hash
 from ...scene.elastic import compliance_matrix, compliance_table
@@ -282,12 +281,10 @@ def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
 
 
 def _store(cache, key, C, K, what, symmetric) -> None:
-    buf = io.BytesIO()
     arrays = {"C": C, "what": np.array(what), "symmetric": np.array(symmetric)}
     if K is not None:
         arrays["K"] = K
-    np.savez(buf, **arrays)
-    cache.put(key, "skin.npz", buf.getvalue())
+    cache.put(key, "skin.npz", npz_bytes(arrays))  # its bytes: a function of the arrays
 
 
 def _memo_dense(grid, finger, slide_dir, inverse) -> CoupledSkin:
