@@ -31,7 +31,7 @@ import numpy as np
 from . import _validate as v
 from .cache import default_root
 from .datasets.export import spec_from_tactile
-from .datasets.fs import StoreLock, fs_errors, no_empty_folders_left
+from .datasets.fs import fs_errors, no_empty_folders_left
 from .datasets.integrity import (
     chunk_files,
     compare_index,
@@ -39,6 +39,7 @@ from .datasets.integrity import (
     reading,
     values_digest,
 )
+from .datasets.lock import StoreLock
 from .datasets.store import (
     DataGroup,
     SlideWriter,
@@ -53,6 +54,7 @@ from .datasets.store import (
 )
 from .errors import ConfigError, StoreError, Terminated, WorkerError
 from .hashing import canonical_json
+from .interrupts import interrupt_of
 from .sensors.calibration import load_calibration
 from .slides.config import config_slide_set, load_config
 from .slides.jobs import SlideWorker
@@ -391,10 +393,12 @@ def generate(
             try:
                 _fill(runner, run, groups, resumed, out, total, simulated, progress, log)
             except BaseException as exc:
-                if isinstance(exc, KeyboardInterrupt):
+                # an interrupt may surface through a compiled kernel as a SystemError
+                stop = interrupt_of(exc)
+                if stop is not None:
                     run.interrupted = True
-                    if isinstance(exc, Terminated):
-                        run.signal = signal.Signals(exc.signum).name
+                    if isinstance(stop, Terminated):
+                        run.signal = signal.Signals(stop.signum).name
                     log(
                         f"{'stopped by ' + run.signal if run.signal else 'interrupted'}: "
                         f"{run.reused + run.written} of {total} slides are in {out}; run the "
@@ -402,6 +406,8 @@ def generate(
                     )
                 runner.close(cancel=True)
                 _record_run(root, run, backend, runner.workers, address, t_start, out, log)
+                if stop is not None and stop is not exc:
+                    raise stop from None
                 raise
             runner.close(cancel=True)
             _record_run(root, run, backend, runner.workers, address, t_start, out)

@@ -1,8 +1,8 @@
-"""The file system under a store: one writer at a time (:class:`~.lock.StoreLock`, from
-:mod:`.lock`), folders built under a temporary name and renamed when whole
-(:func:`building`, :func:`take`), no empty folder left by a failed command
+"""The file system under a store: folders built under a temporary name and renamed when
+whole (:func:`building`, :func:`take`), no empty folder left by a failed command
 (:func:`no_empty_folders_left`), and the operating system's faults as one line each
-(:func:`io_error`, :func:`fs_errors`, :func:`write_faults`).
+(:func:`io_error`, :func:`fs_errors`, :func:`write_faults`). One writer at a time:
+:mod:`.lock`.
 """
 
 from __future__ import annotations
@@ -16,8 +16,6 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import StoreError
-from .lock import StoreLock as StoreLock
-from .lock import lock_path as lock_path
 
 _NO_SPACE = (errno.ENOSPC, errno.EDQUOT)
 _READ_ONLY = (errno.EROFS, errno.EACCES, errno.EPERM)

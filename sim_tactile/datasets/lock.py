@@ -35,6 +35,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from ..errors import StoreError
+from .fs import fs_errors, io_error
 
 #: How an existing lock file is opened: never through a link, never blocking, read-only.
 _OPEN_EXISTING = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC
@@ -114,8 +115,6 @@ def _create(path: Path, store: Path) -> int | None:
     except FileExistsError:
         return None
     except OSError as exc:
-        from .fs import io_error
-
         raise io_error(exc, store) from None
 
 
@@ -202,8 +201,6 @@ class StoreLock:
             os.close(fd)
 
     def acquire(self) -> StoreLock:
-        from .fs import fs_errors
-
         with fs_errors(self.store):
             self.path.parent.mkdir(parents=True, exist_ok=True)
         while True:
