@@ -15,11 +15,10 @@ import os
 import socket
 import stat
 import tempfile
-import threading
 from pathlib import Path
 
 import pytest
-from _stores import quiet_generate, write_config
+from _stores import quiet_generate, within, write_config
 
 from sim_tactile.datasets import lock as lock_mod
 from sim_tactile.datasets.lock import StoreLock, lock_path
@@ -31,24 +30,8 @@ HANG_S = 20.0
 VICTIM = b"someone's precious file\n"
 
 
-def _within(call, timeout_s: float = HANG_S):
-    """``call()``'s result or exception, failing the test if it does not return in time."""
-    box: dict = {}
-
-    def target():
-        try:
-            box["value"] = call()
-        except BaseException as exc:  # noqa: BLE001 - handed to the test
-            box["exc"] = exc
-
-    t = threading.Thread(target=target, daemon=True)
-    t.start()
-    t.join(timeout_s)
-    return t.is_alive(), box
-
-
 def _refused(call, *words: str) -> str:
-    hung, box = _within(call)
+    hung, box = within(call, HANG_S)
     assert not hung, "the lock hung"
     exc = box.get("exc")
     assert isinstance(exc, StoreError), box
