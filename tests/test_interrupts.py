@@ -139,7 +139,10 @@ slides_per_plate = 400
 duration_s = 1.5
 """
 #: (signal, delay [s] after the first slide is in the store): SIGTERM at two points of a
-#: slide's kernels, and Ctrl-C; the runs go side by side
+#: slide's kernels, and Ctrl-C; the first run alone, the others side by side
+#: How long the first slide may take to reach the store [s] (a cold cache builds the
+#: plates and skins first; generous for a machine shared with other work).
+FIRST_SLIDE_S = 600.0
 SENDS = [(signal.SIGTERM, 0.05), (signal.SIGTERM, 0.4), (signal.SIGINT, 0.2)]
 
 
@@ -157,7 +160,7 @@ def _stop_generate(cfg: Path, out: Path, env: dict, signum: int, delay_s: float)
     t0 = time.monotonic()
     chunks = out / "data" / "c"
     while not (chunks.is_dir() and any(chunks.rglob("*"))):  # the slides run now
-        assert p.poll() is None and time.monotonic() - t0 < 240, "".join(err)[-2000:]
+        assert p.poll() is None and time.monotonic() - t0 < FIRST_SLIDE_S, "".join(err)[-2000:]
         time.sleep(0.01)
     time.sleep(delay_s)
     p.send_signal(signum)
@@ -175,7 +178,8 @@ def test_a_signal_during_the_kernels_of_one_worker_is_reported_and_recorded(tmp_
     def one(k: int) -> None:  # generate writes no slide to the cache: the session's serves
         got[k] = _stop_generate(cfg, tmp_path / f"run{k}.zarr", cli_env, *SENDS[k])
 
-    threads = [threading.Thread(target=one, args=(k,)) for k in range(len(SENDS))]
+    one(0)  # alone: it builds the plates and skins into the cache that the others read
+    threads = [threading.Thread(target=one, args=(k,)) for k in range(1, len(SENDS))]
     for t in threads:
         t.start()
     for t in threads:
