@@ -20,7 +20,14 @@ version on a machine, whatever checkout, worktree, clone or installed wheel runs
 clone's test of its own wheel reads what its suite compiled), two versions side by side
 never overwrite each other, and a read-only site-packages needs no ``__pycache__``. Where
 that folder cannot be written, numba's own places serve (``$NUMBA_CACHE_DIR``, or
-``__pycache__`` beside the source), with the same versioned stamp.
+``__pycache__`` beside the source), with the same versioned stamp, and a warning says so;
+where none can, the folder is read as it is. A kernel that cannot be kept (a full disk, a
+read-only folder) is compiled and used all the same, with a warning that nothing was kept.
+
+Every file is proven before numba reads it (:mod:`sim_tactile._kernel_files`): a digest
+binds its bytes to its name and its stamp, and a damaged, truncated, unreadable or
+misplaced file is compiled again, with a warning naming it. numba's files are pickles, so
+the kernel folder is trusted as code is: share it only with people whose code you would run.
 
 This subclasses numba's cache machinery (``FunctionCache`` and its locators, as numba's own
 ``enable_caching`` uses them); ``tests/test_jit_cache.py`` edits a callee in another file of
@@ -30,12 +37,15 @@ a copy of the package and checks that the kernel, and a slide, move with it.
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
 import numba
 from numba.core import caching
 
+from ._kernel_files import ProvenCacheFile
+from .errors import CacheWarning, os_error_message
 from .hashing import PACKAGE, code_version
 
 #: The libraries whose versions change what a kernel compiles to (numba checks its own too).
@@ -46,6 +56,11 @@ def kernel_stamp(module: str) -> str:
     """What a cached kernel of ``module`` must have been compiled from: the code version of
     the module's import closure and of :data:`KERNEL_LIBRARIES`."""
     return code_version(module, libraries=KERNEL_LIBRARIES)
+
+
+def _stamp_of(module: str) -> str:
+    """:func:`kernel_stamp` for this package's modules; none for others (a test's kernel)."""
+    return kernel_stamp(module) if module.split(".")[0] == PACKAGE else ""
 
 
 def kernel_root() -> Path:
@@ -82,12 +97,42 @@ class _ContentLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocat
 
     @classmethod
     def from_function(cls, py_func, py_file):
-        if py_func.__module__.split(".")[0] != PACKAGE:
+        if py_func.__module__.split(".")[0] != PACKAGE or not os.path.exists(py_file):
             return None
-        self = super().from_function(py_func, py_file)
-        if self is not None:
-            _prune(Path(self._cache_path))
+        self = cls(py_func, py_file)
+        try:
+            self.ensure_cache_path()
+        except OSError as exc:  # numba's own places serve, where they can be written
+            _once(
+                f"the kernel folder cannot be written ({os_error_message(exc, kernel_root())}): "
+                "the kernels are kept in numba's own cache folders where one can be written "
+                "(set SIM_TACTILE_KERNELS to a writable folder)"
+            )
+            return None
+        _prune(Path(self._cache_path))
         return self
+
+
+class _ReadOnlyContentLocator(_ContentLocator):
+    """The kernel folder as it is, where no folder can be written: what it holds is read
+    (proven), and what is compiled is not kept (:meth:`VersionedFunctionCache.save_overload`
+    says so)."""
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if py_func.__module__.split(".")[0] != PACKAGE or not os.path.exists(py_file):
+            return None
+        return cls(py_func, py_file)
+
+
+_said: set[str] = set()
+
+
+def _once(message: str) -> None:
+    """A :class:`~sim_tactile.errors.CacheWarning`, once per process."""
+    if message not in _said:
+        _said.add(message)
+        warnings.warn(message, CacheWarning, stacklevel=3)
 
 
 #: Code versions of one module kept side by side (the most recently used; a checkout's edits
@@ -134,16 +179,46 @@ def _versioned(base: type) -> type:
 
 
 class _Impl(caching.CompileResultCacheImpl):
-    _locator_classes = [_ContentLocator] + [
-        _versioned(c) if issubclass(c, caching._SourceFileBackedLocatorMixin) else c
-        for c in caching.CompileResultCacheImpl._locator_classes
+    _locator_classes = [
+        _ContentLocator,
+        *(
+            _versioned(c) if issubclass(c, caching._SourceFileBackedLocatorMixin) else c
+            for c in caching.CompileResultCacheImpl._locator_classes
+        ),
+        _ReadOnlyContentLocator,
     ]
 
 
 class VersionedFunctionCache(caching.FunctionCache):
-    """numba's per-function cache, its entries stamped with :func:`kernel_stamp`."""
+    """numba's per-function cache, its entries stamped with :func:`kernel_stamp` and each
+    of its files proven before it is read (:class:`~._kernel_files.ProvenCacheFile`)."""
 
     _impl_class = _Impl
+
+    def __init__(self, py_func) -> None:
+        super().__init__(py_func)
+        locator = self._impl.locator
+        self._cache_file = ProvenCacheFile(
+            self._cache_path,
+            self._impl.filename_base,
+            locator.get_source_stamp(),
+            stamp=_stamp_of(py_func.__module__),
+            own_folder=isinstance(locator, _ContentLocator),
+        )
+
+    def save_overload(self, sig, data) -> None:
+        """Keep a compiled kernel; where it cannot be kept (a full disk, a read-only
+        folder), the run goes on with it, and a warning says that nothing was kept."""
+        try:
+            super().save_overload(sig, data)
+        except OSError as exc:
+            root = kernel_root()
+            where = root if Path(self._cache_path).is_relative_to(root) else self._cache_path
+            _once(
+                f"compiled kernels cannot be kept: {os_error_message(exc, where)}; this run "
+                "compiles them and keeps nothing (set SIM_TACTILE_KERNELS to a writable "
+                "folder with free space)"
+            )
 
 
 def njit(fn: Callable | None = None, **options):

@@ -35,7 +35,7 @@ import numpy as np
 from . import _validate as v
 from .cache import default_root
 from .datasets.export import spec_from_tactile
-from .datasets.fs import FolderHold, StoreLock, fs_errors, no_empty_folders_left
+from .datasets.fs import FolderHold, fs_errors, no_empty_folders_left
 from .datasets.integrity import (
     chunk_files,
     compare_index,
@@ -43,6 +43,7 @@ from .datasets.integrity import (
     reading,
     values_digest,
 )
+from .datasets.lock import StoreLock
 from .datasets.store import (
     DataGroup,
     SlideWriter,
@@ -58,6 +59,7 @@ from .datasets.store import (
 )
 from .errors import ConfigError, StoreError, Terminated, WorkerError
 from .hashing import canonical_json
+from .interrupts import interrupt_of
 from .sensors.calibration import load_calibration
 from .slides.config import config_slide_set, is_config_path, load_config
 from .slides.jobs import SlideWorker
@@ -430,10 +432,12 @@ def generate(
                 _fill(runner, run, groups, resumed, out, total, simulated, progress, log)
                 hold.check()  # the last slide too went into the store at --out
             except BaseException as exc:
-                if isinstance(exc, KeyboardInterrupt):
+                # an interrupt may surface through a compiled kernel as a SystemError
+                stop = interrupt_of(exc)
+                if stop is not None:
                     run.interrupted = True
-                    if isinstance(exc, Terminated):
-                        run.signal = signal.Signals(exc.signum).name
+                    if isinstance(stop, Terminated):
+                        run.signal = signal.Signals(stop.signum).name
                     log(
                         f"{'stopped by ' + run.signal if run.signal else 'interrupted'}: "
                         f"{run.reused + run.written} of {total} slides are in {out}; run the "
@@ -442,6 +446,8 @@ def generate(
                 runner.close(cancel=True)
                 if hold.follows or not hold.moved():  # never a file at a vacated path
                     _record_run(root, run, backend, runner.workers, address, t_start, out, log)
+                if stop is not None and stop is not exc:
+                    raise stop from None
                 raise
             runner.close(cancel=True)
             _record_run(root, run, backend, runner.workers, address, t_start, out)

@@ -103,3 +103,22 @@ def assert_same(a: dict, b: dict, history: bool = False) -> None:
     for k in ("data", "slides", "batches", "labels", "taxels"):
         np.testing.assert_array_equal(a[k], b[k], err_msg=k)
     assert a["names"] == b["names"]
+
+
+def within(call, timeout_s: float) -> tuple[bool, dict]:
+    """Run ``call()`` in a daemon thread: whether it is still running after ``timeout_s``
+    (a hang), and ``{"value": ...}`` or ``{"exc": ...}`` when it returned."""
+    import threading
+
+    box: dict = {}
+
+    def target():
+        try:
+            box["value"] = call()
+        except BaseException as exc:  # noqa: BLE001 - handed to the test
+            box["exc"] = exc
+
+    t = threading.Thread(target=target, daemon=True)
+    t.start()
+    t.join(timeout_s)
+    return t.is_alive(), box

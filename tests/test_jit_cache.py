@@ -222,3 +222,43 @@ def test_a_module_keeps_its_most_recent_code_versions(tmp_path):
     kept = {d.name for d in module.iterdir()}
     assert len(kept) == KEEP_VERSIONS and "v0" in kept
     assert kept == {"v0", *(f"v{k}" for k in range(4, KEEP_VERSIONS + 3))}
+
+
+@pytest.mark.slow
+def test_a_data_file_from_another_versions_folder_does_not_run_its_physics(tmp_path):
+    """Version A (callee shift 1) and version B (shift 2) each compile into their own
+    folder; B's compiled caller is copied over A's, then B's whole folder into A's. A
+    computes A's value (it ran B's, 6 instead of 4, with exit 0), warning of the file, and
+    compiles it again."""
+    pkg = _copy_package(tmp_path, with_caches=False)
+    (pkg / "_probe_caller.py").write_text(_CALLER)
+    callee = pkg / "_probe_callee.py"
+    env = _env(pkg, tmp_path)
+    kernels = tmp_path / "kernels" / "sim_tactile._probe_caller"
+
+    def run() -> tuple[dict, str]:
+        p = subprocess.run(
+            [sys.executable, "-c", _RUN], env=env, capture_output=True, text=True, cwd=tmp_path
+        )
+        assert p.returncode == 0, p.stderr[-3000:]
+        return json.loads(p.stdout), p.stderr
+
+    callee.write_text(_CALLEE.format(shift=1.0))
+    assert run()[0]["value"] == 4.0
+    (a,) = kernels.iterdir()
+    callee.write_text(_CALLEE.format(shift=2.0))
+    assert run()[0]["value"] == 6.0
+    (b,) = set(kernels.iterdir()) - {a}
+    callee.write_text(_CALLEE.format(shift=1.0))
+    (theirs,) = b.glob("*.nbc")
+    (ours,) = a.glob("*.nbc")
+    shutil.copyfile(theirs, ours)  # B's compiled caller under A's name
+    got, err = run()
+    assert got == {"value": 4.0, "hits": 0, "misses": 1}, err[-2000:]
+    assert ours.name in err and "another version of the code" in err
+    assert run()[0] == {"value": 4.0, "hits": 1, "misses": 0}
+    for f in b.iterdir():  # the whole of B's folder copied into A's (`cp B/* A/`)
+        shutil.copyfile(f, a / f.name)
+    got, err = run()
+    assert got == {"value": 4.0, "hits": 0, "misses": 1}, err[-2000:]
+    assert ".nbi" in err and "another version of the code" in err

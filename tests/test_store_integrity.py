@@ -262,7 +262,7 @@ def test_a_plain_suite_exports_each_part(store, tmp_path, ref_back):
 
 def test_a_plate_map_is_checked_against_its_digest(tmp_path):
     from sim_tactile.datasets.export import spec_from_tactile
-    from sim_tactile.datasets.fs import StoreLock
+    from sim_tactile.datasets.lock import StoreLock
     from sim_tactile.datasets.store import create_store
     from sim_tactile.records import TactileDataset
 

@@ -22,7 +22,7 @@ from _stores import TINY, fake_slide, quiet_generate, read_back, write_config
 
 from sim_tactile import datasets
 from sim_tactile.datasets import store as store_mod
-from sim_tactile.datasets.fs import StoreLock, lock_path
+from sim_tactile.datasets.lock import StoreLock, lock_path
 from sim_tactile.errors import StoreError
 
 #: what the refused writer of a pair may be told (one line each)
@@ -222,7 +222,7 @@ def test_a_dead_writers_lock_and_temporary_store_are_no_obstacle(tmp_path, cli_e
     out = tmp_path / "x.zarr"
     code = (
         "import sys, time\n"
-        "from sim_tactile.datasets.fs import StoreLock\n"
+        "from sim_tactile.datasets.lock import StoreLock\n"
         f"StoreLock({str(out)!r}).acquire()\n"
         "print('held', flush=True)\n"
         "time.sleep(120)\n"

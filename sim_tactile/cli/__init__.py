@@ -4,20 +4,22 @@ commands (plates, sim, tasks, data, bench).
 Every command takes ``--json``: stdout then carries one JSON document and nothing else;
 progress and logs go to stderr. A failure exits non-zero with a one-line reason on stderr
 (``--debug`` shows the traceback). SIGTERM stops a command as Ctrl-C does: its workers stop,
-its store records the interrupted run, and it exits with 143.
+its store records the interrupted run, and it exits with 143 (Ctrl-C: 130). An interrupt
+that surfaces as another exception (through a compiled kernel, :mod:`sim_tactile.interrupts`)
+is reported as the interrupt.
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import signal
 import sys
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 
 from .. import __version__
 from ..errors import SimTactileError, Terminated, os_error_message
+from ..interrupts import handled, interrupt_of
 from . import bench, data, plates, sim, tasks
 from ._common import log
 
@@ -72,25 +74,6 @@ def documented_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _raise_terminated(signum, frame) -> None:
-    raise Terminated(signum)
-
-
-@contextlib.contextmanager
-def _signals() -> Iterator[None]:
-    """SIGTERM raises :class:`~sim_tactile.errors.Terminated` (a KeyboardInterrupt) in the
-    main thread for as long as a command runs."""
-    try:
-        old = signal.signal(signal.SIGTERM, _raise_terminated)
-    except ValueError:  # not the main thread (an embedding program): leave it be
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
-
-
 def _one_line_warnings(message, category, filename, lineno, line=None) -> str:
     return f"sim-tactile: warning: {message}\n"
 
@@ -111,43 +94,52 @@ def main(argv: Sequence[str] | None = None) -> int:
     debug = bool(getattr(args, "debug", False))
     if not debug:
         warnings.formatwarning = _one_line_warnings
-    with _signals():
+    with handled():
         try:
             return int(args.func(args) or 0)
-        except Terminated as exc:
-            log(f"sim-tactile: stopped by signal {signal.Signals(exc.signum).name}")
-            return 128 + exc.signum
-        except KeyboardInterrupt:
-            log("sim-tactile: interrupted")
-            return EXIT_INTERRUPTED
-        except BrokenPipeError:  # e.g. `sim-tactile plates list | head`
-            sys.stderr.close()
-            return 0
-        except SimTactileError as exc:
-            if debug:
+        except KeyboardInterrupt as exc:
+            return _stopped(exc)
+        except Exception as exc:
+            # a signal that surfaced through a compiled kernel (a SystemError with the
+            # interrupt in its chain), or any failure after a signal came: the signal
+            stop = interrupt_of(exc)
+            if stop is not None:
+                return _stopped(stop)
+            if debug and not isinstance(exc, BrokenPipeError):
                 raise
-            log(f"sim-tactile: error: {exc}")
-            return EXIT_ERROR
-        except OSError as exc:  # the machine's fault: a full disk, a read-only folder
-            if debug:
-                raise
-            where = exc.filename if exc.filename is not None else "a file"
-            log(f"sim-tactile: error: {os_error_message(exc, where, 'using')}")
-            return EXIT_ERROR
-        except MemoryError:
-            if debug:
-                raise
-            log("sim-tactile: error: out of memory (a smaller input, or fewer --workers)")
-            return EXIT_ERROR
-        except Exception as exc:  # a bug: one line, and how to see more
-            if debug:
-                raise
-            text = str(exc).splitlines()[0] if str(exc) else ""
-            log(
-                f"sim-tactile: internal error: {type(exc).__name__}: {text} (run again with "
-                "--debug for the traceback, and please report it)"
-            )
-            return EXIT_INTERNAL
+            return _failed(exc)
+
+
+def _stopped(exc: KeyboardInterrupt) -> int:
+    """The one line and exit status of a command stopped by a signal or Ctrl-C."""
+    if isinstance(exc, Terminated):
+        log(f"sim-tactile: stopped by signal {signal.Signals(exc.signum).name}")
+        return 128 + exc.signum
+    log("sim-tactile: interrupted")
+    return EXIT_INTERRUPTED
+
+
+def _failed(exc: Exception) -> int:
+    """The one line and exit status of a command that failed with ``exc``."""
+    if isinstance(exc, BrokenPipeError):  # e.g. `sim-tactile plates list | head`
+        sys.stderr.close()
+        return 0
+    if isinstance(exc, SimTactileError):
+        log(f"sim-tactile: error: {exc}")
+        return EXIT_ERROR
+    if isinstance(exc, OSError):  # the machine's fault: a full disk, a read-only folder
+        where = exc.filename if exc.filename is not None else "a file"
+        log(f"sim-tactile: error: {os_error_message(exc, where, 'using')}")
+        return EXIT_ERROR
+    if isinstance(exc, MemoryError):
+        log("sim-tactile: error: out of memory (a smaller input, or fewer --workers)")
+        return EXIT_ERROR
+    text = str(exc).splitlines()[0] if str(exc) else ""  # a bug: one line, and how to see more
+    log(
+        f"sim-tactile: internal error: {type(exc).__name__}: {text} (run again with --debug "
+        "for the traceback, and please report it)"
+    )
+    return EXIT_INTERNAL
 
 
 if __name__ == "__main__":  # pragma: no cover

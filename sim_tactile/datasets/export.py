@@ -20,8 +20,9 @@ import numpy as np
 from ..errors import ConfigError, StoreError
 from ..hashing import array_digest
 from ..records import TactileDataset
-from .fs import StoreLock, building
+from .fs import building
 from .integrity import DIGEST_ATTR
+from .lock import StoreLock
 from .reader import SlideStore, open_store, parts_of
 from .store import PARAM_NAMES, SlideWriter, StoreSpec, create_store, set_attrs, zarr_module
 

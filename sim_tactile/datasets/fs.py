@@ -1,30 +1,21 @@
-"""The file system under a store: one writer at a time (:class:`StoreLock`), folders built
-under a temporary name and renamed when whole (:func:`building`, :func:`take`; a killed
-builder's folder removed by the next, :func:`remove_dead_builds`), a store written through
-its open folder, so that a move is noticed and never writes the old path again
-(:class:`FolderHold`), no empty folder left by a failed command
-(:func:`no_empty_folders_left`), and the operating system's faults as one line each
-(:func:`io_error`, :func:`fs_errors`, :func:`write_faults`).
-
-The lock is an advisory ``flock`` on a file beside the store (``.NAME.lock`` in the store's
-parent folder, holding the writer's pid, host and start time): it exists before the store
-does, so one lock covers creating, resuming and finishing a store. The kernel drops it when
-its holder dies, however it dies, so a lock file left behind by ``kill -9`` is no lock. A
-second writer is refused at once, told who holds it.
+"""The file system under a store: folders built under a temporary name and renamed when
+whole (:func:`building`, :func:`take`; a killed builder's folder removed by the next,
+:func:`remove_dead_builds`), a store written through its open folder, so that a move is
+noticed and never writes the old path again (:class:`FolderHold`), no empty folder left by a
+failed command (:func:`no_empty_folders_left`), and the operating system's faults as one
+line each (:func:`io_error`, :func:`fs_errors`, :func:`write_faults`). One writer at a time:
+:mod:`.lock`.
 """
 
 from __future__ import annotations
 
 import errno
 import glob
-import json
 import os
 import shutil
-import socket
 import uuid
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from datetime import UTC, datetime
 from pathlib import Path
 
 from ..errors import StoreError
@@ -177,114 +168,6 @@ def remove_dead_builds(out: Path, log: Callable[[str], None] | None = None) -> l
         finally:
             os.close(fd)
     return removed
-
-
-def lock_path(store: Path) -> Path:
-    return store.with_name(f".{store.name}.lock")
-
-
-def _holder(fd: int) -> str:
-    try:
-        doc = json.loads(os.pread(fd, 4096, 0) or b"{}")
-        return f"pid {doc['pid']} on {doc['host']}, since {doc['since']}"
-    except (OSError, ValueError, KeyError, TypeError):
-        return "another process"
-
-
-def _refused(store: Path, fd: int) -> StoreError:
-    return StoreError(
-        f"{store} is being written by another process ({_holder(fd)}); one writer at a time: "
-        "wait for it to finish (or stop it), then run again"
-    )
-
-
-class StoreLock:
-    """The lock of the store at ``store`` (a context manager): held for a whole write."""
-
-    def __init__(self, store: str | Path) -> None:
-        self.store = Path(store)
-        self.path = lock_path(self.store)
-        self.fd: int | None = None
-
-    @staticmethod
-    def probe(store: str | Path) -> None:
-        """Raise if another process holds the lock of ``store`` now (a quick early check
-        before slow set-up; :meth:`acquire` is what counts)."""
-        import fcntl
-
-        store = Path(store)
-        try:
-            fd = os.open(lock_path(store), os.O_RDONLY | os.O_CLOEXEC)
-        except OSError:
-            return  # no lock file: nobody holds it
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            raise _refused(store, fd) from None
-        except OSError:
-            pass  # a file system without locks: acquire() says so
-        finally:
-            os.close(fd)
-
-    def acquire(self) -> StoreLock:
-        import fcntl
-
-        with fs_errors(self.store):
-            self.store.parent.mkdir(parents=True, exist_ok=True)
-        while True:
-            with fs_errors(self.store):
-                fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                err = _refused(self.store, fd)
-                os.close(fd)
-                raise err from None
-            except OSError as exc:
-                os.close(fd)
-                raise StoreError(
-                    f"cannot lock {self.store} ({exc.strerror}): its file system does not "
-                    "support file locks; write the store on a local disk"
-                ) from None
-            # the file may have been removed by the holder we waited on: lock the new one
-            try:
-                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
-            except FileNotFoundError:
-                same = False
-            if same:
-                break
-            os.close(fd)
-        self.fd = fd
-        doc = {
-            "pid": os.getpid(),
-            "host": socket.gethostname(),
-            "since": datetime.now(UTC).isoformat(timespec="seconds"),
-        }
-        try:
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, json.dumps(doc).encode(), 0)
-        except OSError:
-            pass  # who holds it is a courtesy: the lock itself is taken
-        return self
-
-    def release(self) -> None:
-        if self.fd is None:
-            return
-        import fcntl
-
-        try:
-            os.unlink(self.path)  # while still held: a waiter then finds it gone
-        except OSError:
-            pass
-        fcntl.flock(self.fd, fcntl.LOCK_UN)
-        os.close(self.fd)
-        self.fd = None
-
-    def __enter__(self) -> StoreLock:
-        return self.acquire()
-
-    def __exit__(self, *exc) -> None:
-        self.release()
 
 
 class StoreMoved(StoreError):

@@ -32,7 +32,7 @@ bytes of the SHA-256 of the slide's samples, its index and the configuration's h
 finds a chunk that was later truncated, altered or moved: every read verifies it.
 
 A store is made under a fresh temporary name beside it and renamed when whole, by a writer
-holding the store's lock (:class:`~.fs.StoreLock`).
+holding the store's lock (:class:`~.lock.StoreLock`).
 """
 
 from __future__ import annotations
@@ -287,7 +287,7 @@ def create_store(path: str | Path, specs: dict[str, StoreSpec], root_attrs: dict
     """Create the store at ``path`` (which must not exist) with a group per spec (key ``""``:
     the root itself). Built under a fresh temporary name beside it and renamed: a store
     either exists whole or not at all, and is refused if ``path`` appeared meanwhile. The
-    caller holds the store's lock (:class:`~.fs.StoreLock`): any temporary folder of this
+    caller holds the store's lock (:class:`~.lock.StoreLock`): any temporary folder of this
     store still there is a dead writer's, and is removed."""
     zarr = zarr_module()
     path = Path(path)

@@ -20,6 +20,7 @@ from typing import Any
 from .. import _validate as v
 from ..cache import ArtefactCache
 from ..errors import ConfigError, SimTactileError, WorkerError, require
+from ..interrupts import raise_pending
 from ..records import Recording
 from .jobs import SlideJob, SlideOutcome, SlideWorker, cached_slide, slide_key
 
@@ -265,6 +266,7 @@ def stream(
     queue = iter(items)
     pending: dict = {}
     while True:
+        raise_pending()  # a signal whose exception a compiled kernel swallowed stops here
         while len(pending) < backend.slots:
             nxt = next(queue, None)
             if nxt is None:
