@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from sim_tactile.errors import ConfigError, PhysicsError
-from sim_tactile.plates import height_at, surface_of
+from sim_tactile.plates import surface_of
 from sim_tactile.scene.nodes import skin_grid
 from sim_tactile.sensors import resolve_sensor
 from sim_tactile.sim.plan.fidelity import choose_fidelity
@@ -82,7 +82,7 @@ def depths(name: str, xs_m, press_m: float = 0.3e-3) -> np.ndarray:
     margin = surface_of(plate).margin_m
     out = []
     for x in xs_m:
-        top = height_at(plate, x + grid.xy[:, 0], grid.xy[:, 1])
+        top = surface_of(plate).height(x + grid.xy[:, 0], grid.xy[:, 1])
         pen = top - grid.z - (np.nanmax(top - grid.z) - press_m)
         out.append(np.where(pen > -margin, pen, -np.inf))
     return np.array(out)
