@@ -1,0 +1,193 @@
+"""A data set's cost through ``sim-tactile generate`` on one worker: the whole command, its
+start-up and its worker's set-up counted, as a user pays it.
+
+    python perf/bench_dataset.py CONFIG.toml [CONFIG.toml ...] [--against PATH]
+        [--rounds 2] [--json]
+
+Each run is a fresh process (``generate CONFIG --workers 1``) on a fresh cache that holds
+the artefacts a data set reuses from earlier runs (plates' files and MJCF, skin matrices)
+but no slide and no phase table: what a first ``generate`` of a new configuration pays on
+an installation that has run before (its compiled kernels warm). The real-time factor per
+core is the set's simulated seconds over the command's CPU seconds (user + system of the
+process and its children: the machine is shared, wall time is not a measure).
+
+``--against PATH`` runs each configuration alternately with this checkout and the one at
+PATH (another commit, ``git worktree add``), ``--rounds`` times each, A B A B, after one
+warm-up run of each side (which fills that side's artefact cache and compiles its
+kernels), and reports each side's median and the ratio of medians; the commits are printed
+with the figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Entries of the cache that are results, not set-up: slides and phase tables (in either
+#: layout, a file or an entry folder), removed from the seeded cache before a counted run.
+RESULTS = ("slide.npz", "phase.npz")
+#: The command line, run by this Python with the checkout first on its path.
+CLI = (sys.executable, "-c", "import sys; from sim_tactile.cli import main; sys.exit(main())")
+
+
+def commit(checkout: Path) -> str:
+    out = subprocess.run(
+        ["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    return out.stdout.strip() or "unknown"
+
+
+def _strip_results(cache: Path) -> None:
+    for p in sorted(cache.rglob("*"), key=lambda q: len(q.parts), reverse=True):
+        if any(r in p.name for r in RESULTS) and p.exists():
+            if p.is_dir():
+                shutil.rmtree(p)
+            else:
+                p.unlink()
+
+
+def run_once(checkout: Path, config: Path, seed_cache: Path) -> dict:
+    """One counted ``generate`` in a fresh process on a copy of ``seed_cache``."""
+    work = Path(tempfile.mkdtemp(prefix="bench-dataset-"))
+    try:
+        cache = work / "cache"
+        shutil.copytree(seed_cache, cache)
+        env = dict(os.environ, SIM_TACTILE_CACHE=str(cache), PYTHONPATH=str(checkout))
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        proc = subprocess.run(
+            [
+                *CLI,
+                "generate",
+                str(config),
+                "--out",
+                str(work / "set.zarr"),
+                "--workers",
+                "1",
+                "--json",
+            ],
+            env=env,
+            capture_output=True,
+            text=True,
+            cwd=str(work),
+            check=False,
+        )
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        if proc.returncode != 0:
+            raise SystemExit(f"generate failed ({proc.returncode}): {proc.stderr[-2000:]}")
+        out = json.loads(proc.stdout)
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        return {
+            "cpu_s": cpu,
+            "wall_s": wall,
+            "simulate_s": out.get("simulate_s"),
+            "sim_s": _simulated_seconds(work / "set.zarr", checkout),
+        }
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def _simulated_seconds(store: Path, checkout: Path) -> float:
+    """The store's slides times their window [s]."""
+    code = (
+        "import json, sys, zarr; r = zarr.open_group(sys.argv[1], mode='r'); "
+        "a = dict(r.attrs); n = a.get('n_slides'); "
+        "rate = a.get('rate_hz'); t = a.get('n_time'); "
+        "print(json.dumps([n, rate, t]))"
+    )
+    env = dict(os.environ, PYTHONPATH=str(checkout))
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(store)],
+        capture_output=True,
+        text=True,
+        env=env,
+        check=False,
+    )
+    try:
+        n, rate, t = json.loads(out.stdout)
+        return float(n) * float(t) / float(rate)
+    except (ValueError, TypeError):
+        return float("nan")
+
+
+def seed(checkout: Path, config: Path) -> Path:
+    """A warm-up run's cache with its results removed: the artefacts a counted run reuses."""
+    work = Path(tempfile.mkdtemp(prefix="bench-dataset-seed-"))
+    env = dict(os.environ, SIM_TACTILE_CACHE=str(work / "cache"), PYTHONPATH=str(checkout))
+    subprocess.run(
+        [*CLI, "generate", str(config), "--out", str(work / "set.zarr"), "--workers", "1"],
+        env=env,
+        capture_output=True,
+        text=True,
+        cwd=str(work),
+        check=True,
+    )
+    shutil.rmtree(work / "set.zarr", ignore_errors=True)
+    _strip_results(work / "cache")
+    return work / "cache"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("configs", nargs="+", type=Path)
+    ap.add_argument("--against", type=Path, default=None, help="another checkout (B)")
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    sides = [("A", ROOT)] + ([("B", args.against.resolve())] if args.against else [])
+    rows = []
+    for config in args.configs:
+        config = config.resolve()
+        seeds = {name: seed(path, config) for name, path in sides}
+        runs = {name: [] for name, _ in sides}
+        for _ in range(args.rounds):
+            for name, path in sides:
+                runs[name].append(run_once(path, config, seeds[name]))
+        for s in seeds.values():
+            shutil.rmtree(s.parent, ignore_errors=True)
+        row = {"config": config.name}
+        for name, path in sides:
+            rs = runs[name]
+            sim = rs[0]["sim_s"]
+            cpu = statistics.median(r["cpu_s"] for r in rs)
+            row[name] = {
+                "commit": commit(path),
+                "sim_s": sim,
+                "cpu_s": round(cpu, 2),
+                "wall_s": round(statistics.median(r["wall_s"] for r in rs), 2),
+                "rtf_per_core": round(sim / cpu, 2),
+                "runs_cpu_s": [round(r["cpu_s"], 2) for r in rs],
+            }
+        if "B" in row:
+            row["speed_up"] = round(row["B"]["cpu_s"] / row["A"]["cpu_s"], 2)
+        rows.append(row)
+        if not args.json:
+            line = f"{config.name}: " + "; ".join(
+                f"{n} {row[n]['commit']} RTF/core {row[n]['rtf_per_core']} "
+                f"({row[n]['sim_s']:.1f} s simulated, CPU {row[n]['runs_cpu_s']})"
+                for n, _ in sides
+            )
+            if "speed_up" in row:
+                line += f"; A is {row['speed_up']}x B"
+            print(line, flush=True)
+    if args.json:
+        print(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
