@@ -110,3 +110,45 @@ def test_first_run_counts_the_kernels_not_compiled_here(tmp_path):
     )
     assert int(out.stdout.strip()) > 0
     assert "compiling" in COMPILE_NOTICE and "minutes" in COMPILE_NOTICE
+
+
+def test_the_compile_notice_comes_with_a_compile_and_once():
+    """The notice listens to numba's compiles: a kernel of this package that compiles says it
+    once; one that is already compiled, or another package's, says nothing."""
+    import numba
+
+    from sim_tactile.cli._common import compile_notice
+
+    def probe(x):
+        return x + 1
+
+    probe.__module__ = "sim_tactile._notice_probe"  # as if the package's own
+    kernel = numba.njit(cache=False)(probe)
+    said: list[str] = []
+    with compile_notice(said.append):
+        kernel(1)
+        kernel(2.5)  # another signature: another compile, no second notice
+    assert said == [COMPILE_NOTICE]
+    with compile_notice(said.append):
+        kernel(3)  # compiled already: nothing compiles
+        numba.njit(cache=False)(lambda x: x * 2)(4)  # not the package's
+    assert said == [COMPILE_NOTICE]
+
+
+def test_a_typo_says_no_compile_notice(tmp_path):
+    """With no compiled kernel at all (an empty kernel cache), a mistyped task fails with
+    its one line, and no notice: nothing compiled (the notice was printed first, always)."""
+    env = dict(
+        os.environ,
+        SIM_TACTILE_KERNELS=str(tmp_path / "kernels"),
+        NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+    )
+    code = "import sys; from sim_tactile.cli import main; sys.exit(main())"
+    out = subprocess.run(
+        [sys.executable, "-c", code, "run", "finger7-v9", "--quick", "--out", str(tmp_path / "o")],
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    assert out.returncode == 2 and "finger7-v9" in out.stderr
+    assert "compiling" not in out.stderr, out.stderr

@@ -19,7 +19,7 @@ from collections.abc import Iterator, Sequence
 from .. import __version__
 from ..errors import SimTactileError, Terminated, os_error_message
 from . import bench, data, plates, sim, tasks
-from ._common import log
+from ._common import compile_notice, log
 
 DESCRIPTION = (
     "The sim-tactile command line of a physics-simulated benchmark for tactile texture perception. Build "
@@ -111,7 +111,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     debug = bool(getattr(args, "debug", False))
     if not debug:
         warnings.formatwarning = _one_line_warnings
-    with _signals():
+    notice = compile_notice() if getattr(args, "compiles", False) else contextlib.nullcontext()
+    with _signals(), notice:
         try:
             return int(args.func(args) or 0)
         except Terminated as exc:

@@ -115,6 +115,7 @@ def add_parsers(sub) -> None:
         "calibrate",
         cmd_calibrate,
         "Fit a sensor model's gains, offsets, noise, drift and ADC step to real recordings.",
+        compiles=True,
     )
     cb.add_argument("sensor", help="The sensor to calibrate: biotac19 or icub60.")
     cb.add_argument("--data", required=True, help="The folder of the sensor's real data set.")
@@ -126,6 +127,7 @@ def add_parsers(sub) -> None:
         cmd_generate,
         "Simulate every slide of a task or of a configuration file into a Zarr store, in "
         "parallel (local processes or Ray), resumably.",
+        compiles=True,
     )
     gn.add_argument(
         "task",

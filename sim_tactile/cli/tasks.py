@@ -8,7 +8,7 @@ import re
 
 from ..errors import ConfigError
 from ..tables import text_table
-from ._common import add_command, announce_compile, emit, log
+from ._common import add_command, emit, log
 from .data import add_sensor_config
 
 
@@ -119,8 +119,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         if is_config_path(task_id):
             task_id = config_task(task_id)[0].id
         base = load_baseline(args.baseline, task_id, args.quick)
-    if args.store is None and args.data is None:  # it simulates: its kernels may compile now
-        announce_compile(("sim_tactile.sim.slide", "sim_tactile.encoders"))
     report = run_task(
         args.task,
         args.out,
@@ -148,7 +146,6 @@ def cmd_ablate(args: argparse.Namespace) -> int:
     from ..tasks.ablate import ablate, ablation_rows, parse_sets
 
     sets = parse_sets(args.sets)
-    announce_compile(("sim_tactile.sim.slide", "sim_tactile.encoders"))
     rep = ablate(args.task, sets, args.out, **_task_options(args))
 
     def table() -> str:
@@ -211,6 +208,7 @@ def add_parsers(sub) -> None:
         "run",
         cmd_run,
         "Run a benchmark task's evaluation protocol and write its report and figures.",
+        compiles=True,
     )
     add_sensor_config(rn)
     rn.add_argument(
@@ -254,6 +252,7 @@ def add_parsers(sub) -> None:
         "ablate",
         cmd_ablate,
         "Sweep encoder, neuron and classifier parameters over a task's cached slides, as a grid.",
+        compiles=True,
     )
     ab.add_argument("task", help="A task id, for example roughness8-v1.")
     ab.add_argument(
