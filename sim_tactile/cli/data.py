@@ -29,16 +29,27 @@ def cmd_generate(args: argparse.Namespace) -> int:
     emit(
         args,
         res,
-        lambda: (
-            f"{res['out']}: {res['trials']} slides ({res['written']} simulated now, "
-            f"{res['reused']} kept, {res['regenerated']} corrupt ones redone"
-            + (f", {', '.join(res['repaired'])} written again" if res["repaired"] else "")
-            + ") in "
-            f"{res['wall_s']:.1f} s; store overhead "
-            + (f"{100 * res['store_overhead']:.2f}%" if res["store_overhead"] else "-")
-        ),
+        lambda: generate_line(res),
     )
     return 0
+
+
+def generate_line(res: dict) -> str:
+    """``generate``'s summary for people: where each slide came from (simulated now, the
+    slide cache, recorded data, or kept in the store from before)."""
+    came = [f"{res['simulated']} simulated now", f"{res['cached']} from the slide cache"]
+    if res["copied"]:
+        came.append(f"{res['copied']} copied from the recordings")
+    came.append(f"{res['reused']} kept")
+    if res["regenerated"]:
+        came.append(f"{res['regenerated']} corrupt ones redone")
+    if res["repaired"]:
+        came.append(f"{', '.join(res['repaired'])} written again")
+    overhead = f"{100 * res['store_overhead']:.2f}%" if res["store_overhead"] else "-"
+    return (
+        f"{res['out']}: {res['trials']} slides ({', '.join(came)}) in {res['wall_s']:.1f} s; "
+        f"store overhead {overhead}"
+    )
 
 
 def cmd_export(args: argparse.Namespace) -> int:

@@ -34,6 +34,7 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
 from ..encoders.encodings import Steps, threshold_encoding
+from .._names import did_you_mean
 from ..errors import ConfigError, UnknownNameError
 from ..spikes import SpikeFeatures, SpikeTrainDistances
 from .preprocess import SpikeCounts, SpikeRaster, TimeCollapse
@@ -191,7 +192,8 @@ def get_classifier(name: str) -> ClassifierSpec:
         return CLASSIFIERS[name]
     except KeyError:
         raise UnknownNameError(
-            f"classifier {name!r} is not known; valid: {', '.join(CLASSIFIERS)}"
+            f"classifier {name!r} is not known{did_you_mean(name, CLASSIFIERS)}; valid: "
+            f"{', '.join(CLASSIFIERS)}"
         ) from None
 
 

@@ -54,6 +54,7 @@ from dataclasses import fields, replace
 from pathlib import Path
 
 from .. import _validate as v
+from .._names import did_you_mean
 from ..errors import ConfigError
 from ..plates import get_plate, preset_names
 from ..plates.user import is_user_plate, parse_ref
@@ -240,7 +241,8 @@ def _plate(value, base_dir: Path | None) -> str:
         return str(path)
     if value not in preset_names():
         raise ConfigError(
-            f"plate {value!r} is not a preset; valid: {', '.join(preset_names())}, a plate "
+            f"plate {value!r} is not a preset{did_you_mean(value, preset_names())}; valid: "
+            f"{', '.join(preset_names())}, a plate "
             "file (.toml), a part (.step, .stp, .stl, .py[:function]) or a height map (.npy, .png)"
         )
     return value

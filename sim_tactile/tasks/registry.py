@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from ..encoders.encodings import Steps, threshold_encoding
+from .._names import did_you_mean
 from ..errors import ConfigError, UnknownNameError
 from ..learn.classifiers import LearnContext, get_classifier
 from ..records import TactileDataset
@@ -281,7 +282,8 @@ def get_task(task_id: str) -> TaskSpec:
         return _TASKS[_ALIASES.get(task_id, task_id)]
     except KeyError:
         raise UnknownNameError(
-            f"task {task_id!r} is not known; valid: {', '.join(_TASKS) or '(none)'}"
+            f"task {task_id!r} is not known{did_you_mean(task_id, [*_TASKS, *_ALIASES])}; "
+            f"valid: {', '.join(_TASKS) or '(none)'}"
         ) from None
 
 

@@ -22,7 +22,7 @@ from .. import __version__
 from .._validate import integer
 from ..datasets.fs import no_empty_folders_left, write_faults
 from ..datasets.reader import open_store, parts_of
-from ..errors import ConfigError, StoreError, require
+from ..errors import ConfigError, MissingDependencyError, StoreError, require
 from ..hashing import derive_seed
 from ..learn.classifiers import LearnContext, get_classifier, make_classifier
 from ..learn.precomputed import sample_index
@@ -34,6 +34,7 @@ from ..slides.plan import slide_plan, task_slide_config
 from .config_task import PREFIX as CONFIG_PREFIX
 from .config_task import config_task, is_config_path
 from .figures import write_figures
+from .flags import row_flags
 from .methods import Method, as_methods, classify_methods, method_row
 from .precompute import Precomputed
 from .registry import DataRequest, Run, TaskSpec, get_task, with_calibration
@@ -137,6 +138,23 @@ def task_data(spec: TaskSpec, req: DataRequest) -> TactileDataset:
     return st.to_tactile()
 
 
+def _check_torch(spec: TaskSpec, runs: list[Run]) -> None:
+    """torch, where a row needs it; else an error that names those rows, the install
+    command and the option that runs the others alone."""
+    rows = [r.name for r in runs if get_classifier(r.classifier).needs_torch]
+    if not rows:
+        return
+    try:
+        require("torch", "learn")
+    except MissingDependencyError as exc:
+        rest = [r.classifier for r in runs if not get_classifier(r.classifier).needs_torch]
+        others = ",".join(dict.fromkeys(rest)) or "svm-raw,svm-spike"
+        raise MissingDependencyError(
+            f"task {spec.id}: the row(s) {', '.join(rows)} need torch: pip install "
+            f"'sim-tactile[learn]', or run the others alone with --classifiers {others}"
+        ) from exc
+
+
 @dataclass
 class LoadedTask:
     """A task, its runs under the chosen classifiers, and its data set (loaded in ``load_s``)."""
@@ -159,8 +177,7 @@ def load_task(
 ) -> LoadedTask:
     """Check the options against the task, then load (or simulate) its data set."""
     runs = task_runs(spec, classifiers)
-    if any(get_classifier(r.classifier).needs_torch for r in runs):
-        require("torch", "learn")
+    _check_torch(spec, runs)
     if spec.needs_data_path and data is None and store is None:
         raise ConfigError(
             f"task {spec.id} runs on real recordings: pass --data PATH (the folder of the data "
@@ -342,6 +359,13 @@ def evaluate_task(
             "machine": platform.machine(),
         },
     )
+    for row in report.results:
+        said = row_flags(
+            row.extra.get("accuracies", ()), row.extra.get("neuromorphic"), ds.duration_s
+        )
+        if said:
+            row.extra["flags"] = said
+            log(f"{spec.id}: {row.label}: check this row: {'; '.join(said)}")
     if figures:
         report.figures = write_figures(out, spec, ds, encoded, results, [*runs, *methods])
     report.timing["wall_s"] = round(time.perf_counter() - t0, 2)
