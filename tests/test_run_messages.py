@@ -87,7 +87,9 @@ def test_a_run_flags_a_constant_model_and_a_silent_encoder(tones):
     assert rows["constant"]["accuracies"] == [pytest.approx(1 / 3)] * 5
     assert "the same accuracy (0.333) on all 5" in rows["constant"]["flags"][0]
     said = rows["silent"]["flags"]
-    assert any("spikes per channel per slide" in f for f in said), rows["silent"].get("neuromorphic")
+    assert any("spikes per channel per slide" in f for f in said), rows["silent"].get(
+        "neuromorphic"
+    )
     assert "flags" not in rows["svm-raw"]
     text = Report.from_json(rep).text()
     assert "! constant" in text and "! silent" in text and "! svm-raw" not in text

@@ -33,8 +33,8 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
-from ..encoders.encodings import Steps, threshold_encoding
 from .._names import did_you_mean
+from ..encoders.encodings import Steps, threshold_encoding
 from ..errors import ConfigError, UnknownNameError
 from ..spikes import SpikeFeatures, SpikeTrainDistances
 from .preprocess import SpikeCounts, SpikeRaster, TimeCollapse

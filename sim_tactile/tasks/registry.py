@@ -15,8 +15,8 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-from ..encoders.encodings import Steps, threshold_encoding
 from .._names import did_you_mean
+from ..encoders.encodings import Steps, threshold_encoding
 from ..errors import ConfigError, UnknownNameError
 from ..learn.classifiers import LearnContext, get_classifier
 from ..records import TactileDataset
