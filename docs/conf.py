@@ -28,7 +28,7 @@ extensions = [
     "_resolve",
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**/README.md", "tutorials/*.py"]
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**/README.md"]
 myst_enable_extensions = ["colon_fence", "deflist", "dollarmath"]
 myst_heading_anchors = 3
 

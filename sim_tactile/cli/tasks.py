@@ -124,6 +124,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         args.out,
         sensor_config=args.sensor_config,
         methods=methods or None,
+        export_nir=args.export_nir,
         # a configuration file's own seed unless --seed is given (as generate takes it)
         **(_task_options(args) | {"seed": args.seed}),
     )
@@ -246,6 +247,13 @@ def add_parsers(sub) -> None:
         default=None,
         metavar="PATH",
         help="Write this run's report as a baseline for --baseline.",
+    )
+    rn.add_argument(
+        "--export-nir",
+        default=None,
+        metavar="FILE.nir",
+        help="Save the spiking network the run trained (the snn row's last repeat) as a NIR "
+        "graph, its outputs named by the task's classes (the nir extra).",
     )
     ab = add_command(
         sub,

@@ -72,7 +72,7 @@ from .slide_set import SLIDES_RANGE, SlideSet
 MAX_PLATES = 1000
 #: Most slides a configuration may ask for (plates x slides_per_plate): a store indexes
 #: every one, and a million 1 s slides take 11 hours of a core at the faster scenes' 25x
-#: real time (the README's throughput; the slower scenes, days).
+#: real time (the manual's throughput results; the slower scenes, days).
 MAX_SLIDES = 1_000_000
 
 #: The keys of a configuration file, and what each takes.

@@ -6,7 +6,7 @@ the report lists the sentences under it (``ResultRow.extra["flags"]``)."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 #: Fewest repeats over which one accuracy on every split is taken as a sign, not chance (two
 #: splits of 14 test slides agree by chance often; five rarely).
@@ -25,9 +25,10 @@ def row_flags(accuracies: Sequence[float], neuromorphic: dict | None, window_s: 
     acc = [float(a) for a in accuracies]
     if len(acc) >= SAME_ON_EVERY_SPLIT_FROM and max(acc) == min(acc) < 1.0:
         out.append(
-            f"the same accuracy ({acc[0]:.3f}) on all {len(acc)} random splits: the model "
-            "likely answers alike whatever it is trained on; check its settings (targets, "
-            "epochs, learning rate) and its input's spikes"
+            f"the same accuracy ({acc[0]:.3f}) on all {len(acc)} random splits, so its SD of "
+            "0 measures nothing: the model decides alike whatever it is trained on (one "
+            "answer for all, or input that tells some classes apart and the others not at "
+            "all); check its settings and its input"
         )
     enc = (neuromorphic or {}).get("encoder") or {}
     rate = enc.get("spikes_per_s_per_channel")
@@ -38,3 +39,13 @@ def row_flags(accuracies: Sequence[float], neuromorphic: dict | None, window_s: 
             "gain or lower its threshold"
         )
     return out
+
+
+def flag_rows(rows, window_s: float, log: Callable[[str], None]) -> None:
+    """Put each doubtful row's sentences in its ``extra["flags"]`` and log them
+    (``rows``: :class:`~.report.ResultRow` s)."""
+    for row in rows:
+        said = row_flags(row.extra.get("accuracies", ()), row.extra.get("neuromorphic"), window_s)
+        if said:
+            row.extra["flags"] = said
+            log(f"{row.label}: check this row: {'; '.join(said)}")
