@@ -60,9 +60,27 @@ def test_building_the_command_line_imports_no_heavy_library():
 
 
 def test_tasks_lists_every_registered_task_one_line_each(cli):
-    lines = cli(["tasks"]).stdout.strip().splitlines()
-    assert lines[0].split() == ["id", "paper", "sensor", "classes", "slides"]
+    lines = cli(["tasks"]).stdout.strip().split("\n\n")[0].splitlines()
+    assert lines[0].split() == ["id", "paper", "sensor", "classes", "slides", "needs", "quick"]
     assert [line.split()[0] for line in lines[1:]] == list(task_ids())
+    row = {line.split()[0]: line for line in lines[1:]}
+    assert row["biotac20-real-v1"].rstrip().split()[-3:-1] == ["torch,", "--data"]
+    assert " - " in row["finger7-v1"] and "torch" not in row["finger7-v1"]
+
+
+def test_tasks_says_what_each_needs_and_how_long_its_quick_form_takes(cli):
+    """Which tasks need torch (a network among their rows) or --data, and each quick
+    form's measured wall time (a suite: its parts'), from `sim-tactile tasks --json`."""
+    from sim_tactile.cli.tasks import QUICK_WALL_S, about
+
+    rows = {r["id"]: r for r in json.loads(cli(["tasks", "--json"]).stdout)}
+    assert rows["biotac20-real-v1"]["needs"] == ["torch", "--data"]
+    assert rows["textures20-v1"]["needs"] == ["torch"] and rows["finger7-v1"]["needs"] == []
+    measured = {t for t, s in QUICK_WALL_S.items() if s is not None}
+    assert measured >= {t for t in task_ids() if not get_task(t).parts} - {"icub20-real-v1"}
+    parts = get_task("textures20-v1").parts
+    assert rows["textures20-v1"]["quick_s"] == sum(QUICK_WALL_S[p] for p in parts)
+    assert (about(38.3), about(150.0), about(None)) == ("~40 s", "~2 min", "?")
 
 
 def test_tasks_json_gives_id_paper_sensor_classes_and_slides(cli):

@@ -8,6 +8,8 @@ import os
 import re
 import subprocess
 import sys
+import sysconfig
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -102,30 +104,70 @@ def history_in_results_page(page: Path) -> list[str]:
     return faults
 
 
+#: The extras besides the manual's own ([docs]) and the tests' ([test]): `make docs` and a
+#: reader's `pip install ".[docs]"` install none of them.
+OTHER_EXTRAS = ("learn", "ray", "tonic", "hub", "nir", "neurobench")
+
+
+def extras_modules() -> list[str]:
+    """The top-level modules of the other extras' distributions (their names: torch, ray,
+    tonic, datasets, pyarrow, mlcroissant, nir, snntorch, nirtorch; tqdm is a core one)."""
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    core = {re.split(r"[<>=\[ ]", d)[0] for d in meta["dependencies"]}
+    names = {
+        re.split(r"[<>=\[ ]", d)[0]
+        for extra in OTHER_EXTRAS
+        for d in meta["optional-dependencies"][extra]
+    }
+    return sorted(names - core)
+
+
+#: Sphinx run as after `pip install ".[docs]"`, not editable: ``python -S`` runs no .pth file,
+#: so the editable install's finder (which maps assets/ into the package) is not there, and
+#: the other extras' modules are not found (as where they are not installed).
+BUILD = """
+import sys
+BLOCKED = set(sys.argv[1].split(","))
+class NotInstalled:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in BLOCKED:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, NotInstalled())
+from sphinx.cmd.build import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
 @pytest.fixture(scope="module")
 def built(tmp_path_factory) -> Path:
-    """The manual built as ``make docs`` builds it (-W: a warning fails)."""
+    """The manual built as a reader builds it after ``pip install ".[docs]"`` (a regular
+    install, only the [docs] extra: :data:`BUILD`), as ``make docs`` does (-W: a warning
+    fails)."""
     pytest.importorskip("sphinx")
     out = tmp_path_factory.mktemp("docs")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env["PYTHONPATH"] = sysconfig.get_paths()["purelib"]  # the libraries, no .pth run
+    args = ["-W", "--keep-going", "-q", "-b", "html", str(DOCS), str(out)]
     proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "sphinx",
-            "-W",
-            "--keep-going",
-            "-q",
-            "-b",
-            "html",
-            str(DOCS),
-            str(out),
-        ],
+        [sys.executable, "-S", "-c", BUILD, ",".join(extras_modules()), *args],
         capture_output=True,
         text=True,
         timeout=900,
+        env=env,
+        cwd=out,
     )
     assert proc.returncode == 0, proc.stderr[-4000:]
     return out
+
+
+def test_the_manual_needs_only_its_own_extra():
+    """`make docs` installs the [docs] extra, not the tests' and the bridges' extras (the
+    build above runs without them); the modules those extras bring are what it hides."""
+    rule = re.search(r"^docs: (.*)$", (ROOT / "Makefile").read_text(), flags=re.M)[1]
+    stamp = re.search(r"^\$\(STAMP_DOCS\):.*\n\t(.*)$", (ROOT / "Makefile").read_text(), re.M)
+    assert rule.strip() == "$(STAMP_DOCS)" and stamp[1].endswith("install -q -e '.[docs]'")
+    assert {"torch", "tonic", "nir", "datasets", "ray"} <= set(extras_modules())
+    assert "tqdm" not in extras_modules()
 
 
 @pytest.mark.slow

@@ -27,6 +27,12 @@ def _task_options(args: argparse.Namespace) -> dict:
 
 #: The sensors of the tasks that read real recordings (their data are not a slide set).
 REAL_SENSORS = {"biotac20-real-v1": "biotac19", "icub20-real-v1": "icub60"}
+#: Wall time [s] of each task's quick form with its own rows (`sim-tactile run TASK --quick`,
+#: a real-data task with its --data), its slides simulated into an empty slide cache, the
+#: kernels compiled: `python perf/bench_quick.py --tasks all --cold` on 2 cores (AMD EPYC,
+#: shared with other jobs). A suite's is its parts'. None: not measured (the real iCub
+#: recordings were not at hand).
+QUICK_WALL_S: dict[str, float | None] = {}
 
 
 def paper_of(reference: str) -> tuple[str, str]:
@@ -46,6 +52,7 @@ def task_summary(task_id: str) -> dict:
     from ..datasets.real import N_MATERIALS, N_SLIDES
     from ..slides import SlideSet
     from ..tasks import get_task
+    from ..tasks.needs import task_needs
 
     spec = get_task(task_id)
     paper, number = paper_of(spec.reference)
@@ -73,8 +80,28 @@ def task_summary(task_id: str) -> dict:
         "title": spec.title,
         "parts": list(spec.parts),
         "needs_data": spec.needs_data_path,
+        "needs": task_needs(spec),
+        "quick_s": quick_wall_s(spec),
         "aliases": spec.describe()["aliases"],
     }
+
+
+def quick_wall_s(spec) -> float | None:
+    """About how long the task's quick form takes [s] (:data:`QUICK_WALL_S`; a suite: its
+    parts' sum), None where it was not measured."""
+    if spec.parts:
+        parts = [QUICK_WALL_S.get(p) for p in spec.parts]
+        return None if None in parts else float(sum(parts))
+    return QUICK_WALL_S.get(spec.id)
+
+
+def about(seconds: float | None) -> str:
+    """``~40 s``, ``~3 min``; ``?`` where not measured."""
+    if seconds is None:
+        return "?"
+    if seconds < 90:
+        return f"~{max(10, round(seconds, -1)):.0f} s"
+    return f"~{round(seconds / 60):.0f} min"
 
 
 def _short(text: str, n: int) -> str:
@@ -86,12 +113,27 @@ def cmd_tasks(args: argparse.Namespace) -> int:
     from ..tasks import task_ids
 
     rows = [task_summary(t) for t in task_ids()]
-    head = ["id", "paper", "sensor", "classes", "slides"]
+    head = ["id", "paper", "sensor", "classes", "slides", "needs", "quick"]
     table = [
-        [r["id"], _short(r["paper"], 48), r["sensor"], str(r["classes"]), str(r["slides"])]
+        [
+            r["id"],
+            _short(r["paper"], 32),
+            r["sensor"],
+            str(r["classes"]),
+            str(r["slides"]),
+            ", ".join(r["needs"]) or "-",
+            about(r["quick_s"]),
+        ]
         for r in rows
     ]
-    emit(args, rows, lambda: "\n".join(text_table(head, table, right=(3, 4))))
+    notes = [
+        "",
+        "needs: torch, the [learn] extra (or leave the networks out: --classifiers "
+        "svm-raw,svm-spike); --data, the real data set's folder.",
+        "quick: about how long 'run TASK --quick' takes on 2 cores, its slides simulated "
+        "(the kernels compiled; a first run adds 1.5-2 min).",
+    ]
+    emit(args, rows, lambda: "\n".join(text_table(head, table, right=(3, 4)) + notes))
     return 0
 
 
