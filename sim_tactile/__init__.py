@@ -17,14 +17,3 @@ from .errors import (  # noqa: F401  (re-exported)
     SimTactileError,
     UnknownNameError,
 )
-
-
-def __getattr__(name: str):
-    """``sim_tactile.TactileTorchDataset``, the PyTorch ``Dataset``
-    (:class:`~sim_tactile.formats.torch_data.TactileTorchDataset`), imported when first
-    named, so that ``import sim_tactile`` does not import torch."""
-    if name == "TactileTorchDataset":
-        from .formats.torch_data import TactileTorchDataset
-
-        return TactileTorchDataset
-    raise AttributeError(f"module 'sim_tactile' has no attribute {name!r}")

@@ -67,16 +67,16 @@ def test_encoded_items_are_the_tasks_spike_rasters(tones):
 
 def test_transforms_apply_to_each_item_and_the_short_import_is_the_class(tones):
     """``transform`` and ``target_transform`` as torchvision and Tonic take them; a value
-    that is not callable is refused by name; ``sim_tactile.TactileTorchDataset`` is the
-    class (and ``import sim_tactile`` alone does not import torch)."""
+    that is not callable is refused by name; ``sim_tactile.formats.TactileTorchDataset`` is
+    the class (and importing ``sim_tactile.formats`` alone does not import torch)."""
     import subprocess
     import sys
 
-    import sim_tactile
+    import sim_tactile.formats as formats
 
-    assert sim_tactile.TactileTorchDataset is TactileTorchDataset
+    assert formats.TactileTorchDataset is TactileTorchDataset
     plain = TactileTorchDataset(tones.store, split="test")
-    ds = sim_tactile.TactileTorchDataset(
+    ds = formats.TactileTorchDataset(
         tones.store,
         split="test",
         transform=lambda x: x.mean(dim=0),
@@ -88,7 +88,7 @@ def test_transforms_apply_to_each_item_and_the_short_import_is_the_class(tones):
     assert name == plain.classes[y0]
     with pytest.raises(ConfigError, match="transform = 3 is not valid; valid: a callable"):
         TactileTorchDataset(tones.store, transform=3)
-    code = "import sys, sim_tactile; print('torch' in sys.modules)"
+    code = "import sys, sim_tactile.formats; print('torch' in sys.modules)"
     assert subprocess.check_output([sys.executable, "-c", code], text=True).strip() == "False"
 
 

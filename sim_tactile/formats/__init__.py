@@ -10,3 +10,16 @@
 The spiking network's NIR graph and the NeuroBench figures live with the network:
 :mod:`sim_tactile.learn.nir`, :mod:`sim_tactile.learn.neurobench`.
 """
+
+__all__ = ["TactileTorchDataset"]
+
+
+def __getattr__(name: str):
+    """``sim_tactile.formats.TactileTorchDataset``, the PyTorch ``Dataset``
+    (:class:`~.torch_data.TactileTorchDataset`), imported when first named, so that
+    importing the package does not import torch."""
+    if name == "TactileTorchDataset":
+        from .torch_data import TactileTorchDataset
+
+        return TactileTorchDataset
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -15,8 +15,8 @@ store itself) yields the same samples, in the same order, as one process; with
 - ``transform`` / ``target_transform``: callables applied to ``x`` and to the target of
   each item, as torchvision's and Tonic's data sets take them.
 
-It is also ``sim_tactile.TactileTorchDataset`` (imported when first named: ``import
-sim_tactile`` does not import torch).
+It is also ``sim_tactile.formats.TactileTorchDataset`` (imported when first named:
+importing ``sim_tactile.formats`` does not import torch).
 """
 
 from __future__ import annotations
