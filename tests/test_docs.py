@@ -259,6 +259,24 @@ def test_the_file_format_page_names_every_key_the_readers_take():
     assert "heightmap" in page and "columns run along the slide" in page
 
 
+def test_every_picture_is_shown_in_the_manual():
+    """Each figure in docs/img is on a page (a picture nobody sees is a page not written)."""
+    text = "\n".join(p.read_text() for p in _pages())
+    assert [p.name for p in (DOCS / "img").glob("*.png") if f"img/{p.name}" not in text] == []
+
+
+def test_the_examples_link_to_files_that_exist():
+    """The examples' READMEs are read on the repository's site, outside the manual's build
+    (which checks its own links): each relative link leads to a file."""
+    dead = [
+        f"{page.relative_to(ROOT)}: {target}"
+        for page in (ROOT / "examples").rglob("*.md")
+        for target in re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", page.read_text())
+        if not target.startswith("http") and not (page.parent / target).exists()
+    ]
+    assert dead == []
+
+
 def test_public_packages_are_found():
     found = set(_gen.public_packages())
     assert {"sim_tactile.plates", "sim_tactile.tasks", "sim_tactile.spikes"} <= found
