@@ -39,11 +39,12 @@ html_theme = "furo"
 html_title = f"sim_tactile {release}"
 html_static_path: list[str] = []
 
-#: The extras' libraries that modules of the package import (the torch Dataset imports torch
-#: when it is imported); where one is not installed (`make docs` installs the [docs] extra
-#: only), autodoc and the generated pages import a stand-in.
-OPTIONAL = ("torch", "tonic", "nir", "nirtorch", "norse", "snntorch", "neurobench", "ray")
-OPTIONAL += ("datasets", "pyarrow", "mlcroissant")
+#: The extras' libraries that a module of the package imports when it is imported (the
+#: torch Dataset's module imports torch; the others import theirs when called); where one is
+#: not installed (`make docs` installs the [docs] extra only), autodoc and the generated
+#: pages import a stand-in. (A stand-in of a library that others probe for, pyarrow for
+#: pandas, would break them: only what the package needs is stood in for.)
+OPTIONAL = ("torch",)
 
 
 def _missing(name: str) -> bool:
