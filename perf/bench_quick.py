@@ -5,7 +5,7 @@ task's quick form (``sim-tactile tasks`` shows these times).
   issue 45: under 2 minutes on 2 cores, the SNN at 0.6 or more;
 - ``--tasks all`` (or a comma-separated list): ``sim-tactile run TASK --quick`` with the
   task's own rows, one task at a time (a real-data task with ``--data``, from
-  ``$SIM_TACTILE_DATA`` or ../shared/datasets).
+  ``$SIM_TACTILE_DATASETS`` or ../shared/datasets).
 
 Each command runs in a subprocess, timed by its wall time and by the CPU time it and its
 workers used (user + system): on a machine shared with other jobs the wall time grows with
@@ -47,7 +47,9 @@ DATA = {
 
 
 def data_root() -> Path:
-    env = os.environ.get("SIM_TACTILE_DATA")
+    """``$SIM_TACTILE_DATASETS`` (as the tests find the data), else ``shared/datasets``
+    beside the checkout."""
+    env = os.environ.get("SIM_TACTILE_DATASETS")
     return Path(env) if env else Path(__file__).resolve().parents[2] / "shared" / "datasets"
 
 
