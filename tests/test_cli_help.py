@@ -64,7 +64,7 @@ def test_tasks_lists_every_registered_task_one_line_each(cli):
     assert lines[0].split() == ["id", "paper", "sensor", "classes", "slides", "needs", "quick"]
     assert [line.split()[0] for line in lines[1:]] == list(task_ids())
     row = {line.split()[0]: line for line in lines[1:]}
-    assert row["biotac20-real-v1"].rstrip().split()[-3:-1] == ["torch,", "--data"]
+    assert "torch, --data" in row["biotac20-real-v1"] and "~" in row["biotac20-real-v1"]
     assert " - " in row["finger7-v1"] and "torch" not in row["finger7-v1"]
 
 

@@ -27,12 +27,26 @@ def _task_options(args: argparse.Namespace) -> dict:
 
 #: The sensors of the tasks that read real recordings (their data are not a slide set).
 REAL_SENSORS = {"biotac20-real-v1": "biotac19", "icub20-real-v1": "icub60"}
-#: Wall time [s] of each task's quick form with its own rows (`sim-tactile run TASK --quick`,
-#: a real-data task with its --data), its slides simulated into an empty slide cache, the
-#: kernels compiled: `python perf/bench_quick.py --tasks all --cold` on 2 cores (AMD EPYC,
-#: shared with other jobs). A suite's is its parts'. None: not measured (the real iCub
-#: recordings were not at hand).
-QUICK_WALL_S: dict[str, float | None] = {}
+#: What each task's quick form needs [s]: the CPU time (user + system, the command and its
+#: workers) of `sim-tactile run TASK --quick` with the task's own rows (a real-data task with
+#: its --data), its slides simulated into an empty slide cache, the kernels compiled.
+#: Measured with `python perf/bench_quick.py --tasks all --cold` on 2 cores (AMD EPYC) shared
+#: with other jobs (load 6-16, so their wall times were 1.5-5 times these); on 2 free cores a
+#: run takes about this, less where both workers simulate. A suite's is its parts'. None:
+#: not measured (the real iCub recordings were not at hand).
+QUICK_WALL_S: dict[str, float | None] = {
+    "finger7-v1": 19.4,
+    "finger7-v2": 132.6,
+    "multilayer3-v1": 16.0,
+    "multilayer3-v2": 29.6,
+    "biotac20-real-v1": 80.2,
+    "icub20-real-v1": None,
+    "roughness8-v1": 17.4,
+    "textures20-biotac19-v1": 29.3,
+    "textures20-icub60-v1": 76.4,
+    "textures20-biotac19-v2": 27.7,
+    "textures20-icub60-v2": 51.6,
+}
 
 
 def paper_of(reference: str) -> tuple[str, str]:
@@ -130,8 +144,8 @@ def cmd_tasks(args: argparse.Namespace) -> int:
         "",
         "needs: torch, the [learn] extra (or leave the networks out: --classifiers "
         "svm-raw,svm-spike); --data, the real data set's folder.",
-        "quick: about how long 'run TASK --quick' takes on 2 cores, its slides simulated "
-        "(the kernels compiled; a first run adds 1.5-2 min).",
+        "quick: about how long 'run TASK --quick' takes on 2 free cores (the CPU time it "
+        "used, its slides simulated; a first run adds 1.5-2 min of compiling).",
     ]
     emit(args, rows, lambda: "\n".join(text_table(head, table, right=(3, 4)) + notes))
     return 0
