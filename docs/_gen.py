@@ -80,6 +80,28 @@ INTERNAL_PACKAGES = {
 }
 
 
+def mount_assets(root: Path) -> None:
+    """Make ``sim_tactile.assets`` (the presets' files) importable from the source tree at
+    ``root``, where it is not already: the build imports the tree's package, which an
+    editable install maps ``assets/`` into and a regular install (``pip install
+    ".[docs]"``) does not (``No module named 'sim_tactile.assets'``). As
+    ``[tool.setuptools.package-dir]`` maps it: the folder ``root/assets`` is the package."""
+    import importlib.util
+
+    try:
+        if importlib.util.find_spec(f"{ROOT}.assets") is not None:
+            return
+    except ImportError:
+        pass
+    init = root / "assets" / "__init__.py"
+    spec = importlib.util.spec_from_file_location(
+        f"{ROOT}.assets", init, submodule_search_locations=[str(init.parent)]
+    )
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+
+
 def modules() -> list[str]:
     """Every public module of the package (no name part starting with ``_``), sorted."""
     pkg = importlib.import_module(ROOT)
@@ -319,7 +341,7 @@ def task_page(task_id: str) -> str:
     its whole pinned definition, from the registry."""
     import json
 
-    from sim_tactile.cli.tasks import task_summary
+    from sim_tactile.cli.tasks import about, task_summary
     from sim_tactile.tasks import get_task
     from sim_tactile.tasks.ablate import PARAM_HELP, used_params
 
@@ -333,6 +355,8 @@ def task_page(task_id: str) -> str:
         f"split {spec.split}",
         f"- run it: `sim-tactile run {task_id} --out out/{task_id}`"
         + (" --data PATH" if spec.needs_data_path else ""),
+        f"- needs: {', '.join(s['needs']) or 'the core install'}; its quick form "
+        f"(`--quick`) takes {about(s['quick_s'])} on 2 cores",
     ]
     if spec.parts:
         lines.append(f"- parts: {', '.join(f'`{p}`' for p in spec.parts)}")
@@ -358,7 +382,7 @@ def task_page(task_id: str) -> str:
 
 def write_tasks(out_dir: Path) -> list[str]:
     """Write ``out_dir/<task>.md`` for every registered task and an index."""
-    from sim_tactile.cli.tasks import task_summary
+    from sim_tactile.cli.tasks import about, task_summary
     from sim_tactile.tasks import task_ids
 
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -367,10 +391,13 @@ def write_tasks(out_dir: Path) -> list[str]:
         _write(out_dir / f"{t}.md", task_page(t))
     rows = [task_summary(t) for t in ids]
     index = ["# The tasks", "", "Generated from the task registry (`sim-tactile tasks`).", ""]
-    index += ["| task | paper | sensor | classes | slides |", "|---|---|---|---|---|"]
+    index += [
+        "| task | paper | sensor | classes | slides | needs | quick |",
+        "|---|---|---|---|---|---|---|",
+    ]
     index += [
         f"| [`{r['id']}`]({r['id']}.md) | {r['paper']} | `{r['sensor']}` | {r['classes']} "
-        f"| {r['slides']} |"
+        f"| {r['slides']} | {', '.join(r['needs']) or '-'} | {about(r['quick_s'])} |"
         for r in rows
     ]
     index += ["", "```{toctree}", ":hidden:", "", *ids, "```", ""]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import sys
 from pathlib import Path
@@ -13,7 +14,9 @@ sys.path.insert(0, str(HERE.parent))
 import _docstrings  # noqa: E402
 import _gen  # noqa: E402
 
-import sim_tactile  # noqa: E402
+import sim_tactile  # noqa: E402  (this source tree's, which the manual documents)
+
+_gen.mount_assets(HERE.parent)  # its presets too, installed or not (pip install ".[docs]")
 
 project = "sim_tactile"
 author = "the sim_tactile authors"
@@ -28,7 +31,7 @@ extensions = [
     "_resolve",
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**/README.md", "tutorials/*.py"]
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**/README.md"]
 myst_enable_extensions = ["colon_fence", "deflist", "dollarmath"]
 myst_heading_anchors = 3
 
@@ -36,6 +39,22 @@ html_theme = "furo"
 html_title = f"sim_tactile {release}"
 html_static_path: list[str] = []
 
+#: The extras' libraries that a module of the package imports when it is imported (the
+#: torch Dataset's module imports torch; the others import theirs when called); where one is
+#: not installed (`make docs` installs the [docs] extra only), autodoc and the generated
+#: pages import a stand-in. (A stand-in of a library that others probe for, pyarrow for
+#: pandas, would break them: only what the package needs is stood in for.)
+OPTIONAL = ("torch",)
+
+
+def _missing(name: str) -> bool:
+    try:
+        return importlib.util.find_spec(name) is None
+    except (ImportError, ValueError):
+        return True
+
+
+autodoc_mock_imports = [m for m in OPTIONAL if _missing(m)]
 autodoc_member_order = "bysource"
 # the public names are documented under their entry point, which each page names once: the
 # module a class is defined in is no part of its name for the reader
@@ -66,8 +85,11 @@ nitpick_ignore_regex = [
 
 
 def _generate(app) -> None:
-    _gen.write_api(HERE / "reference" / "api")
-    _gen.write_tasks(HERE / "reference" / "tasks")
+    from sphinx.ext.autodoc.mock import mock
+
+    with mock(app.config.autodoc_mock_imports):  # as autodoc imports the modules
+        _gen.write_api(HERE / "reference" / "api")
+        _gen.write_tasks(HERE / "reference" / "tasks")
 
 
 def _skip(app, what, name, obj, skip, options):

@@ -295,6 +295,9 @@ class _Run:
     todo: list[tuple[int, int]] = field(default_factory=list)
     warns: list[Counter] = field(default_factory=list)
     written: int = 0
+    #: of the written: read from the slide cache, and copied from recorded data
+    cached: int = 0
+    copied: int = 0
     reused: int = 0
     corrupt: list[dict] = field(default_factory=list)
     sim_s: float = 0.0
@@ -343,12 +346,14 @@ def _drain(backend, run: _Run, bar) -> None:
         plan = run.plans[k]
         if plan.jobs is None:
             _write(run, k, i, np.asarray(plan.dataset.data[i], np.float32), (), 0.0)
+            run.copied += 1
             bar.update(1)
         else:
             jobs.append(((k, i), plan.jobs[i]))
     try:
         for (k, i), out in stream(backend, jobs, name=lambda key: _slide_name(run, key)):
             _write(run, k, i, out.data, out.warnings, out.wall_s)
+            run.cached += bool(getattr(out, "cached", False))
             bar.update(1)
     except WorkerError as exc:
         raise StoreError(f"{exc}; {_KEPT}") from None
@@ -487,6 +492,9 @@ def _summary(out, total, resumed, backend, workers, n_workers, plans, root, run,
         "resumed": bool(resumed),
         "wall_s": round(wall, 3),
         "written": run.written,
+        "simulated": run.written - run.cached - run.copied,
+        "cached": run.cached,
+        "copied": run.copied,
         "reused": run.reused,
         "regenerated": len(run.corrupt),
         "corrupt": run.corrupt,

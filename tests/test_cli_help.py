@@ -60,9 +60,27 @@ def test_building_the_command_line_imports_no_heavy_library():
 
 
 def test_tasks_lists_every_registered_task_one_line_each(cli):
-    lines = cli(["tasks"]).stdout.strip().splitlines()
-    assert lines[0].split() == ["id", "paper", "sensor", "classes", "slides"]
+    lines = cli(["tasks"]).stdout.strip().split("\n\n")[0].splitlines()
+    assert lines[0].split() == ["id", "paper", "sensor", "classes", "slides", "needs", "quick"]
     assert [line.split()[0] for line in lines[1:]] == list(task_ids())
+    row = {line.split()[0]: line for line in lines[1:]}
+    assert "torch, --data" in row["biotac20-real-v1"] and "~" in row["biotac20-real-v1"]
+    assert " - " in row["finger7-v1"] and "torch" not in row["finger7-v1"]
+
+
+def test_tasks_says_what_each_needs_and_how_long_its_quick_form_takes(cli):
+    """Which tasks need torch (a network among their rows) or --data, and each quick
+    form's measured wall time (a suite: its parts'), from `sim-tactile tasks --json`."""
+    from sim_tactile.cli.tasks import QUICK_WALL_S, about
+
+    rows = {r["id"]: r for r in json.loads(cli(["tasks", "--json"]).stdout)}
+    assert rows["biotac20-real-v1"]["needs"] == ["torch", "--data"]
+    assert rows["textures20-v1"]["needs"] == ["torch"] and rows["finger7-v1"]["needs"] == []
+    measured = {t for t, s in QUICK_WALL_S.items() if s is not None}
+    assert measured >= {t for t in task_ids() if not get_task(t).parts} - {"icub20-real-v1"}
+    parts = get_task("textures20-v1").parts
+    assert rows["textures20-v1"]["quick_s"] == sum(QUICK_WALL_S[p] for p in parts)
+    assert (about(38.3), about(150.0), about(None)) == ("~40 s", "~2 min", "?")
 
 
 def test_tasks_json_gives_id_paper_sensor_classes_and_slides(cli):
@@ -110,3 +128,45 @@ def test_first_run_counts_the_kernels_not_compiled_here(tmp_path):
     )
     assert int(out.stdout.strip()) > 0
     assert "compiling" in COMPILE_NOTICE and "minutes" in COMPILE_NOTICE
+
+
+def test_the_compile_notice_comes_with_a_compile_and_once():
+    """The notice listens to numba's compiles: a kernel of this package that compiles says it
+    once; one that is already compiled, or another package's, says nothing."""
+    import numba
+
+    from sim_tactile.cli._common import compile_notice
+
+    def probe(x):
+        return x + 1
+
+    probe.__module__ = "sim_tactile._notice_probe"  # as if the package's own
+    kernel = numba.njit(cache=False)(probe)
+    said: list[str] = []
+    with compile_notice(said.append):
+        kernel(1)
+        kernel(2.5)  # another signature: another compile, no second notice
+    assert said == [COMPILE_NOTICE]
+    with compile_notice(said.append):
+        kernel(3)  # compiled already: nothing compiles
+        numba.njit(cache=False)(lambda x: x * 2)(4)  # not the package's
+    assert said == [COMPILE_NOTICE]
+
+
+def test_a_typo_says_no_compile_notice(tmp_path):
+    """With no compiled kernel at all (an empty kernel cache), a mistyped task fails with
+    its one line, and no notice: nothing compiled (the notice was printed first, always)."""
+    env = dict(
+        os.environ,
+        SIM_TACTILE_KERNELS=str(tmp_path / "kernels"),
+        NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+    )
+    code = "import sys; from sim_tactile.cli import main; sys.exit(main())"
+    out = subprocess.run(
+        [sys.executable, "-c", code, "run", "finger7-v9", "--quick", "--out", str(tmp_path / "o")],
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    assert out.returncode == 2 and "finger7-v9" in out.stderr
+    assert "compiling" not in out.stderr, out.stderr

@@ -1,13 +1,15 @@
-"""The manual builds with warnings as errors, documents every public name, and its
-tutorials run in their quick forms."""
+"""The manual builds with warnings as errors, documents every public name, and the code of
+its tutorials and how-to guides, shown in the pages themselves, runs as written."""
 
 from __future__ import annotations
 
 import importlib
+import os
 import re
-import runpy
 import subprocess
 import sys
+import sysconfig
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -19,7 +21,11 @@ sys.path.insert(0, str(DOCS))
 import _docstrings  # noqa: E402
 import _gen  # noqa: E402
 
-TUTORIALS = sorted((DOCS / "tutorials").glob("*.py"))
+#: the pages whose ```python blocks are their tested source (the code a reader sees where
+#: the page is browsed, on the repository's site too): tutorials and how-to guides
+CODE_PAGES = sorted([*(DOCS / "tutorials").glob("*.md"), *(DOCS / "how-to").glob("*.md")])
+#: a ```toml block whose first line is ``# NAME.toml ...`` is a file the page's code reads
+FILE_BLOCK = re.compile(r"```toml\n(# ([\w.-]+\.toml)\b.*?)```", re.S)
 #: the pages generated at build time (from the code), not written by hand
 GENERATED = (DOCS / "reference" / "api", DOCS / "reference" / "tasks")
 RESULTS = DOCS / "results"
@@ -98,30 +104,70 @@ def history_in_results_page(page: Path) -> list[str]:
     return faults
 
 
+#: The extras besides the manual's own ([docs]) and the tests' ([test]): `make docs` and a
+#: reader's `pip install ".[docs]"` install none of them.
+OTHER_EXTRAS = ("learn", "ray", "tonic", "hub", "nir", "neurobench")
+
+
+def extras_modules() -> list[str]:
+    """The top-level modules of the other extras' distributions (their names: torch, ray,
+    tonic, datasets, pyarrow, mlcroissant, nir, snntorch, nirtorch; tqdm is a core one)."""
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    core = {re.split(r"[<>=\[ ]", d)[0] for d in meta["dependencies"]}
+    names = {
+        re.split(r"[<>=\[ ]", d)[0]
+        for extra in OTHER_EXTRAS
+        for d in meta["optional-dependencies"][extra]
+    }
+    return sorted(names - core)
+
+
+#: Sphinx run as after `pip install ".[docs]"`, not editable: ``python -S`` runs no .pth file,
+#: so the editable install's finder (which maps assets/ into the package) is not there, and
+#: the other extras' modules are not found (as where they are not installed).
+BUILD = """
+import sys
+BLOCKED = set(sys.argv[1].split(","))
+class NotInstalled:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in BLOCKED:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, NotInstalled())
+from sphinx.cmd.build import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
 @pytest.fixture(scope="module")
 def built(tmp_path_factory) -> Path:
-    """The manual built as ``make docs`` builds it (-W: a warning fails)."""
+    """The manual built as a reader builds it after ``pip install ".[docs]"`` (a regular
+    install, only the [docs] extra: :data:`BUILD`), as ``make docs`` does (-W: a warning
+    fails)."""
     pytest.importorskip("sphinx")
     out = tmp_path_factory.mktemp("docs")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env["PYTHONPATH"] = sysconfig.get_paths()["purelib"]  # the libraries, no .pth run
+    args = ["-W", "--keep-going", "-q", "-b", "html", str(DOCS), str(out)]
     proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "sphinx",
-            "-W",
-            "--keep-going",
-            "-q",
-            "-b",
-            "html",
-            str(DOCS),
-            str(out),
-        ],
+        [sys.executable, "-S", "-c", BUILD, ",".join(extras_modules()), *args],
         capture_output=True,
         text=True,
         timeout=900,
+        env=env,
+        cwd=out,
     )
     assert proc.returncode == 0, proc.stderr[-4000:]
     return out
+
+
+def test_the_manual_needs_only_its_own_extra():
+    """`make docs` installs the [docs] extra, not the tests' and the bridges' extras (the
+    build above runs without them); the modules those extras bring are what it hides."""
+    rule = re.search(r"^docs: (.*)$", (ROOT / "Makefile").read_text(), flags=re.M)[1]
+    stamp = re.search(r"^\$\(STAMP_DOCS\):.*\n\t(.*)$", (ROOT / "Makefile").read_text(), re.M)
+    assert rule.strip() == "$(STAMP_DOCS)" and stamp[1].endswith("install -q -e '.[docs]'")
+    assert {"torch", "tonic", "nir", "datasets", "ray"} <= set(extras_modules())
+    assert "tqdm" not in extras_modules()
 
 
 @pytest.mark.slow
@@ -183,16 +229,78 @@ def test_the_results_rule_finds_what_breaks_it(tmp_path):
         assert len(history_in_results_page(page)) == faults, (name, history_in_results_page(page))
 
 
+def test_the_architecture_page_names_every_part_of_the_package_and_every_task():
+    """The hand-written map follows the code: each subpackage and top-level module, each
+    floor of sim/, and each task id is named on it."""
+    from sim_tactile.tasks import task_ids
+
+    page = (DOCS / "explanation" / "architecture.md").read_text()
+    pkg = ROOT / "sim_tactile"
+    parts = [f"{p.name}/" for p in pkg.iterdir() if (p / "__init__.py").is_file()]
+    parts += [p.name for p in pkg.glob("*.py") if p.name != "__init__.py"]
+    parts += [f"{p.name}/" for p in (pkg / "sim").iterdir() if (p / "__init__.py").is_file()]
+    parts += [f"`{t}`" for t in task_ids()]
+    assert [p for p in parts if p not in page] == []
+
+
+def test_the_file_format_page_names_every_key_the_readers_take():
+    """Each key a configuration, sensor file or plate reference may hold is on the file
+    formats page (the readers declare them: the page follows them)."""
+    from dataclasses import fields
+
+    from sim_tactile.plates.user import Source
+
+    from sim_tactile.sensors import files
+    from sim_tactile.slides.config import RANDOMISE, TOP_KEYS
+
+    page = (DOCS / "reference" / "file-formats.md").read_text()
+    keys = [*TOP_KEYS, *RANDOMISE, *files.TOP_KEYS, *files.LAYOUT_KEYS, *files.GRID_KEYS]
+    keys += [f.name for f in fields(Source) if f.name not in ("path", "function")]
+    assert sorted({k for k in keys if f"`{k}`" not in page and f"[{k}]" not in page}) == []
+    assert "heightmap" in page and "columns run along the slide" in page
+
+
+def test_every_picture_is_shown_in_the_manual():
+    """Each figure in docs/img is on a page (a picture nobody sees is a page not written)."""
+    text = "\n".join(p.read_text() for p in _pages())
+    assert [p.name for p in (DOCS / "img").glob("*.png") if f"img/{p.name}" not in text] == []
+
+
+def test_the_examples_link_to_files_that_exist():
+    """The examples' READMEs are read on the repository's site, outside the manual's build
+    (which checks its own links): each relative link leads to a file."""
+    dead = [
+        f"{page.relative_to(ROOT)}: {target}"
+        for page in (ROOT / "examples").rglob("*.md")
+        for target in re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", page.read_text())
+        if not target.startswith("http") and not (page.parent / target).exists()
+    ]
+    assert dead == []
+
+
 def test_public_packages_are_found():
     found = set(_gen.public_packages())
     assert {"sim_tactile.plates", "sim_tactile.tasks", "sim_tactile.spikes"} <= found
 
 
-def test_every_tutorial_has_a_page_that_shows_it():
-    pages = "\n".join(p.read_text() for p in (DOCS / "tutorials").glob("*.md"))
-    assert TUTORIALS
-    for script in TUTORIALS:
-        assert f"literalinclude:: {script.name}" in pages.replace("} ", ":: "), script.name
+def page_code(page: Path) -> tuple[str, dict[str, str]]:
+    """A page's Python (its ```python blocks, in order) and the files it names (its
+    :data:`FILE_BLOCK` blocks)."""
+    text = page.read_text()
+    code = "\n".join(re.findall(r"```python\n(.*?)```", text, flags=re.S))
+    return code, {name: body for body, name in FILE_BLOCK.findall(text)}
+
+
+def test_tutorials_and_how_tos_show_their_code_in_the_page():
+    """No page includes its code from a file (browsed on the repository's site, a
+    literalinclude shows nothing); every tutorial has Python to run, and the folders hold
+    no script beside the pages."""
+    assert [p.name for p in DOCS.rglob("*.md") if "literalinclude" in p.read_text()] == []
+    assert list((DOCS / "tutorials").glob("*.py")) + list((DOCS / "how-to").glob("*.py")) == []
+    tutorials = [p for p in CODE_PAGES if p.parent.name == "tutorials"]
+    assert len(tutorials) >= 3 and all(page_code(p)[0] for p in tutorials)
+    code, files = page_code(DOCS / "tutorials" / "your-plates-and-sensor.md")
+    assert set(files) == {"my-grating.toml", "my4x4.toml"} and "my4x4.toml" in code
 
 
 def test_markdown_tables_in_docstrings_become_list_tables():
@@ -202,22 +310,34 @@ def test_markdown_tables_in_docstrings_become_list_tables():
     assert ".. list-table::" in rest and "   * - 1" in rest and "\\|x\\| is a norm" in rest
 
 
-#: the tutorials that load finger7-v1's quick data share a worker with the other tests that
-#: do (test_tasks_sim, test_user_methods, test_readme), so that one of them simulates it
-_F7 = {"your_method"}
+#: the pages that load finger7-v1's quick data share a worker with the other tests that do
+#: (test_tasks_sim, test_user_methods, test_readme), so that one of them simulates it
+_F7 = {"your-method", "nir-export", "ablate"}
+RUNNABLE = [p for p in CODE_PAGES if page_code(p)[0]]
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "script",
+    "page",
     [
         pytest.param(p, marks=pytest.mark.xdist_group("finger7-v1-quick")) if p.stem in _F7 else p
-        for p in TUTORIALS
+        for p in RUNNABLE
     ],
-    ids=[p.stem for p in TUTORIALS],
+    ids=[f"{p.parent.name}/{p.stem}" for p in RUNNABLE],
 )
-def test_tutorial_runs_in_its_quick_form(script, tmp_path, monkeypatch, cache_dir):
-    monkeypatch.setenv("SIM_TACTILE_CACHE", str(cache_dir))
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    module = runpy.run_path(str(script))
-    assert module["main"](tmp_path / "out", quick=True) is not None
+def test_a_page_runs_as_written(page, tmp_path, cache_dir):
+    """The page's blocks in order, as a reader pastes them: in a new process, in an empty
+    folder holding the files the page names."""
+    code, files = page_code(page)
+    for name, body in files.items():
+        (tmp_path / name).write_text(body)
+    env = dict(os.environ, SIM_TACTILE_CACHE=str(cache_dir), MPLBACKEND="Agg")
+    proc = subprocess.run(
+        [sys.executable, "-c", code],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert proc.returncode == 0, proc.stderr[-4000:]

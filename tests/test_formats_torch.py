@@ -65,6 +65,33 @@ def test_encoded_items_are_the_tasks_spike_rasters(tones):
     np.testing.assert_array_equal(y, td.y[te])
 
 
+def test_transforms_apply_to_each_item_and_the_short_import_is_the_class(tones):
+    """``transform`` and ``target_transform`` as torchvision and Tonic take them; a value
+    that is not callable is refused by name; ``sim_tactile.formats.TactileTorchDataset`` is
+    the class (and importing ``sim_tactile.formats`` alone does not import torch)."""
+    import subprocess
+    import sys
+
+    import sim_tactile.formats as formats
+
+    assert formats.TactileTorchDataset is TactileTorchDataset
+    plain = TactileTorchDataset(tones.store, split="test")
+    ds = formats.TactileTorchDataset(
+        tones.store,
+        split="test",
+        transform=lambda x: x.mean(dim=0),
+        target_transform=lambda y: plain.classes[y],
+    )
+    x, name = ds[0]
+    x0, y0 = plain[0]
+    assert x.shape == (x0.shape[1],) and torch.allclose(x, x0.mean(dim=0))
+    assert name == plain.classes[y0]
+    with pytest.raises(ConfigError, match="transform = 3 is not valid; valid: a callable"):
+        TactileTorchDataset(tones.store, transform=3)
+    code = "import sys, sim_tactile.formats; print('torch' in sys.modules)"
+    assert subprocess.check_output([sys.executable, "-c", code], text=True).strip() == "False"
+
+
 def test_any_store_reads_lazily_and_checks_its_slides(tmp_path, tones):
     st = datasets.open(tones.store)
     ds = TactileTorchDataset(st)  # every slide, in store order

@@ -107,6 +107,23 @@ def test_one_and_two_workers_write_the_same_data_set(tiny, tmp_path):
     assert res["config_hash"] == datasets.open(ref).config_hash
 
 
+def test_generate_says_which_slides_came_from_the_slide_cache(tiny, tmp_path, cache_dir):
+    """Slides a run left in the slide cache are read, not simulated, and generate says so
+    (it said "6 simulated now" for slides it read in a fraction of a second)."""
+    from sim_tactile.cli.data import generate_line
+
+    cfg, ref = tiny
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SIM_TACTILE_CACHE", str(cache_dir))
+        filler = SlideWorker(str(cache_dir), write=True)  # as `run` fills the cache
+        first = _quiet(str(cfg), tmp_path / "a.zarr", workers=1, _worker=filler)
+        again = _quiet(str(cfg), tmp_path / "b.zarr", workers=1)
+    assert first["simulated"] + first["cached"] == first["written"] == 6
+    assert (again["simulated"], again["cached"], again["written"]) == (0, 6, 6)
+    assert "(0 simulated now, 6 from the slide cache, 0 kept)" in generate_line(again)
+    assert_same_store(ref, tmp_path / "b.zarr")
+
+
 @pytest.mark.slow
 def test_ray_backend_writes_the_same_data_set(tiny, tmp_path, cli_env):
     pytest.importorskip("ray", reason="the ray extra is not installed")

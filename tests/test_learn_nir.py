@@ -145,3 +145,47 @@ def test_a_missing_nir_names_its_install_command(fitted, monkeypatch):
     monkeypatch.setitem(sys.modules, "nir", None)
     with pytest.raises(MissingDependencyError, match=r"pip install 'sim-tactile\[nir\]'"):
         fitted[0].to_nir()
+
+
+def test_run_exports_the_network_it_trained_with_the_plates_as_classes(tones, tmp_path):
+    """``run --export-nir``: the snn row's last repeat, read back by the nir library, its
+    output neurons named by the plates; its weights are the network's that scored the row."""
+    from _fake_task import PLATES
+
+    from sim_tactile.cli import main
+
+    path = tmp_path / "snn.nir"
+    argv = ["run", tones.task, "--quick", "--store", str(tones.store), "--classifiers"]
+    argv += ["snn,svm-raw", "--out", str(tmp_path / "out"), "--export-nir", str(path)]
+    assert main(argv) == 0
+    back = nir.read(str(path))
+
+    def text(values) -> list[str]:  # nir reads a list of strings back as bytes
+        return [v.decode() if isinstance(v, bytes) else str(v) for v in values]
+
+    assert text(back.metadata["classes"]) == [p.split("/")[1] for p in PLATES]
+    assert text(back.metadata["plates"]) == list(PLATES)
+    assert str(back.metadata["task"]) == tones.task and "last of 1" in str(back.metadata["repeat"])
+    assert [type(back.nodes[k]).__name__ for k in bridge.SNN_NODES][1:3] == ["Linear", "CubaLIF"]
+    assert back.nodes["fc2"].weight.shape == (len(PLATES), SNN["hidden"])
+    # no snn row, a wrong suffix, a missing folder: refused before anything runs
+    for extra, words in (
+        (["--classifiers", "svm-raw", "--export-nir", str(path)], "no snn row"),
+        (["--classifiers", "snn", "--export-nir", str(tmp_path / "x.h5")], "ending in .nir"),
+        (
+            ["--classifiers", "snn", "--export-nir", str(tmp_path / "no" / "x.nir")],
+            "does not exist",
+        ),
+    ):
+        out = tmp_path / f"out-{len(words)}"
+        with pytest.raises(ConfigError, match=words):
+            tasks.run_task(
+                tones.task,
+                out,
+                quick=True,
+                store=tones.store,
+                classifiers=extra[1],
+                export_nir=extra[3],
+                log=lambda m: None,
+            )
+        assert not out.exists()

@@ -316,6 +316,22 @@ def test_a_script_is_run_in_another_process(files, tmp_path):
     assert any("no texture" in n for n in plate.texture.notes)
 
 
+def test_a_script_plate_is_named_by_its_file_and_function_once():
+    """``pins.py:pins`` is the plate ``pins``, not ``pins-pins``; another function is named
+    after the file and the function; a ``name`` option wins."""
+    from sim_tactile.plates.user import plate_name
+
+    def name(ref: str) -> str:
+        src = parse_ref(ref)
+        return plate_name(src, Path(src.path))
+
+    assert name("a/pins.py:pins") == "pins"
+    assert name("a/pins.py") == name("a/pins.py:plate") == "pins"
+    assert name("a/parts.py:knurl") == "parts-knurl"
+    assert name("a/pins.py:pins?name=studs") == "studs"
+    assert name("scan.npy") == "scan"
+
+
 def test_references_parse_and_print_back():
     src = parse_ref("a/b/knurl.py:make?pixel_m=2.5e-05&up=-y&fill_overhangs=true")
     assert (src.path, src.function, src.pixel_m, src.up, src.fill_overhangs) == (

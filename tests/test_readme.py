@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import re
+import shlex
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -61,3 +63,29 @@ def test_every_python_block_runs_as_written(tmp_path, monkeypatch, cache_dir):
     for code in blocks:
         exec(compile(code, str(README), "exec"), {"__name__": "__readme__"})
     assert (tmp_path / "out" / "mine" / "report.json").is_file()
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("finger7-v1-quick")
+def test_the_use_it_with_commands_run_as_written(tmp_path, cli_env):
+    """The bridges' command lines, pasted into a shell in an empty folder: a store, its
+    Parquet export (which Hugging Face's datasets reads), and a run that saves its spiking
+    network as a NIR graph whose outputs are the plates."""
+    from conftest import EXE
+
+    section = TEXT[TEXT.index("## Use it with") : TEXT.index("## The tasks")]
+    lines = re.findall(r"```bash\n(.*?)```", section, flags=re.S)[0].splitlines()
+    assert len(lines) == 3
+    for line in lines:
+        argv = shlex.split(line, comments=True)
+        assert argv[0] == "sim-tactile"
+        proc = subprocess.run(
+            [EXE, *argv[1:]], cwd=tmp_path, env=cli_env, capture_output=True, text=True
+        )
+        assert proc.returncode == 0, (line, proc.stderr[-3000:])
+    datasets = pytest.importorskip("datasets")
+    nir = pytest.importorskip("nir")
+    hub = datasets.load_dataset(str(tmp_path / "f7-hub"))
+    assert set(hub) == {"train", "test"} and len(hub["train"]) == 42
+    names = [c.decode() for c in nir.read(str(tmp_path / "snn.nir")).metadata["classes"]]
+    assert names == list(hub["train"].features["label"].names)

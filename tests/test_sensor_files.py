@@ -215,8 +215,46 @@ BAD = [
         ["2 [[transducer]]", "1 layers"],
     ),
     ("another format", 'format = 2\nbase = "grid3x3"\n', ["format", "valid: 1"]),
+    (
+        "3 mm taxels at 2 mm pitch",
+        GRID4.replace("pitch_m = 2.5e-3", "pitch_m = 2e-3").replace("2.0e-3", "3e-3"),
+        ["taxels 0 (r0c0", "1 (r0c1", "of layer 0 overlap by 1 x 3 mm", "overlap = true"],
+    ),
+    (
+        "two taxels 0.5 mm apart",
+        'base = "grid3x3"\n[layout]\nx_m = [0.0, 5e-4]\ny_m = [0.0, 0.0]\nsize_m = 1e-3\n',
+        ["taxels 0 (t0, 1 x 1 mm at x = 0, y = 0 mm)", "x = 0.5", "overlap by 0.5 x 1 mm"],
+    ),
+    (
+        "overlap not true or false",
+        'base = "grid3x3"\n[layout]\noverlap = "yes"\nx_m = [0.0]\ny_m = [0.0]\nsize_m = 1e-3\n',
+        ["layout.overlap", "'yes'", "true or false"],
+    ),
     ("not TOML", "base = \n", ["not valid TOML"]),
 ]
+
+
+def test_overlapping_taxels_are_taken_where_the_file_says_so(tmp_path):
+    """``overlap = true`` lets taxels of one layer share the skin, beside a grid or columns;
+    such a sensor writes itself with the key, and reads back (from its file and from a data
+    set's record); taxels that only touch need no key."""
+    grid = GRID4.replace("pitch_m = 2.5e-3", "pitch_m = 2e-3").replace("2.0e-3", "3e-3")
+    s = load_sensor_file(
+        _write(tmp_path, grid.replace("[layout.grid]", "[layout]\noverlap = true\n[layout.grid]"))
+    )
+    assert s.layout.n == 16 and s.layout.sizes[0, 0] == 3e-3
+    cols = 'base = "grid3x3"\n[layout]\noverlap = true\nx_m = [0.0, 5e-4]\ny_m = [0.0, 0.0]\nsize_m = 1e-3\n'
+    for sensor in (s, load_sensor_file(_write(tmp_path, cols, "c.toml"))):
+        path = write_sensor_file(sensor, tmp_path / "back.toml")
+        assert "overlap = true" in path.read_text()
+        assert content_hash(load_sensor_file(path).to_json()) == content_hash(sensor.to_json())
+        rec = sensor_from_record(json.loads(json.dumps(sensor.to_json())))
+        assert content_hash(rec.to_json()) == content_hash(sensor.to_json())
+    touching = GRID4.replace("2.0e-3", "2.5e-3")  # size = pitch: edges meet
+    assert load_sensor_file(_write(tmp_path, touching, "t.toml")).layout.n == 16
+    assert (
+        "overlap" not in write_sensor_file(get_sensor("grid3x3"), tmp_path / "g.toml").read_text()
+    )
 
 
 @pytest.mark.parametrize("what, text, words", BAD, ids=[b[0] for b in BAD])

@@ -3,6 +3,8 @@ peak, micro-roughness, seeded imperfections, real-data statistics, bad input."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -209,3 +211,24 @@ def test_baselines_and_dead_taxels_belong_to_the_unit_not_the_slide():
     other = Imperfections(noise_std=0.1, offset_max=4.0, dead_fraction=0.2, unit_seed=7)
     c = other.apply(y, pos, 100.0, np.random.default_rng(1))
     assert np.abs(c.mean(0) - a.mean(0)).max() > 0.5
+
+
+def test_the_biotac_channels_have_one_name_in_data_calibration_and_simulation(tmp_path):
+    """``ele1`` .. ``ele19`` everywhere: the real data's columns, the shipped calibration,
+    the sensor (a simulated slide's ``channel_names``) and the traces figure's legend, which
+    named them ``t0`` .. ``t18``; a recording that names no channels keeps ``t0``, ``t1``."""
+    import sim_tactile.sensors as sensors_pkg
+    from sim_tactile.datasets.real import BIOTAC_ELECTRODES
+    from sim_tactile.records import Recording
+    from sim_tactile.sensors.calibration import load_calibration
+    from sim_tactile.sim.plots import channel_names, plot_traces
+
+    names = list(BIOTAC_ELECTRODES)
+    cal = load_calibration(Path(sensors_pkg.__file__).parent / "calibrations" / "biotac19.toml")
+    assert list(cal.channels) == names == list(get_sensor("biotac19").layout.names)
+    taxels = get_sensor("biotac19").layout.positions
+    rec = Recording(np.zeros((4, 19), np.float32), np.arange(4) / 100.0, taxels, meta={})
+    assert channel_names(rec)[:2] == ["t0", "t1"]
+    named = Recording(rec.data, rec.times, taxels, meta={"channel_names": names})
+    assert channel_names(named) == names
+    assert plot_traces(named, tmp_path / "traces.png").is_file()

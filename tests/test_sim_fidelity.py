@@ -103,19 +103,62 @@ def test_the_node_count_is_capped_and_says_so():
 
 
 @pytest.mark.parametrize(
-    ("plate", "sensor", "kw", "words"),
+    ("plate", "sensor", "kw", "words", "remedy"),
     [
-        ("multilayer3/grating-9", "multilayer3x3x2", {}, "aliases the texture"),
-        ("textures20/grating-1.5mm", "icub60", {}, "larger than the texture period"),
-        ("roughness8/ra-50", "pvdf2", {}, "micro-roughness"),
-        ("finger7/ridges-4", "grid3x3", {"dt_s": 0.01}, "time step 0.01 s is too coarse"),
-        ("finger7/ridges-4", "grid3x3", {"pitch_m": 2e-3}, "node pitch 2 mm is too coarse"),
+        (
+            "multilayer3/grating-9",
+            "multilayer3x3x2",
+            {},
+            "aliases the texture",
+            "taxels at most 2 mm apart would sample it",
+        ),
+        (
+            "textures20/grating-1.5mm",
+            "icub60",
+            {},
+            "larger than the texture period",
+            "taxels smaller than 1.5 mm",
+        ),
+        ("roughness8/ra-50", "pvdf2", {}, "micro-roughness", "nothing to change"),
+        (
+            "finger7/ridges-4",
+            "grid3x3",
+            {"dt_s": 0.01},
+            "time step 0.01 s is too coarse",
+            "pass dt_s at most",
+        ),
+        (
+            "finger7/ridges-4",
+            "grid3x3",
+            {"pitch_m": 2e-3},
+            "node pitch 2 mm is too coarse",
+            "pass pitch_m at most 1.25 mm",
+        ),
     ],
 )
-def test_each_warning(plate, sensor, kw, words):
+def test_each_warning_names_its_remedy(plate, sensor, kw, words, remedy):
     sen = get_sensor(sensor)
     fid = choose_fidelity(get_plate(plate), sen.layout, sen.finger, Protocol(), "auto", **kw)
-    assert any(words in w for w in fid.warnings), fid.warnings
+    said = [w for w in fid.warnings if words in w]
+    assert said, fid.warnings
+    assert remedy in said[0], said[0]
+
+
+def test_a_raised_node_pitch_names_its_remedy_and_only_where_it_was_raised():
+    """The BioTac on a 2 mm grating: its features ask for 0.4 mm nodes, L1's node cap raises
+    them to 0.709 mm, and the warning says how to get finer ones. L2 halves that pitch
+    (0.354 mm, finer than asked): nothing was raised, and nothing is said; nor where the
+    caller forces a pitch."""
+    plate, sen = get_plate("textures20/grating-2.0mm"), get_sensor("biotac19")
+    l1 = choose_fidelity(plate, sen.layout, sen.finger, Protocol(), "auto")
+    raised = [w for w in l1.warnings if "node pitch raised" in w]
+    assert raised and f"to {l1.pitch_m * 1e3:.3g} mm" in raised[0]
+    assert "fidelity L2" in raised[0] and "pitch_m" in raised[0]
+    l2 = choose_fidelity(plate, sen.layout, sen.finger, Protocol(), "L2")
+    assert l2.pitch_m < 0.4e-3
+    assert not any("node pitch raised" in w for w in l2.warnings), l2.warnings
+    forced = choose_fidelity(plate, sen.layout, sen.finger, Protocol(), "L1", pitch_m=0.3e-3)
+    assert not any("node pitch raised" in w for w in forced.warnings)
 
 
 def test_levels_and_bad_input():

@@ -22,12 +22,40 @@ DETERMINISM_WINDOW_S = 0.3
 def test_every_released_task_keeps_its_description():
     """Each task's whole definition (data, protocol, settings, runs, paper cells) as it was
     released; a difference is a new task version, not an edit (``python
-    tools/task_descriptions.py`` only when a task is added)."""
+    tools/task_descriptions.py`` only when a task is added). The quick form (``quick``, a
+    smoke run) is pinned too, in the next test."""
     released = json.loads(DESCRIPTIONS.read_text())
     now = {t: get_task(t).describe() for t in task_ids()}
     assert sorted(now) == sorted(released), "a task was added or removed"
     for t in released:
-        assert now[t] == released[t], f"task {t} changed meaning: release a new version"
+        full = {k: v for k, v in now[t].items() if k != "quick"}
+        assert full == {k: v for k, v in released[t].items() if k != "quick"}, (
+            f"task {t} changed meaning: release a new version"
+        )
+
+
+def test_every_task_keeps_its_quick_form():
+    """A task's quick form is pinned as well: a change to it is a change of every quick run's
+    numbers, said in the CHANGELOG when the file is written again."""
+    released = json.loads(DESCRIPTIONS.read_text())
+    for t in task_ids():
+        assert get_task(t).describe()["quick"] == released[t]["quick"], (
+            f"task {t}'s quick form changed: say so in the CHANGELOG and run "
+            "tools/task_descriptions.py"
+        )
+
+
+def test_the_quick_form_caps_the_networks_and_keeps_a_task_own():
+    """Where a task's quick settings give the torch rows nothing, they get the quick
+    network settings and at most QUICK_NETWORK_REPEATS repeats; a task's own stay."""
+    from sim_tactile.tasks.registry import QUICK_NETWORK_PARAMS, QUICK_NETWORK_REPEATS
+
+    finger = get_task("finger7-v1").settings(quick=True)
+    assert finger.repeats_for("snn") == QUICK_NETWORK_REPEATS < finger.repeats_for("svm")
+    assert dict(finger.params["snn"]) == dict(QUICK_NETWORK_PARAMS["snn"])
+    assert get_task("finger7-v1").settings(quick=False).repeats_for("snn") == 1000
+    biotac = get_task("biotac20-real-v1").settings(quick=True)
+    assert biotac.repeats_for("snn") == 1 and biotac.params["snn"]["epochs"] == 12
 
 
 def test_aliases_resolve_and_removal_is_explicit():

@@ -12,6 +12,7 @@ is reported as the interrupt.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import signal
 import sys
 import warnings
@@ -21,7 +22,7 @@ from .. import __version__
 from ..errors import SimTactileError, Terminated, os_error_message
 from ..interrupts import handled, interrupt_of
 from . import bench, data, plates, sim, tasks
-from ._common import log
+from ._common import compile_notice, log
 
 DESCRIPTION = (
     "The sim-tactile command line of a physics-simulated benchmark for tactile texture perception. Build "
@@ -94,7 +95,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     debug = bool(getattr(args, "debug", False))
     if not debug:
         warnings.formatwarning = _one_line_warnings
-    with handled():
+    notice = compile_notice() if getattr(args, "compiles", False) else contextlib.nullcontext()
+    with handled(), notice:
         try:
             return int(args.func(args) or 0)
         except KeyboardInterrupt as exc:

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import pickle  # only for its error: numba reads its own cache index with it
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 from ..errors import ConfigError
 
@@ -61,8 +62,11 @@ class LazyHelpFormatter(argparse.HelpFormatter):
         return super()._format_action(action)
 
 
-def add_command(parent, name: str, func, help: str) -> argparse.ArgumentParser:
-    """A subcommand with ``--json`` that runs ``func(args)``."""
+def add_command(
+    parent, name: str, func, help: str, *, compiles: bool = False
+) -> argparse.ArgumentParser:
+    """A subcommand with ``--json`` that runs ``func(args)``; ``compiles``: it may compile
+    the package's kernels (then :func:`compile_notice` watches it)."""
     sp = parent.add_parser(name, help=help, description=help, formatter_class=LazyHelpFormatter)
     sp.add_argument(
         "--json",
@@ -75,7 +79,7 @@ def add_command(parent, name: str, func, help: str) -> argparse.ArgumentParser:
         default=argparse.SUPPRESS,
         help="Show the traceback of an error instead of its one-line reason.",
     )
-    sp.set_defaults(func=func)
+    sp.set_defaults(func=func, compiles=compiles)
     return sp
 
 
@@ -110,8 +114,8 @@ def options_of(args: argparse.Namespace):
 #: About how long the simulator's numba kernels take to compile on a first run (measured on
 #: 2 cores: 80-110 s for `sim-tactile run finger7-v1 --quick` in a fresh installation).
 COMPILE_NOTICE = (
-    "sim-tactile: first run on this installation: compiling the simulator's kernels once "
-    "(about 1.5-2 minutes on 2 cores); they are cached, and later runs start in seconds."
+    "sim-tactile: compiling the package's kernels once on this installation (about 1.5-2 "
+    "minutes on 2 cores for a simulation's); they are cached, and later runs start in seconds."
 )
 
 
@@ -120,7 +124,9 @@ def kernels_to_compile(modules: Sequence[str] = ("sim_tactile.sim.slide",)) -> i
     on disk: no cache index yet, or one that numba would not load (another numba, or a stamp
     other than the kernel's :func:`~sim_tactile._jit.kernel_stamp`: an edited, upgraded or
     freshly installed package). None where that cannot be told (a numba without the cache
-    API read here). Imports ``modules``."""
+    API read here). Imports ``modules``. (An upper bound of what a command compiles: it
+    counts kernels the command may never call; :func:`compile_notice` watches the compiles
+    themselves.)"""
     import importlib
 
     for name in modules:
@@ -152,11 +158,40 @@ def _cached_on_disk(dispatcher) -> bool:
         return False
 
 
-def announce_compile(modules: Sequence[str] = ("sim_tactile.sim.slide",)) -> None:
-    """Say, on stderr, that the kernels compile now when they have never been compiled
-    here: otherwise a first run is silent for a minute or two."""
-    if kernels_to_compile(modules):
-        log(COMPILE_NOTICE)
+@contextlib.contextmanager
+def compile_notice(say: Callable[[str], None] = log) -> Iterator[None]:
+    """Say :data:`COMPILE_NOTICE` when, and only when, a kernel of this package starts to
+    compile while the block runs: numba's ``numba:compile`` event, which it fires on a
+    cache miss, never for a kernel it loads from disk. Once a command, also across the
+    worker processes it forks (a flag in memory they share)."""
+    try:
+        from numba.core import event
+    except ImportError:  # no numba: nothing compiles
+        yield
+        return
+    import multiprocessing
+
+    said, lock = multiprocessing.RawValue("b", 0), multiprocessing.Lock()
+
+    class Notice(event.Listener):
+        def on_start(self, ev) -> None:
+            fn = getattr((ev.data or {}).get("dispatcher"), "py_func", None)
+            if not str(getattr(fn, "__module__", "")).startswith("sim_tactile."):
+                return
+            with lock:
+                first, said.value = not said.value, 1
+            if first:
+                say(COMPILE_NOTICE)
+
+        def on_end(self, ev) -> None:
+            pass
+
+    listener = Notice()
+    event.register("numba:compile", listener)
+    try:
+        yield
+    finally:
+        event.unregister("numba:compile", listener)
 
 
 PLATE_HELP = (

@@ -104,6 +104,7 @@ def add_parsers(sub) -> None:
         "Measure the real-time factor against the error (against the finest level, the "
         "physics and the closed forms) of every fidelity level, time step and node pitch on "
         "each task's scene, with a table and a Pareto figure.",
+        compiles=True,
     )
     se.add_argument(
         "--quick",
@@ -143,6 +144,7 @@ def add_parsers(sub) -> None:
         "Set simulated against real streams of each sensor with real data: the distributions "
         "of mean, maximum, temporal spread, noise, spectral slope, channel correlation and "
         "class separability, with a table and a figure.",
+        compiles=True,
     )
     sr.add_argument("--data", required=True, help="The folder of the real data set.")
     sr.add_argument("--out", required=True, help="The folder to write the figure into.")
@@ -171,6 +173,7 @@ def add_parsers(sub) -> None:
         cmd_bench_stability,
         "Run the hard cases (fast slides, high forces, coarse steps, extreme neuron inputs, "
         "dead taxels, empty spike trains): each must end in a measured result or a named error.",
+        compiles=True,
     )
     st.add_argument(
         "--cases", default=None, help="Comma-separated case names (default: all of them)."

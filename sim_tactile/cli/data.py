@@ -29,16 +29,27 @@ def cmd_generate(args: argparse.Namespace) -> int:
     emit(
         args,
         res,
-        lambda: (
-            f"{res['out']}: {res['trials']} slides ({res['written']} simulated now, "
-            f"{res['reused']} kept, {res['regenerated']} corrupt ones redone"
-            + (f", {', '.join(res['repaired'])} written again" if res["repaired"] else "")
-            + ") in "
-            f"{res['wall_s']:.1f} s; store overhead "
-            + (f"{100 * res['store_overhead']:.2f}%" if res["store_overhead"] else "-")
-        ),
+        lambda: generate_line(res),
     )
     return 0
+
+
+def generate_line(res: dict) -> str:
+    """``generate``'s summary for people: where each slide came from (simulated now, the
+    slide cache, recorded data, or kept in the store from before)."""
+    came = [f"{res['simulated']} simulated now", f"{res['cached']} from the slide cache"]
+    if res["copied"]:
+        came.append(f"{res['copied']} copied from the recordings")
+    came.append(f"{res['reused']} kept")
+    if res["regenerated"]:
+        came.append(f"{res['regenerated']} corrupt ones redone")
+    if res["repaired"]:
+        came.append(f"{', '.join(res['repaired'])} written again")
+    overhead = f"{100 * res['store_overhead']:.2f}%" if res["store_overhead"] else "-"
+    return (
+        f"{res['out']}: {res['trials']} slides ({', '.join(came)}) in {res['wall_s']:.1f} s; "
+        f"store overhead {overhead}"
+    )
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -115,6 +126,7 @@ def add_parsers(sub) -> None:
         "calibrate",
         cmd_calibrate,
         "Fit a sensor model's gains, offsets, noise, drift and ADC step to real recordings.",
+        compiles=True,
     )
     cb.add_argument("sensor", help="The sensor to calibrate: biotac19 or icub60.")
     cb.add_argument("--data", required=True, help="The folder of the sensor's real data set.")
@@ -126,6 +138,7 @@ def add_parsers(sub) -> None:
         cmd_generate,
         "Simulate every slide of a task or of a configuration file into a Zarr store, in "
         "parallel (local processes or Ray), resumably.",
+        compiles=True,
     )
     gn.add_argument(
         "task",

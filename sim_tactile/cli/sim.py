@@ -171,6 +171,7 @@ def _add_simulate(sub) -> None:
         "simulate",
         cmd_simulate,
         "Press a finger on a plate, slide it across, and record its taxels (one slide).",
+        compiles=True,
     )
     add_plate_args(sm, required=True)
     sm.add_argument(
@@ -235,6 +236,7 @@ def _add_press(sub) -> None:
         "press",
         cmd_press,
         "Press a pad statically on a plate and read the pressure with a dense grid of taxels.",
+        compiles=True,
     )
     pr.add_argument(
         "--finger",

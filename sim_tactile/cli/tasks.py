@@ -8,7 +8,7 @@ import re
 
 from ..errors import ConfigError
 from ..tables import text_table
-from ._common import add_command, announce_compile, emit, log
+from ._common import add_command, emit, log
 from .data import add_sensor_config
 
 
@@ -27,6 +27,26 @@ def _task_options(args: argparse.Namespace) -> dict:
 
 #: The sensors of the tasks that read real recordings (their data are not a slide set).
 REAL_SENSORS = {"biotac20-real-v1": "biotac19", "icub20-real-v1": "icub60"}
+#: What each task's quick form needs [s]: the CPU time (user + system, the command and its
+#: workers) of `sim-tactile run TASK --quick` with the task's own rows (a real-data task with
+#: its --data), its slides simulated into an empty slide cache, the kernels compiled.
+#: Measured with `python perf/bench_quick.py --tasks all --cold` on 2 cores (AMD EPYC) shared
+#: with other jobs (load 6-16, so their wall times were 1.5-5 times these); on 2 free cores a
+#: run takes about this, less where both workers simulate. A suite's is its parts'. None:
+#: not measured (the real iCub recordings were not at hand).
+QUICK_WALL_S: dict[str, float | None] = {
+    "finger7-v1": 19.4,
+    "finger7-v2": 132.6,
+    "multilayer3-v1": 16.0,
+    "multilayer3-v2": 29.6,
+    "biotac20-real-v1": 80.2,
+    "icub20-real-v1": None,
+    "roughness8-v1": 17.4,
+    "textures20-biotac19-v1": 29.3,
+    "textures20-icub60-v1": 76.4,
+    "textures20-biotac19-v2": 27.7,
+    "textures20-icub60-v2": 51.6,
+}
 
 
 def paper_of(reference: str) -> tuple[str, str]:
@@ -46,6 +66,7 @@ def task_summary(task_id: str) -> dict:
     from ..datasets.real import N_MATERIALS, N_SLIDES
     from ..slides import SlideSet
     from ..tasks import get_task
+    from ..tasks.needs import task_needs
 
     spec = get_task(task_id)
     paper, number = paper_of(spec.reference)
@@ -73,8 +94,28 @@ def task_summary(task_id: str) -> dict:
         "title": spec.title,
         "parts": list(spec.parts),
         "needs_data": spec.needs_data_path,
+        "needs": task_needs(spec),
+        "quick_s": quick_wall_s(spec),
         "aliases": spec.describe()["aliases"],
     }
+
+
+def quick_wall_s(spec) -> float | None:
+    """About how long the task's quick form takes [s] (:data:`QUICK_WALL_S`; a suite: its
+    parts' sum), None where it was not measured."""
+    if spec.parts:
+        parts = [QUICK_WALL_S.get(p) for p in spec.parts]
+        return None if None in parts else float(sum(parts))
+    return QUICK_WALL_S.get(spec.id)
+
+
+def about(seconds: float | None) -> str:
+    """``~40 s``, ``~3 min``; ``?`` where not measured."""
+    if seconds is None:
+        return "?"
+    if seconds < 90:
+        return f"~{max(10, round(seconds, -1)):.0f} s"
+    return f"~{round(seconds / 60):.0f} min"
 
 
 def _short(text: str, n: int) -> str:
@@ -86,12 +127,27 @@ def cmd_tasks(args: argparse.Namespace) -> int:
     from ..tasks import task_ids
 
     rows = [task_summary(t) for t in task_ids()]
-    head = ["id", "paper", "sensor", "classes", "slides"]
+    head = ["id", "paper", "sensor", "classes", "slides", "needs", "quick"]
     table = [
-        [r["id"], _short(r["paper"], 48), r["sensor"], str(r["classes"]), str(r["slides"])]
+        [
+            r["id"],
+            _short(r["paper"], 32),
+            r["sensor"],
+            str(r["classes"]),
+            str(r["slides"]),
+            ", ".join(r["needs"]) or "-",
+            about(r["quick_s"]),
+        ]
         for r in rows
     ]
-    emit(args, rows, lambda: "\n".join(text_table(head, table, right=(3, 4))))
+    notes = [
+        "",
+        "needs: torch, the [learn] extra (or leave the networks out: --classifiers "
+        "svm-raw,svm-spike); --data, the real data set's folder.",
+        "quick: about how long 'run TASK --quick' takes on 2 free cores (the CPU time it "
+        "used, its slides simulated; a first run adds 1.5-2 min of compiling).",
+    ]
+    emit(args, rows, lambda: "\n".join(text_table(head, table, right=(3, 4)) + notes))
     return 0
 
 
@@ -119,13 +175,12 @@ def cmd_run(args: argparse.Namespace) -> int:
         if is_config_path(task_id):
             task_id = config_task(task_id)[0].id
         base = load_baseline(args.baseline, task_id, args.quick)
-    if args.store is None and args.data is None:  # it simulates: its kernels may compile now
-        announce_compile(("sim_tactile.sim.slide", "sim_tactile.encoders"))
     report = run_task(
         args.task,
         args.out,
         sensor_config=args.sensor_config,
         methods=methods or None,
+        export_nir=args.export_nir,
         # a configuration file's own seed unless --seed is given (as generate takes it)
         **(_task_options(args) | {"seed": args.seed}),
     )
@@ -148,7 +203,6 @@ def cmd_ablate(args: argparse.Namespace) -> int:
     from ..tasks.ablate import ablate, ablation_rows, parse_sets
 
     sets = parse_sets(args.sets)
-    announce_compile(("sim_tactile.sim.slide", "sim_tactile.encoders"))
     rep = ablate(args.task, sets, args.out, **_task_options(args))
 
     def table() -> str:
@@ -211,6 +265,7 @@ def add_parsers(sub) -> None:
         "run",
         cmd_run,
         "Run a benchmark task's evaluation protocol and write its report and figures.",
+        compiles=True,
     )
     add_sensor_config(rn)
     rn.add_argument(
@@ -249,11 +304,19 @@ def add_parsers(sub) -> None:
         metavar="PATH",
         help="Write this run's report as a baseline for --baseline.",
     )
+    rn.add_argument(
+        "--export-nir",
+        default=None,
+        metavar="FILE.nir",
+        help="Save the spiking network the run trained (the snn row's last repeat) as a NIR "
+        "graph, its outputs named by the task's classes (the nir extra).",
+    )
     ab = add_command(
         sub,
         "ablate",
         cmd_ablate,
         "Sweep encoder, neuron and classifier parameters over a task's cached slides, as a grid.",
+        compiles=True,
     )
     ab.add_argument("task", help="A task id, for example roughness8-v1.")
     ab.add_argument(

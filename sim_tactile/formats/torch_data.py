@@ -11,17 +11,23 @@ store itself) yields the same samples, in the same order, as one process; with
   ``(steps, M)`` float32 raster of 0 / 1 at ``dt_s`` (default: the sample period), the
   :class:`~sim_tactile.learn.snn.SNNClassifier`'s input;
 - ``split="train"`` / ``"test"``: that side of the task's split ``repeat`` (the indices of
-  :meth:`~sim_tactile.tasks.TaskProtocol.splits`), in increasing order.
+  :meth:`~sim_tactile.tasks.TaskProtocol.splits`), in increasing order;
+- ``transform`` / ``target_transform``: callables applied to ``x`` and to the target of
+  each item, as torchvision's and Tonic's data sets take them.
+
+It is also ``sim_tactile.formats.TactileTorchDataset`` (imported when first named:
+importing ``sim_tactile.formats`` does not import torch).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from .._validate import positive
-from ..errors import require
+from ..errors import ConfigError, require
 from ._source import Source
 from .events import Encoded
 
@@ -39,6 +45,8 @@ class TactileTorchDataset(torch.utils.data.Dataset):
         encoded: True: the task's own encoding (when ``encoder`` is None).
         dt_s: the raster's step [s] for encoded items (default ``1 / rate_hz``).
         part: a suite's part, for a suite's store.
+        transform: ``x -> x'``, applied to each item's tensor (None: as it is).
+        target_transform: ``target -> target'``, applied to each item's label.
 
     Attributes: ``targets`` (the items' labels), ``indices`` (their sample numbers),
     ``classes``, ``channel_names``, ``rate_hz``.
@@ -54,7 +62,15 @@ class TactileTorchDataset(torch.utils.data.Dataset):
         encoded: bool = False,
         dt_s: float | None = None,
         part: str | None = None,
+        transform: Callable[[Any], Any] | None = None,
+        target_transform: Callable[[int], Any] | None = None,
     ) -> None:
+        for name, fn in (("transform", transform), ("target_transform", target_transform)):
+            if fn is not None and not callable(fn):
+                raise ConfigError(
+                    f"{name} = {fn!r} is not valid; valid: a callable (x -> x), or None"
+                )
+        self.transform, self.target_transform = transform, target_transform
         self.source = Source(data, part=part)
         self.indices = self.source.split_indices(split, repeat)
         self.targets = self.source.labels[self.indices].copy()
@@ -75,10 +91,15 @@ class TactileTorchDataset(torch.utils.data.Dataset):
         trains = [self.encode(i)]
         return SpikeRaster(dt_s=self.dt_s).fit(trains).transform(trains)[0]
 
-    def __getitem__(self, i: int) -> tuple[Any, int]:
+    def __getitem__(self, i: int) -> tuple[Any, Any]:
         n = len(self)
         if not -n <= int(i) < n:
             raise IndexError(f"index {i} out of range; valid: [{-n}, {n - 1}]")
         k = int(self.indices[int(i)])
         x = self.source.sample(k) if self.encode is None else self._raster(k)
-        return torch.from_numpy(np.array(x, dtype=np.float32)), int(self.source.labels[k])
+        x, target = torch.from_numpy(np.array(x, dtype=np.float32)), int(self.source.labels[k])
+        if self.transform is not None:
+            x = self.transform(x)
+        if self.target_transform is not None:
+            target = self.target_transform(target)
+        return x, target

@@ -33,6 +33,7 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
+from .._names import did_you_mean
 from ..encoders.encodings import Steps, threshold_encoding
 from ..errors import ConfigError, UnknownNameError
 from ..spikes import SpikeFeatures, SpikeTrainDistances
@@ -193,7 +194,8 @@ def get_classifier(name: str) -> ClassifierSpec:
         return CLASSIFIERS[name]
     except KeyError:
         raise UnknownNameError(
-            f"classifier {name!r} is not known; valid: {', '.join(CLASSIFIERS)}"
+            f"classifier {name!r} is not known{did_you_mean(name, CLASSIFIERS)}; valid: "
+            f"{', '.join(CLASSIFIERS)}"
         ) from None
 
 

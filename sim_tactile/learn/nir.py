@@ -34,6 +34,7 @@ threshold adaptation: an encoder with ``refractory_s > 0`` or ``beta > 0`` is re
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -65,9 +66,12 @@ def _cuba(nir, n: int, tau_s: float, theta: float, w_in: float):
     )
 
 
-def snn_to_nir(clf: Any):
+def snn_to_nir(clf: Any, class_names: Sequence[str] | None = None):
     """The fitted SNNClassifier ``clf`` as a ``nir.NIRGraph`` (see the module docstring);
-    its input is the raster ``(channels,)`` per step, its output the class neurons' spikes."""
+    its input is the raster ``(channels,)`` per step, its output the class neurons' spikes.
+    The metadata's ``classes`` name the output neurons in order: ``class_names[label]``
+    where the labels index ``class_names`` (a task's plates), else the labels as text (the
+    nir library reads a list of strings back as bytes)."""
     nir = _nir()
     module = getattr(clf, "module_", None)
     if module is None:
@@ -91,15 +95,28 @@ def snn_to_nir(clf: Any):
         )
     )
     edges = list(zip(SNN_NODES[:-1], SNN_NODES[1:], strict=True))
-    return nir.NIRGraph(nodes=nodes, edges=edges, metadata=_snn_metadata(clf))
+    return nir.NIRGraph(nodes=nodes, edges=edges, metadata=_snn_metadata(clf, class_names))
 
 
-def _snn_metadata(clf: Any) -> dict:
+def _class_names(labels: np.ndarray, names: Sequence[str] | None) -> list[str]:
+    if names is None:
+        return [str(c) for c in labels]
+    names = [str(n) for n in names]
+    idx = [int(c) for c in labels]
+    if any(c != i or not 0 <= i < len(names) for c, i in zip(labels, idx, strict=True)):
+        raise ConfigError(
+            f"the network's labels {list(labels)} do not index class_names ({len(names)}); "
+            "valid: labels 0 .. len(class_names) - 1"
+        )
+    return [names[i] for i in idx]
+
+
+def _snn_metadata(clf: Any, class_names: Sequence[str] | None = None) -> dict:
     return {
         "source": "sim_tactile SNNClassifier (SRM neurons, seed paper 000)",
         "dt_s": float(clf.dt_s),
         "input": "one-step pulses of height 1 per input spike, at dt_s",
-        "classes": [str(c) for c in clf.classes_],
+        "classes": _class_names(clf.classes_, class_names),
         "approximation": "SRM refractory kernel -> reset to v_reset = 0; see sim_tactile.learn.nir",
     }
 

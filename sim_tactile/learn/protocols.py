@@ -21,6 +21,7 @@ import re
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from sklearn.base import BaseEstimator
@@ -134,6 +135,9 @@ class EvalResult:
     #: the first repeat's neuromorphic figures on its test samples (the encoder's spike rate,
     #: a spiking model's NeuroBench metrics: :mod:`.neurobench`), None where it has none
     neuromorphic: dict | None = None
+    #: the last repeat's fitted estimator, where :func:`evaluate` was asked to keep it
+    #: (``keep_model``; not in :meth:`to_json`)
+    model: Any = field(default=None, repr=False, compare=False)
 
     @property
     def mean(self) -> float:
@@ -194,6 +198,7 @@ def evaluate(
     time_repeats: int | None = None,
     log: Callable[[str], None] | None = None,
     name: str = "",
+    keep_model: bool = False,
 ) -> EvalResult:
     """Fit and score a fresh estimator on every split.
 
@@ -205,6 +210,7 @@ def evaluate(
         times_s: time points [s] of the accuracy-over-time curve (needs 3-D ``X``, ``rate_hz``).
         anytime: fit once; the decision at ``t`` is ``predict_upto`` (see the module docstring).
         time_repeats: how many of the splits also get the curve (default: all).
+        keep_model: keep the last repeat's fitted estimator in ``EvalResult.model``.
     """
     x = np.asarray(X)
     if x.ndim not in (2, 3):
@@ -234,6 +240,8 @@ def evaluate(
         res.epoch_s += _epoch_times(est)
         if r == 0 and x.ndim == 3:
             res.neuromorphic = neuromorphic_figures(est, x[te])
+        if keep_model and r == len(splits) - 1:
+            res.model = est
         if log and (len(splits) <= 20 or (r + 1) % max(1, len(splits) // 5) == 0):
             log(f"{name} repeat {r + 1}/{len(splits)}: accuracy {acc:.3f} (fit {t1 - t0:.1f} s)")
         if r >= n_curve:

@@ -23,6 +23,7 @@ is causal, the output counts up to step ``n`` are those of the first ``n`` input
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -240,8 +241,9 @@ class SNNClassifier(TorchClassifier):
 
         return snn_metrics(self, X)
 
-    def to_nir(self):
-        """The fitted network as a NIR graph (:func:`~sim_tactile.learn.nir.snn_to_nir`)."""
+    def to_nir(self, class_names: Sequence[str] | None = None):
+        """The fitted network as a NIR graph (:func:`~sim_tactile.learn.nir.snn_to_nir`);
+        ``class_names`` (indexed by the labels, e.g. a task's plates) name its outputs."""
         from .nir import snn_to_nir
 
-        return snn_to_nir(self)
+        return snn_to_nir(self, class_names)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .._names import did_you_mean
 from ..errors import UnknownNameError
 from .layouts import Layout, dense_layout, get_layout, grid_layout
 from .pad import Finger
@@ -40,7 +41,10 @@ def sensor_names() -> list[str]:
 def get_sensor(name: str) -> Sensor:
     """The preset sensor ``name``, read from its file (:func:`preset_file`)."""
     if name not in PRESETS:
-        raise UnknownNameError(f"sensor {name!r} is not known; valid: {', '.join(PRESETS)}")
+        raise UnknownNameError(
+            f"sensor {name!r} is not known{did_you_mean(name, PRESETS)}; valid: "
+            f"{', '.join(PRESETS)}"
+        )
     from .files import sensor_from_data
 
     return sensor_from_data(preset_data(name), where=f"preset sensor file {preset_file(name)}")
@@ -64,7 +68,8 @@ def resolve_sensor(sensor: Sensor | Layout | str) -> Sensor:
         return Sensor.bare(get_layout(sensor))
     except UnknownNameError:
         raise UnknownNameError(
-            f"sensor {sensor!r} is not known; valid: {', '.join(PRESETS)}, a sensor file "
+            f"sensor {sensor!r} is not known{did_you_mean(sensor, PRESETS)}; valid: "
+            f"{', '.join(PRESETS)}, a sensor file "
             "(.toml), or a layout dense-<pitch>mm (e.g. dense-0.25mm)"
         ) from None
 

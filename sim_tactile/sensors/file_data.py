@@ -10,7 +10,7 @@ import numpy as np
 
 from ..toml_text import write_file
 from .files import FORMAT, TRANSDUCERS, sensor_from_data
-from .layouts import Layout, grid_layout
+from .layouts import Layout, grid_layout, overlapping_taxels
 
 
 def sensor_to_data(sensor) -> dict:
@@ -49,6 +49,7 @@ def sensor_from_record(d: dict):
         "size_m": lay["sizes_m"],
         "layer": lay["layer"],
         "names": lay["names"],
+        "overlap": True,  # the record was checked when its data set was made
     }
     if lay.get("grid_shape") is not None:
         layout["grid_shape"] = lay["grid_shape"]
@@ -85,9 +86,10 @@ def write_sensor_file(sensor, path: str | Path, header: str = "") -> Path:
 
 
 def _layout_data(lay: Layout) -> dict:
+    over = {"overlap": True} if overlapping_taxels(lay) is not None else {}
     grid = _as_grid(lay)
     if grid is not None:
-        return {"grid": grid}
+        return {"grid": grid, **over}
     depth = [float(-z) if z != 0 else 0.0 for z in lay.positions[:, 2]]
     sizes = lay.sizes.tolist()
     d = {
@@ -100,7 +102,7 @@ def _layout_data(lay: Layout) -> dict:
     }
     if lay.grid_shape is not None:
         d["grid_shape"] = list(lay.grid_shape)
-    return d
+    return {**d, **over}
 
 
 def _as_grid(lay: Layout) -> dict | None:

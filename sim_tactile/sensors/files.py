@@ -23,6 +23,7 @@
     # layer = 0                 # or [...]: the layer of each (one transducer per layer)
     # names = ["a", "b", ...]   # optional channel names
     # grid_shape = [rows, cols] # optional: the taxels form this grid in channel order
+    # overlap = true            # optional: taxels of one layer may overlap (refused else)
 
     [pad]                       # sensors.pad.Finger: shape ("flat", "sphere", "ellipsoid"),
     shape = "flat"              # size_m, edge_radius_m, radius_m, radii_m, thickness_m,
@@ -45,7 +46,8 @@ With a ``base``, ``[layout]`` replaces the base's taxels whole; ``[pad]``, ``[im
 and a ``[transducer]`` without a ``kind`` change the base's fields one by one, and
 ``[pad.stack]`` or a ``[transducer]`` with a ``kind`` replace the base's. Every value is
 checked before anything runs; an error names the file, the key, the value and the valid
-range. Every taxel must lie on the pad: its footprint within the pad's patch in x and y,
+range. Taxels of one layer must not overlap (their footprints may touch) unless
+``[layout]`` says ``overlap = true`` (beside ``[layout.grid]`` too). Every taxel must lie on the pad: its footprint within the pad's patch in x and y,
 its depth within the skin's thickness (:func:`~.sensor.check_pad` names the one that does
 not). :func:`~.file_data.sensor_to_data` writes a sensor in this form (the presets' files in
 the project's ``assets/sensors`` are written so), and a data set records it, so that its
@@ -62,7 +64,7 @@ import numpy as np
 from .. import _validate as v
 from ..errors import ConfigError
 from ..toml_text import read_file
-from .layouts import Layout, grid_layout
+from .layouts import Layout, grid_layout, overlap_text, overlapping_taxels
 from .pad import Finger
 from .presets import PRESETS, preset_data, preset_file
 from .sensor import Sensor, check_pad
@@ -88,7 +90,17 @@ TOP_KEYS = (
     "transducer",
     "imperfections",
 )
-LAYOUT_KEYS = ("x_m", "y_m", "depth_m", "size_m", "layer", "names", "grid_shape", "grid")
+LAYOUT_KEYS = (
+    "x_m",
+    "y_m",
+    "depth_m",
+    "size_m",
+    "layer",
+    "names",
+    "grid_shape",
+    "grid",
+    "overlap",
+)
 GRID_KEYS = ("rows", "cols", "pitch_m", "size_m", "depth_m")
 TRANSDUCERS = {
     "piezoresistive": PiezoResistive,
@@ -149,6 +161,26 @@ def _sensor(data: dict, default_name: str):
 # ------------------------------------------------------------------------------ sections
 def _layout(t: dict, name: str, rate: float) -> Layout:
     _known("layout.", t, LAYOUT_KEYS)
+    overlap = t.get("overlap", False)
+    if not isinstance(overlap, bool):
+        raise ConfigError(f"layout.overlap = {overlap!r} is not valid; valid: true or false")
+    layout = _placed({k: x for k, x in t.items() if k != "overlap"}, name, rate)
+    return layout if overlap else _apart(layout)
+
+
+def _apart(layout: Layout) -> Layout:
+    """``layout``, unless two taxels of one layer overlap (:func:`.layouts.overlapping_taxels`)."""
+    pair = overlapping_taxels(layout)
+    if pair is not None:
+        raise ConfigError(
+            f"layout: {overlap_text(layout, *pair)}; valid: footprints that do not overlap "
+            "(they may touch): a pitch at least the taxel size, or overlap = true in [layout] "
+            "where the taxels share the skin on purpose"
+        )
+    return layout
+
+
+def _placed(t: dict, name: str, rate: float) -> Layout:
     if "grid" in t:
         extra = sorted(set(t) - {"grid"})
         if extra:

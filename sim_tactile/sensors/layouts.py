@@ -103,6 +103,41 @@ class Layout:
         }
 
 
+#: How far two taxels' footprints may reach into each other and still count as touching [m]
+#: (a nanometre: a grid whose taxels are as wide as its pitch touches within rounding).
+TOUCH_TOL_M = 1e-9
+
+
+def overlapping_taxels(layout: Layout) -> tuple[int, int] | None:
+    """The first pair ``(i, j)``, ``i < j``, of taxels of one layer whose footprints
+    (``sizes`` centred on ``positions`` in x and y) overlap by more than
+    :data:`TOUCH_TOL_M` in both directions; None where none do (footprints may touch)."""
+    xy, half = layout.positions[:, :2], layout.sizes / 2
+    for lay in np.unique(layout.layer):
+        idx = np.flatnonzero(layout.layer == lay)
+        for start in range(0, len(idx), 256):  # 256 x N pairs at a time (N <= 4096)
+            a = idx[start : start + 256]
+            gap = np.abs(xy[a, None] - xy[None, idx]) - (half[a, None] + half[None, idx])
+            over = (gap < -TOUCH_TOL_M).all(axis=-1) & (idx[None, :] > a[:, None])
+            hit = np.argwhere(over)
+            if len(hit):
+                return int(a[hit[0, 0]]), int(idx[hit[0, 1]])
+    return None
+
+
+def overlap_text(layout: Layout, i: int, j: int) -> str:
+    """Where taxels ``i`` and ``j`` overlap, in words (for an error)."""
+    (xi, yi), (xj, yj) = layout.positions[i, :2] * 1e3, layout.positions[j, :2] * 1e3
+    (si, ti), (sj, tj) = layout.sizes[i] * 1e3, layout.sizes[j] * 1e3
+    wx = min(xi + si / 2, xj + sj / 2) - max(xi - si / 2, xj - sj / 2)
+    wy = min(yi + ti / 2, yj + tj / 2) - max(yi - ti / 2, yj - tj / 2)
+    return (
+        f"taxels {i} ({layout.names[i]}, {si:.4g} x {ti:.4g} mm at x = {xi:.4g}, y = {yi:.4g} "
+        f"mm) and {j} ({layout.names[j]}, {sj:.4g} x {tj:.4g} mm at x = {xj:.4g}, y = "
+        f"{yj:.4g} mm) of layer {int(layout.layer[i])} overlap by {wx:.4g} x {wy:.4g} mm"
+    )
+
+
 def grid_layout(
     name: str,
     nx: int,

@@ -20,6 +20,15 @@ def _figure(*args, **kw):
 LEGEND_UP_TO = 20
 
 
+def channel_names(rec: Recording) -> list[str]:
+    """The recording's channel names, as its sensor names them (the BioTac's ``ele1`` ..
+    ``ele19``, a grid's ``r0c0`` ..); ``t0``, ``t1``, .. for a recording that names none."""
+    names = rec.meta.get("channel_names")
+    if names and len(names) == rec.n_taxels:
+        return [str(c) for c in names]
+    return [f"t{i}" for i in range(rec.n_taxels)]
+
+
 def plot_traces(rec: Recording, path: str | Path) -> Path:
     """One line per taxel, its output against time, ordered by the taxel's row (y) then its
     column (x); each labelled with its name and its position on the pad."""
@@ -30,7 +39,7 @@ def plot_traces(rec: Recording, path: str | Path) -> Path:
     ax = fig.add_subplot()
     pos = rec.taxels
     order = np.lexsort((pos[:, 0], pos[:, 1]))
-    names = [f"t{i}" for i in range(n)]  # the channel names of a sensor: t0, t1, ...
+    names = channel_names(rec)
     if n <= 10:
         colours = [matplotlib.colormaps["tab10"](k) for k in range(n)]
     elif n <= LEGEND_UP_TO:

@@ -205,7 +205,8 @@ def _run(slide: Slide, cache) -> SimResult:
         warnings.append(
             f"the stroke stopped at the plate's end after {slide_rec.stopped_at_s:.3g} s of the "
             f"{sim_s:.3g} s window ({proto.speed_m_s * 1e3:.3g} mm/s): the pad rested on flat "
-            "ground for the rest"
+            f"ground for the rest; a window of at most {slide.stopped_at_s:.3g} s (duration_s), "
+            "or a slower speed, keeps it on the plate"
         )
     if proto.force_control != "position":  # there the load follows the texture
         warnings += _force_warnings(slide_rec.forces, proto.force_n, proto.speed_m_s)
@@ -386,6 +387,6 @@ def _force_warnings(forces: np.ndarray, target_n: float, speed_m_s: float) -> li
     if off > 0.02:
         out.append(
             f"the pad was off the plate (normal force < 10% of {target_n:g} N) in "
-            f"{100 * off:.1f}% of the samples"
+            f"{100 * off:.1f}% of the samples; a slower speed or a larger force keeps it on"
         )
     return out

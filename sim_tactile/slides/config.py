@@ -54,6 +54,7 @@ from dataclasses import fields, replace
 from pathlib import Path
 
 from .. import _validate as v
+from .._names import did_you_mean
 from ..errors import ConfigError
 from ..plates import get_plate, preset_names
 from ..plates.parts.user import is_user_plate, parse_ref
@@ -72,7 +73,7 @@ from .slide_set import SLIDES_RANGE, SlideSet
 MAX_PLATES = 1000
 #: Most slides a configuration may ask for (plates x slides_per_plate): a store indexes
 #: every one, and a million 1 s slides take 11 hours of a core at the faster scenes' 25x
-#: real time (the README's throughput; the slower scenes, days).
+#: real time (the manual's throughput results; the slower scenes, days).
 MAX_SLIDES = 1_000_000
 
 #: The keys of a configuration file, and what each takes.
@@ -239,7 +240,8 @@ def _plate(value, base_dir: Path | None) -> str:
         return str(path)
     if value not in preset_names():
         raise ConfigError(
-            f"plate {value!r} is not a preset; valid: {', '.join(preset_names())}, a plate "
+            f"plate {value!r} is not a preset{did_you_mean(value, preset_names())}; valid: "
+            f"{', '.join(preset_names())}, a plate "
             "file (.toml), a part (.step, .stp, .stl, .py[:function]) or a height map (.npy, .png)"
         )
     return value

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _validate as v
+from .._names import did_you_mean
 from ..errors import ConfigError
 from ..hashing import derive_seed
 from ..plates import get_plate, is_plate_file, preset_names
@@ -110,7 +111,10 @@ class SlideSet:
             if is_plate_file(p):
                 get_plate(p)  # a plate file, a part or a height map: it must read
             elif p not in preset_names():
-                raise ConfigError(f"plate {p!r} is not a preset; valid: {preset_names()}")
+                raise ConfigError(
+                    f"plate {p!r} is not a preset{did_you_mean(p, preset_names())}; valid: "
+                    f"{preset_names()}"
+                )
         names = [class_name(p) for p in self.plates]
         if len(set(names)) != len(names):
             raise ConfigError(f"two plates share a class name: {names}; valid: distinct names")
@@ -121,7 +125,10 @@ class SlideSet:
                     f"({self.sensor_spec.name!r})"
                 )
         elif self.sensor not in sensor_names():
-            raise ConfigError(f"sensor {self.sensor!r} is not known; valid: {sensor_names()}")
+            raise ConfigError(
+                f"sensor {self.sensor!r} is not known{did_you_mean(self.sensor, sensor_names())}; "
+                f"valid: {sensor_names()}"
+            )
         if self.calibration is not None:
             calibrated(self.base_sensor(), self.calibration)  # fits this sensor
         v.integer("slides", self.slides, *SLIDES_RANGE)

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
+from .._names import did_you_mean
 from ..encoders.encodings import Steps, threshold_encoding
 from ..errors import ConfigError, UnknownNameError
 from ..learn.classifiers import LearnContext, get_classifier
@@ -93,6 +94,42 @@ class Settings:
         return int(self.repeats_by_classifier.get(name, self.repeats))
 
 
+#: A quick run's torch rows (their fits are most of its time): at most this many repeats
+#: where the task's quick settings give them none of their own; the report's ``repeats``
+#: column states each row's number. A quick run is a smoke run of every row in about a
+#: minute; the full run's protocol does not change.
+QUICK_NETWORK_REPEATS = 5
+#: The torch rows' parameters in a quick run where the task's quick settings give none: a
+#: spiking network small enough, and spike-count targets low enough for a 1 s window, to
+#: learn on a quick split (finger7-v1 quick, 6/2, its first 5 splits: 0.76 mean accuracy,
+#: 1.5 s a fit on one core; the full defaults, 250 / 30 spikes in 94 steps: 0.29, 4.5 s), and
+#: the LSTM at 60 epochs (0.88, 3.2 s a fit; its default 200: 0.96, 15.7 s). Measured with
+#: perf/bench_quick_snn.py.
+QUICK_NETWORK_PARAMS: Mapping[str, Mapping[str, Any]] = {
+    "snn": {
+        "hidden": 32,
+        "target_true": 20.0,
+        "target_false": 3.0,
+        "epochs": 60,
+        "lr": 0.03,
+        "batch_size": 8,
+        "num_threads": 1,
+    },
+    "lstm": {"epochs": 60, "num_threads": 1},
+}
+
+
+def quick_form(settings: Settings) -> Settings:
+    """A task's quick ``settings`` with :data:`QUICK_NETWORK_PARAMS` and
+    :data:`QUICK_NETWORK_REPEATS` for the torch rows it gives nothing of its own."""
+    params = {k: dict(v) for k, v in QUICK_NETWORK_PARAMS.items()}
+    params.update({k: dict(v) for k, v in settings.params.items()})
+    cap = min(settings.repeats, QUICK_NETWORK_REPEATS)
+    repeats = {name: cap for name in QUICK_NETWORK_PARAMS}
+    repeats.update(settings.repeats_by_classifier)
+    return replace(settings, params=params, repeats_by_classifier=repeats)
+
+
 @dataclass(frozen=True)
 class BenchScene:
     """A task's scene in ``sim-tactile bench speed-error``: one of its plates (one whose
@@ -148,7 +185,7 @@ class TaskSpec:
             get_data=data,
             encoder=_qualname(self.encoder),
             full=asdict(self.full),
-            quick=asdict(self.quick),
+            quick=asdict(self.settings(True)),
             paper={k: c.to_json() for k, c in self.paper.items()},
             runs=[
                 {**asdict(r), "paper": r.paper.to_json() if r.paper else None} for r in self.runs
@@ -168,7 +205,9 @@ class TaskSpec:
         return self.settings(quick).split or run.split or self.split
 
     def settings(self, quick: bool) -> Settings:
-        return self.quick if quick else self.full
+        """The full settings, or the quick ones with the torch rows' quick form
+        (:func:`quick_form`)."""
+        return quick_form(self.quick) if quick else self.full
 
     def context(self, dataset: TactileDataset, quick: bool) -> LearnContext:
         grid = dataset.meta.get("grid_shape")
@@ -243,7 +282,8 @@ def get_task(task_id: str) -> TaskSpec:
         return _TASKS[_ALIASES.get(task_id, task_id)]
     except KeyError:
         raise UnknownNameError(
-            f"task {task_id!r} is not known; valid: {', '.join(_TASKS) or '(none)'}"
+            f"task {task_id!r} is not known{did_you_mean(task_id, [*_TASKS, *_ALIASES])}; "
+            f"valid: {', '.join(_TASKS) or '(none)'}"
         ) from None
 
 

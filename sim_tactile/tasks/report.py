@@ -150,7 +150,8 @@ class Report:
         if self.quick:
             lines += [
                 "**Quick run**: fewer plates, slides, epochs, repeats and time points than the "
-                "paper's protocol; the neural models are not trained to convergence.",
+                "paper's protocol; the neural models are not trained to convergence. "
+                + self.quick_counts(),
                 "",
             ]
         if self.parts is None:
@@ -164,6 +165,7 @@ class Report:
             ]
         head = ["run", "features", "accuracy (SD)", "paper (SD)", "repeats", "vs paper", "wall [s]"]
         lines += markdown_table(head, [_cells(r) for r in self.results])
+        lines += _flag_lines(self.results, "- ")
         lines += ["", _timing(self.timing)]
         lines += _over_time_table(self.results)
         lines += neuromorphic_table(self.results)
@@ -177,17 +179,19 @@ class Report:
             lines += ["", "## Figures", ""]
             lines += [f"![{Path(f).stem}]({_relative(f, self.parts)})" for f in self.figures]
         if self.remarks:
-            lines += ["", "## Notes", ""] + [f"- {r}" for r in self.remarks]
+            notes = "## Notes" + (" (on the full protocol)" if self.quick else "")
+            lines += ["", notes, ""] + [f"- {r}" for r in self.remarks]
         if self.reference:
             lines += ["", f"Reference: {self.reference}"]
         return "\n".join(lines) + "\n"
 
     def text(self) -> str:
         """The report for a terminal: one line a row, the timing and the figures."""
-        lines = [f"{self.task}" + (" (quick)" if self.quick else ""), ""]
+        lines = [f"{self.task}" + (" (quick)" if self.quick else "")]
+        lines += [self.quick_counts(), ""] if self.quick else [""]
         rows = [
             [
-                r.label,
+                _marked(r),
                 f"{r.accuracy_mean:.3f} ({r.accuracy_std:.3f})",
                 paper_text(r.paper),
                 r.comparison["message"],
@@ -195,9 +199,24 @@ class Report:
             for r in self.results
         ]
         lines += text_table(["run", "accuracy", "paper", "vs paper"], rows, right=(1, 2))
+        lines += _flag_lines(self.results, "")
         lines += ["", _timing(self.timing)]
         lines += [f"figure: {f}" for f in self.figures]
         return "\n".join(lines)
+
+    def quick_counts(self) -> str:
+        """What a quick run ran (the title and the notes describe the full protocol): its
+        slides per class, its split and each row's repeats."""
+        if self.parts is not None:
+            return "Each part's report gives its quick counts."
+        d, p = self.dataset, self.protocol
+        per = sorted(set(d.get("per_class") or []))
+        each = f"{per[0]} per class" if len(per) == 1 else "per class " + "-".join(map(str, per))
+        reps = ", ".join(f"{k} {n}" for k, n in (p.get("repeats") or {}).items())
+        return (
+            f"This run: {d['samples']} slides ({d['classes']} classes, {each}), split "
+            f"{p['split']}, repeats: {reps}. The title and the notes describe the full protocol."
+        )
 
 
 _REPORT_KEYS = (
@@ -215,9 +234,20 @@ _REPORT_KEYS = (
 )
 
 
+def _marked(r: ResultRow) -> str:
+    """A row's label, led by ``!`` where :mod:`.flags` found it doubtful."""
+    return f"! {r.label}" if r.extra.get("flags") else r.label
+
+
+def _flag_lines(rows: list[ResultRow], lead: str) -> list[str]:
+    """Under the table: why each row marked ``!`` is doubtful ([] when none is)."""
+    said = [f"{lead}! {r.label}: {f}" for r in rows for f in r.extra.get("flags") or []]
+    return ["", "Check the rows marked !:", *said] if said else []
+
+
 def _cells(r: ResultRow) -> list[str]:
     return [
-        r.label,
+        _marked(r),
         r.features,
         f"{r.accuracy_mean:.3f} ({r.accuracy_std:.3f})",
         paper_text(r.paper),

@@ -22,7 +22,7 @@ from .. import __version__
 from .._validate import integer
 from ..datasets.fs import no_empty_folders_left, write_faults
 from ..datasets.reader import open_store, parts_of
-from ..errors import ConfigError, StoreError, require
+from ..errors import ConfigError, StoreError
 from ..hashing import derive_seed
 from ..learn.classifiers import LearnContext, get_classifier, make_classifier
 from ..learn.precomputed import sample_index
@@ -34,7 +34,10 @@ from ..slides.plan import slide_plan, task_slide_config
 from .config_task import PREFIX as CONFIG_PREFIX
 from .config_task import config_task, is_config_path
 from .figures import write_figures
+from .flags import flag_rows
 from .methods import Method, as_methods, classify_methods, method_row
+from .needs import check_torch
+from .nir_export import check_nir_export, export_snn, nir_row
 from .precompute import Precomputed
 from .registry import DataRequest, Run, TaskSpec, get_task, with_calibration
 from .report import Report, ResultRow, compare
@@ -159,8 +162,7 @@ def load_task(
 ) -> LoadedTask:
     """Check the options against the task, then load (or simulate) its data set."""
     runs = task_runs(spec, classifiers)
-    if any(get_classifier(r.classifier).needs_torch for r in runs):
-        require("torch", "learn")
+    check_torch(spec, runs)
     if spec.needs_data_path and data is None and store is None:
         raise ConfigError(
             f"task {spec.id} runs on real recordings: pass --data PATH (the folder of the data "
@@ -196,6 +198,7 @@ def run_task(
     store: str | Path | None = None,
     sensor_config: str | Path | None = None,
     methods=None,
+    export_nir: str | Path | None = None,
 ) -> dict:
     """Run ``task_id`` and write its report into ``out_dir``; returns the report as JSON data.
     ``task_id`` may also be a configuration file (``.toml`` / ``.json``, :mod:`.config_task`).
@@ -212,6 +215,8 @@ def run_task(
         sensor_config: a calibration file (``sim-tactile calibrate``) for the task's sensor.
         methods: the user's methods, name -> estimator or (encoder, estimator)
             (:mod:`.methods`), scored beside the built-in rows.
+        export_nir: save the snn row's network (its last repeat) there as a NIR graph
+            (:mod:`.nir_export`).
     """
     # a failed run leaves no empty --out behind; a full or read-only disk is one line
     with no_empty_folders_left(Path(out_dir)), write_faults(Path(out_dir)):
@@ -227,11 +232,23 @@ def run_task(
             store,
             sensor_config,
             methods,
+            export_nir,
         )
 
 
 def _run_task(
-    task_id, out_dir, quick, data, classifiers, repeats, seed, log, store, sensor_config, methods
+    task_id,
+    out_dir,
+    quick,
+    data,
+    classifiers,
+    repeats,
+    seed,
+    log,
+    store,
+    sensor_config,
+    methods,
+    export_nir=None,
 ) -> dict:
     t_start = time.perf_counter()
     log = log or stderr_log
@@ -246,6 +263,8 @@ def _run_task(
     seed = integer("seed", seed, 0, None)
     if repeats is not None:
         repeats = integer("repeats", repeats, 1, None)
+    if export_nir is not None:
+        export_nir = check_nir_export(export_nir, spec, task_runs(spec, classifiers))
     if spec.parts:
         methods = {m.name: m for m in as_methods(methods)} or None  # checked before any part
         return _run_suite(
@@ -270,6 +289,7 @@ def _run_task(
         seed=seed,
         log=log,
         methods=user,
+        export_nir=export_nir,
     )
     report.timing["load_s"] = round(task.load_s, 3)
     report.timing["wall_s"] = round(time.perf_counter() - t_start, 2)
@@ -289,6 +309,7 @@ def evaluate_task(
     log: Callable[[str], None],
     figures: bool = True,
     methods: Sequence[Method] = (),
+    export_nir: Path | None = None,
 ) -> Report:
     """Encode ``ds``, run each of ``runs`` and of the user's ``methods`` under the task's
     protocol and make the report (with its figures in ``out``; the caller writes it)."""
@@ -302,9 +323,14 @@ def evaluate_task(
     n_rep.update({m.name: repeats or settings.repeats for m in methods})
     pre = Precomputed(spec, ds, encoded) if spec.encode_once else None
     t1 = time.perf_counter()
+    keep = nir_row(runs) if export_nir is not None else None
     results, wall, splits = _classify(
-        spec, ds, ctx, runs, n_rep, pre, quick=quick, seed=seed, log=log
+        spec, ds, ctx, runs, n_rep, pre, quick=quick, seed=seed, log=log, keep=keep
     )
+    if keep is not None:
+        model = results[keep.name].model
+        path = export_snn(export_nir, model, spec, keep, ds.class_names, n_rep[keep.name])
+        log(f"{spec.id}: the {keep.name} row's network (its last repeat) as NIR: {path}")
     user_enc = classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, seed, log)
     encode_s += user_enc
     classify_s = time.perf_counter() - t1 - user_enc
@@ -342,13 +368,14 @@ def evaluate_task(
             "machine": platform.machine(),
         },
     )
+    flag_rows(report.results, ds.duration_s, lambda m: log(f"{spec.id}: {m}"))
     if figures:
         report.figures = write_figures(out, spec, ds, encoded, results, [*runs, *methods])
     report.timing["wall_s"] = round(time.perf_counter() - t0, 2)
     return report
 
 
-def _classify(spec, ds, ctx, runs, n_rep, pre, *, quick, seed, log):
+def _classify(spec, ds, ctx, runs, n_rep, pre, *, quick, seed, log, keep=None):
     """Each run's repeated evaluation: ``({name: EvalResult}, {name: wall [s]}, {split:
     its (train, test) pairs})``. The splits are seeded by ``(seed, 0)``
     (:func:`task_splits`), the models by the classifier's name and the repeat."""
@@ -391,6 +418,7 @@ def _classify(spec, ds, ctx, runs, n_rep, pre, *, quick, seed, log):
             time_repeats=settings.time_repeats,
             log=log,
             name=name,
+            keep_model=keep is not None and run.name == keep.name,
         )
         wall[name] = time.perf_counter() - t0
         r = results[name]

@@ -1,6 +1,6 @@
 """Parametric plate definitions: frozen, validated, hashable, in SI units.
 
-Geometry conventions (the README's, for every plate and sensor): the plate's top surface is at z = 0, features rise to
+Geometry conventions (the manual's plates reference, for every plate and sensor): the plate's top surface is at z = 0, features rise to
 z > 0, the textured area is centred on the origin, sliding goes along +x and ridges run
 along y. The base is a box of ``length_m`` (x) by ``width_m`` (y) by ``thickness_m`` below
 z = 0.

@@ -1,7 +1,8 @@
 """Compare three independent views of a plate: the analytic definition, the exported STL
 (z-buffered) and MuJoCo's collider (probed, see :mod:`.probe`).
 
-:func:`compare_views` returns the figures the tests assert on and the README quotes: feature
+:func:`compare_views` returns the figures the tests assert on and the manual's plates
+reference quotes: feature
 counts (connected regions above half the peak height), peak heights, and the largest height
 differences between views away from walls; for roughness plates, Ra from each view.
 """

@@ -208,8 +208,18 @@ def load_user_plate(ref: str | Source, *, base_dir: str | Path | None = None, **
     return plate
 
 
+def plate_name(src: Source, path: Path) -> str:
+    """A user's plate's name: its ``name`` option, else the file's stem, with the script's
+    function after it where that says more (``knurl.py:fine`` is ``knurl-fine``;
+    ``pins.py:pins`` and ``pins.py:plate`` are ``pins``)."""
+    if src.name:
+        return src.name
+    own = src.function in ("plate", path.stem)
+    return path.stem if own else f"{path.stem}-{src.function}"
+
+
 def _load(src: Source, path: Path, digest: str, where: str) -> Plate:
-    name = src.name or (path.stem if src.function == "plate" else f"{path.stem}-{src.function}")
+    name = plate_name(src, path)
     if src.kind in ("npy", "png"):
         z, pixel, notes = _raster(src, path, where)
         span = ((z.shape[1] - 1) * pixel, (z.shape[0] - 1) * pixel)

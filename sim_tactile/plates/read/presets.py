@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from ..._names import did_you_mean
 from ...errors import UnknownNameError
 from ...toml_text import asset_data, asset_path
 from ..define.spec import Plate
@@ -95,14 +96,12 @@ def get_plate(name: str | Path) -> Plate:
     names = asset_data("plates", "index.toml")["names"]
     if name not in names:
         fams = sorted({n.split("/")[0] for n in names})
-        close = [n for n in names if name and str(name).split("/")[-1] in n][:5]
-        hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise UnknownNameError(
-            f"plate {name!r} is not a preset; valid: one of the {len(names)} names of "
+            f"plate {name!r} is not a preset{did_you_mean(name, names)}; valid: one of the "
+            f"{len(names)} names of "
             f"`sim-tactile plates list` (families {', '.join(fams)}), a plate file (.toml), or "
             "a part (.step, .stp, .stl, a CadQuery script .py[:function]) or height map "
             "(.npy, .png)"
-            f"{hint}"
         )
     data = asset_data("plates", f"{name}.toml")
     return plate_from_data(data, name, where=f"preset plate file {preset_file(name)}")

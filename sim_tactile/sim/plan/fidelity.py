@@ -184,22 +184,26 @@ def choose_fidelity(
     if protocol.force_control == "dynamic":
         omega = math.sqrt(flat_stiffness(finger, level != "L0", k_w) / finger.bone_mass_kg)
         dt_need = min(dt_need, AUTO_OMEGA_DT / omega)
-    auto_pitch, aspect = _node_grid(
-        plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnings
+    auto_pitch, aspect, wanted = _node_grid(
+        plate, finger, level, auto_pitch, taxel_x, taxel_y, scale
     )
     pitch = pitch_m or auto_pitch
     dt_target = dt_s or dt_need
     if level == "L2":
         pitch, dt_target = (pitch_m or auto_pitch / 2), (dt_s or dt_need / 4)
+    if pitch_m is None and wanted is not None and pitch > wanted * (1 + 1e-9):
+        warnings.append(_raised(wanted, pitch, level))  # not where L2 halved it below
     pitch_y = pitch * aspect
     if dt_s is not None and scale is not None and dt_s > scale / (speed * 10):
         warnings.append(
             f"time step {dt_s:g} s is too coarse for {speed:g} m/s: a {scale * 1e3:.3g} mm feature "
-            f"takes {scale / (speed * dt_s):.1f} steps to cross (want >= 10)"
+            f"takes {scale / (speed * dt_s):.1f} steps to cross (want >= 10); pass dt_s at "
+            f"most {scale / (speed * 10):.3g} s, or none (auto)"
         )
     if pitch_m is not None and scale is not None and pitch_m > scale / 2:
         warnings.append(
-            f"node pitch {pitch_m * 1e3:.3g} mm is too coarse for {scale * 1e3:.3g} mm features"
+            f"node pitch {pitch_m * 1e3:.3g} mm is too coarse for {scale * 1e3:.3g} mm features; "
+            f"pass pitch_m at most {scale / 2 * 1e3:.3g} mm, or none (auto)"
         )
     sample = 1.0 / protocol.rate_hz
     n_sub = steps_per_sample(protocol.rate_hz, dt_target)
@@ -344,9 +348,10 @@ def _clippable(plate, finger, protocol, level) -> bool:
     return surface_of(plate).has_walls and not skin_refusals(level, finger, quasi_static)
 
 
-def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnings):
-    """auto's node pitch along the slide and the aspect of the nodes (y pitch / x pitch),
-    under the level's node cap (a warning says when the cap coarsens the grid)."""
+def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale):
+    """auto's node pitch along the slide, the aspect of the nodes (y pitch / x pitch) and
+    the pitch the features asked for before the level's node cap coarsened it (None where
+    the cap left it)."""
     px, py = finger.patch_m
     # Ridges along y under a flat pad: the load varies along the slide only, so the nodes
     # go where it varies: x at 1/5 of the smallest feature, y as coarse as the taxels allow;
@@ -358,18 +363,31 @@ def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale, warnin
         auto_pitch = min(PITCH_MAX_M, max(PITCH_MIN_M, min(taxel_x / 2, scale / 5)))
         aspect = max(1.0, min(taxel_y, PITCH_MAX_Y_M) / auto_pitch)
     floor = math.sqrt(px * py / cap / aspect)
+    wanted = None
     if auto_pitch < floor:
-        warnings.append(
-            f"node pitch raised from {auto_pitch * 1e3:.3g} to {floor * 1e3:.3g} mm to keep the skin "
-            f"under {cap} nodes: features below {2 * floor * 1e3:.3g} mm are smeared"
-        )
-        auto_pitch = floor
+        wanted, auto_pitch = auto_pitch, floor
     if ridges:
         y = auto_pitch * aspect
         x = max(PITCH_MIN_M, scale / RIDGE_NODES_PER_FEATURE, px * py / (cap * y))
         if x < auto_pitch:
             auto_pitch, aspect = x, y / x
-    return auto_pitch, aspect
+    return auto_pitch, aspect, wanted
+
+
+def _raised(wanted: float, pitch: float, level: str) -> str:
+    """The warning for a node pitch that the level's node cap raised above what the
+    features asked for (``wanted``) to ``pitch`` [m]."""
+    finer = (
+        "a node pitch of your own (pitch_m in Python; slower)"
+        if level == "L2"
+        else "fidelity L2 (half this pitch, about 4x the nodes and 8x the time) or a node "
+        "pitch of your own (pitch_m in Python)"
+    )
+    return (
+        f"node pitch raised from {wanted * 1e3:.3g} to {pitch * 1e3:.3g} mm to keep the skin "
+        f"under {MAX_NODES[level]} nodes: features below "
+        f"{2 * pitch * 1e3:.3g} mm are smeared; for a finer grid: {finer}"
+    )
 
 
 def _far_from_physics(plate, layout, finger, protocol, level, measured, shape) -> str:
@@ -404,25 +422,28 @@ def _texture_warnings(plate: Plate, layout, scale: float | None, pitch: float) -
     if scale is not None and pitch > scale / 2:
         warnings.append(
             f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
-            f"({pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes"
+            f"({pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes; a node "
+            f"pitch of at most {scale / 2 * 1e3:.3g} mm resolves it (pitch_m in Python; slower)"
         )
     surf = surface_of(plate)
     if surf.ra_m is not None:
         warnings.append(
             f"micro-roughness (Ra {surf.ra_m * 1e6:.3g} um) is below the node grid: the finger simulation sees "
-            "it only where its nodes sample the height map (the micro-roughness model of the "
-            "sensor adds what lies below)"
+            "it only where its nodes sample the height map; nothing to change: the sensor's "
+            "micro-roughness model adds what lies below"
         )
     period = surf.period_m
     if period is not None and layout.min_pitch_m > period / 2 and layout.n > 1:
         warnings.append(
             f"taxel pitch {layout.min_pitch_m * 1e3:.3g} mm is coarser than half the texture "
-            f"period ({period * 1e3:.3g} mm): the taxel array aliases the texture"
+            f"period ({period * 1e3:.3g} mm): the taxel array aliases the texture; taxels at "
+            f"most {period / 2 * 1e3:.3g} mm apart would sample it (a sensor file of your own)"
         )
     if period is not None and taxel > period:
         warnings.append(
             f"taxels ({taxel * 1e3:.3g} mm) are larger than the texture period "
-            f"({period * 1e3:.3g} mm): each taxel averages over several features"
+            f"({period * 1e3:.3g} mm): each taxel averages over several features; taxels "
+            f"smaller than {period * 1e3:.3g} mm would tell them apart (a sensor file of your own)"
         )
     return warnings
 
