@@ -260,6 +260,16 @@ def test_the_file_format_page_names_every_key_the_readers_take():
     assert "heightmap" in page and "columns run along the slide" in page
 
 
+def test_the_file_format_page_holds_the_knobs_as_they_are_declared():
+    """The configuration table's rows of the knobs of how a slide is computed are those their
+    declaration writes (sim.plan.options.KNOBS): a knob added or changed there is a failing
+    test until the page follows."""
+    from sim_tactile.sim.plan.options import reference_rows
+
+    page = (DOCS / "reference" / "file-formats.md").read_text().splitlines()
+    assert [r for r in reference_rows() if r not in page] == []
+
+
 def test_every_picture_is_shown_in_the_manual():
     """Each figure in docs/img is on a page (a picture nobody sees is a page not written)."""
     text = "\n".join(p.read_text() for p in _pages())

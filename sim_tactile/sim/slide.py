@@ -205,7 +205,7 @@ def _run(slide: Slide, cache) -> SimResult:
         warnings.append(
             f"the stroke stopped at the plate's end after {slide_rec.stopped_at_s:.3g} s of the "
             f"{sim_s:.3g} s window ({proto.speed_m_s * 1e3:.3g} mm/s): the pad rested on flat "
-            f"ground for the rest; a window of at most {slide.stopped_at_s:.3g} s (duration_s), "
+            f"ground for the rest; a window of at most {slide_rec.stopped_at_s:.3g} s (duration_s), "
             "or a slower speed, keeps it on the plate"
         )
     if proto.force_control != "position":  # there the load follows the texture

@@ -209,9 +209,8 @@ def keyed(options: StepOptions) -> dict[str, Any]:
     return out
 
 
-def reference_table() -> str:
-    """The public knobs as a Markdown table (name, valid values, what it does), for the
-    file-format reference."""
-    rows = ["| key | valid | what it does |", "|---|---|---|"]
-    rows += [f"| `{k.name}` | {k.valid()} | {k.help} |" for k in KNOBS if k.public]
-    return "\n".join(rows)
+def reference_rows() -> list[str]:
+    """The public knobs as rows of the file-format reference's configuration table (key,
+    unit, valid: the range, then what it does): the page holds these rows as written (a test
+    compares them), so it follows this declaration."""
+    return [f"| `{k.name}` | | {k.valid()}: {k.help} |" for k in KNOBS if k.public]
