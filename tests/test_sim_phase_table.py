@@ -24,7 +24,7 @@ from sim_tactile.errors import CacheWarning, ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.sim import Protocol, Slide, StepOptions, run
 from sim_tactile.sim.plan.phase import phase_plan
-from sim_tactile.sim.step.phase_table import TABLE_EXT, force_levels
+from sim_tactile.sim.step.phase_table import LEVELS_PER_OCTAVE, TABLE_EXT, force_levels
 from sim_tactile.tasks import get_task
 
 #: The table path is the default where its error against the per-step solve is at most
@@ -200,7 +200,7 @@ def test_force_levels_bracket_the_force_on_a_fixed_grid():
         assert all(F > 0 for F, _ in levels)
         if len(levels) == 2:
             (lo, _), (hi, _) = levels
-            assert lo < f < hi and hi / lo == pytest.approx(2 ** (1 / 16))
+            assert lo < f < hi and hi / lo == pytest.approx(2 ** (1 / LEVELS_PER_OCTAVE))
     assert force_levels(1.0) == [(1.0, 1.0)]
     assert force_levels(0.5) == [(0.5, 1.0)]
 
