@@ -19,15 +19,17 @@ whichever slide asks first.
 
 from __future__ import annotations
 
-import io
+import fcntl
 import math
+import os
 import warnings
 import zipfile
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 
-from ...cache import SETUP
+from ...cache import SETUP, npz_bytes
 from ...errors import CacheWarning, PhysicsError
 from ..plan.phase import PhasePlan
 from .held import HeldStep
@@ -262,35 +264,74 @@ def kept_table(key: str, build, cache) -> tuple[PhaseTable, bool]:
     :class:`~sim_tactile.cache.ArtefactCache`, checked as every entry is), else
     ``build()`` kept in both. ``key`` holds everything the table depends on, and a table
     is the same bit for bit whoever builds it, so a slide does not depend on where its
-    table came from."""
+    table came from. Workers that share ``cache`` build a table once: the first holds a
+    lock on it (:func:`_building`) while it builds, and the others wait and read it."""
     kept = SETUP.get(key)
     if kept is not None:
         return _from_arrays(kept), False
-    if cache is not None:
-        hit = cache.get(key, TABLE_EXT)
-        if hit is not None:
-            try:
-                with np.load(hit, allow_pickle=False) as z:
-                    arrays = tuple(z[f] for f in _FIELDS)
-                if arrays[1].ndim != 2 or any(len(a) != len(arrays[0]) for a in arrays[1:5]):
-                    raise ValueError("its arrays disagree in length")
-                return _from_arrays(SETUP.put(key, arrays)), False
-            except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-                warnings.warn(
-                    f"cache entry {hit} cannot be read as a phase table "
-                    f"({type(exc).__name__}: {exc}); it is solved again",
-                    CacheWarning,
-                    stacklevel=2,
-                )
-                cache.discard(key, TABLE_EXT)
-    table = build()
-    arrays = _to_arrays(table)
-    if cache is not None:
-        buf = io.BytesIO()
-        np.savez(buf, **dict(zip(_FIELDS, arrays, strict=True)))
-        cache.put(key, TABLE_EXT, buf.getvalue())
+    if cache is None:
+        table = build()
+        SETUP.put(key, _to_arrays(table))
+        return table, True
+    found = _read(key, cache)
+    if found is not None:
+        return found, False
+    with _building(cache, key):
+        found = _read(key, cache)  # made by another worker while this one waited
+        if found is not None:
+            return found, False
+        table = build()
+        arrays = _to_arrays(table)
+        cache.put(key, TABLE_EXT, npz_bytes(dict(zip(_FIELDS, arrays, strict=True))))
     SETUP.put(key, arrays)
     return table, True
+
+
+def _read(key: str, cache) -> PhaseTable | None:
+    """The table under ``key`` in ``cache`` (kept in this process too), or None: absent, or
+    damaged and discarded with a warning naming the file."""
+    hit = cache.get(key, TABLE_EXT)
+    if hit is None:
+        return None
+    try:
+        with np.load(hit, allow_pickle=False) as z:
+            arrays = tuple(z[f] for f in _FIELDS)
+        if arrays[1].ndim != 2 or any(len(a) != len(arrays[0]) for a in arrays[1:5]):
+            raise ValueError("its arrays disagree in length")
+        return _from_arrays(SETUP.put(key, arrays))
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+        warnings.warn(
+            f"cache entry {hit} cannot be read as a phase table "
+            f"({type(exc).__name__}: {exc}); it is solved again",
+            CacheWarning,
+            stacklevel=2,
+        )
+        cache.discard(key, TABLE_EXT)
+        return None
+
+
+@contextmanager
+def _building(cache, key: str):
+    """Hold an exclusive ``flock`` on the lock file of table ``key`` beside its cache entry
+    while it is built (the kernel drops it when its holder dies, however it dies); where the
+    cache's folder takes no lock file, build without one (two workers may then build the
+    same table, which is the same bits)."""
+    folder = cache.entry(key, TABLE_EXT).parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd = os.open(
+            folder / f".{key}.{TABLE_EXT}.lock",
+            os.O_RDONLY | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC,
+            0o664,
+        )
+    except OSError:
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
 
 
 _FIELDS = ("phases", "loads", "force", "top", "z", "plan", "stats")

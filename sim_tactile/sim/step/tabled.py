@@ -231,7 +231,10 @@ def slide_on_table(
 def shared(slide: Slide, plan: PhasePlan) -> bool:
     """Whether the slides of ``slide``'s set share tables at force levels (their force
     varies from slide to slide, and the table does not depend on their offset: it does not,
-    or the offset does not vary); else each slide's table is solved at its own force."""
+    or the offset does not vary); else each slide's table is solved at its own force, as on
+    a uniform stretch, whose table is one solve."""
+    if plan.period_m is None:
+        return False
     nominal = slide.protocol
     offset_free = plan.y_m == 0.0 or nominal.offset_jitter_m == 0.0
     return nominal.force_jitter > 0.0 and offset_free
