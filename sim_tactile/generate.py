@@ -61,6 +61,7 @@ from .errors import ConfigError, StoreError, Terminated, WorkerError
 from .hashing import canonical_json
 from .interrupts import interrupt_of
 from .sensors.calibration import load_calibration
+from .sim.plan.options import DEVICES
 from .slides.config import config_slide_set, is_config_path, load_config
 from .slides.jobs import SlideWorker
 from .slides.plan import Plan, slide_plan
@@ -386,6 +387,7 @@ def generate(
     progress: bool = True,
     log: Callable[[str], None] | None = None,
     sensor_config: str | Path | None = None,
+    device: str = "cpu",
     _worker: Callable | None = None,
 ) -> dict:
     """Simulate every slide of ``target`` (a task id or a configuration file) into the Zarr
@@ -398,6 +400,8 @@ def generate(
     resume: continue an interrupted store of the same configuration (without it an existing
         ``out`` is refused).
     sensor_config: a calibration file (``sim-tactile calibrate``) for the task's sensor.
+    device: where the phase tables of slides on a spectral skin are solved (``cpu``, or
+        ``cuda``: checked before anything is made; the slides' keys record it).
     _worker: what simulates a job (tests put faults in with it; default: a
         :class:`~sim_tactile.slides.jobs.SlideWorker` that reads the slide cache, never
         writes it).
@@ -410,9 +414,17 @@ def generate(
     if workers is not None:
         workers = v.integer("--workers", workers, 1, MAX_WORKERS)
     out = Path(out)
+    v.one_of("--device", device, DEVICES)
+    if device != "cpu":  # asked for and absent: one line, and nothing made
+        from .sim.skin.contact.device import require_device
+
+        require_device(device)
     plans, root_attrs = resolve(
         target, quick=quick, seed=seed, data=data, log=log, sensor_config=sensor_config
     )
+    for plan in plans:  # the device says where the tables are solved, not what a slide is
+        if plan.jobs is not None and device != "cpu":
+            plan.jobs = [replace(j, options=replace(j.options, device=device)) for j in plan.jobs]
     for plan in plans:  # what a store cannot hold is refused before anything is made
         check_fits(plan.spec, f"{target}" + (f" ({plan.group})" if plan.group else ""))
     total = sum(p.spec.n_slides for p in plans)

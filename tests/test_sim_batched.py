@@ -315,3 +315,37 @@ def test_the_cpu_path_and_these_modules_load_no_torch():
     )
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "False"
+
+
+def test_a_phase_tables_phases_solved_at_once_are_the_ones_solved_one_by_one(cache, monkeypatch):
+    """The batched held step (sim/step/batched_held.py) on the CPU against the plain loop: a
+    phase table of a spectral skin solved a grid at a time, and one phase after another,
+    agree at every phase both solved, to the solve's tolerance; asked for a dense skin or the
+    CPU, there is nothing to batch."""
+    pytest.importorskip("torch")
+    from dataclasses import replace as _replace
+
+    from sim_tactile.plates import get_plate
+    from sim_tactile.sim import Protocol, Slide, StepOptions
+    from sim_tactile.sim.step import batched_held as bh
+    from sim_tactile.sim.step import tabled
+
+    opts = StepOptions(skin_solver="spectral", path="phase-table", solve_tol=1e-8)
+    slide = Slide(
+        get_plate("finger7/bumps-6x6"),
+        "grid3x3",
+        Protocol(duration_s=0.25, start="texture"),
+        pitch_m=0.5e-3,  # the pad's own lattice (auto would anchor it to the boxes' walls)
+        options=opts,
+    )
+    proto, fid, plan = slide.drawn(), slide.resolved, slide.table_plan()
+    one = tabled.solve_table(slide, proto, fid, plan, proto.force_n, cache)
+    assert bh.batched_held(object(), "cuda") is None  # not the plain loop: not batched
+    monkeypatch.setattr(tabled, "batched_held", lambda hold, device: bh.BatchedHeld(hold, "cpu"))
+    many = tabled.solve_table(_replace(slide, options=opts), proto, fid, plan, proto.force_n, cache)
+    common = sorted(set(one.phases.tolist()) & set(many.phases.tolist()))
+    assert len(common) >= 0.8 * len(one.phases)
+    a = one.loads[np.searchsorted(one.phases, common)]
+    b = many.loads[np.searchsorted(many.phases, common)]
+    assert np.abs(a).max() > 0
+    np.testing.assert_allclose(b, a, rtol=0, atol=1e-5 * np.abs(a).max())

@@ -25,6 +25,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
         progress=not args.json,
         log=log,
         sensor_config=args.sensor_config,
+        device=args.device,
     )
     emit(
         args,
@@ -164,6 +165,14 @@ def add_parsers(sub) -> None:
         "--address",
         default=None,
         help="The Ray cluster's address (HOST:PORT, or auto), with --backend ray.",
+    )
+    gn.add_argument(
+        "--device",
+        default="cpu",
+        choices=("cpu", "cuda"),
+        help="Where the phase tables of slides on a spectral skin are solved: cpu (the "
+        "default), or cuda, each table's phases at once on a GPU (torch with CUDA; one error "
+        "and nothing written where there is none). The slides' keys say which made them.",
     )
     gn.add_argument("--quick", action="store_true", help="Simulate the task's quick slides.")
     gn.add_argument(

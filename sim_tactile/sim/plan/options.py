@@ -41,6 +41,8 @@ AUTO_SOLVE_EVERY = 4
 #: per-step solve), ``per-step`` (the skin solved at every step: the reference) or
 #: ``phase-table`` (asked for: refused where the scene does not allow it).
 PATHS = ("auto", "per-step", "phase-table")
+#: Where the batched solves run (``StepOptions.device``): the CPU, or a GPU through torch.
+DEVICES = ("cpu", "cuda")
 
 
 @dataclass(frozen=True)
@@ -150,6 +152,15 @@ KNOBS: tuple[Knob, ...] = (
         public=True,
         keyed=False,
     ),
+    Knob(
+        "device",
+        "where a phase table's phases are solved on a spectral skin: cpu, one after another, "
+        "or cuda, all of a grid at once on a GPU (torch with CUDA; asked for where there is "
+        "none, one error and nothing run)",
+        "choice",
+        choices=DEVICES,
+        public=True,
+    ),
 )
 #: The knobs by name.
 KNOB = {k.name: k for k in KNOBS}
@@ -166,6 +177,7 @@ class StepOptions:
         taxel loads between on the line between two solves (1: every step, the reference);
     solve_tol: the spectral contact solve's tolerance (None: the reference, 1e-10);
     path: ``auto``, ``per-step`` or ``phase-table`` (:data:`PATHS`).
+    device: ``cpu`` or ``cuda`` (:data:`DEVICES`): where a phase table's phases are solved.
     """
 
     primitive_collider: bool = True
@@ -175,6 +187,7 @@ class StepOptions:
     solve_every: int = 1
     solve_tol: float | None = None
     path: str = "auto"
+    device: str = "cpu"
 
     def __post_init__(self) -> None:
         for f in fields(self):  # each kept as the value it reads as (a float, an int)

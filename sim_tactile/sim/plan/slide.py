@@ -143,7 +143,9 @@ class Slide:
         ``per-step`` is the reference, the knobs as given. The resolved options say which
         (``path`` ``phase-table`` or ``per-step``). The probe rig has its own slide."""
         opts = self.options
-        default = opts == StepOptions()  # auto chooses only where no knob was set by hand
+        # auto chooses only where no knob of the numbers was set by hand (the device says
+        # where the batched solves run, not what they give)
+        default = replace(opts, device="cpu") == StepOptions()
         if self.rig is not None or (opts.path == "auto" and not default):
             return None, replace(opts, path="per-step")
         proto = self.drawn()

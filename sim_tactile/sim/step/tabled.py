@@ -22,11 +22,12 @@ import numpy as np
 
 from ...errors import PhysicsError
 from ...hashing import blas_kernel, code_version, content_hash
-from ..plan.fidelity import Fidelity
+from ..plan.fidelity import Fidelity, solved_spectrally
 from ..plan.options import keyed
 from ..plan.phase import PhasePlan, travel
 from ..plan.protocol import Protocol, SlideWindow
 from ..plan.slide import Slide
+from .batched_held import batched_held
 from .build import runner_for, scene_for
 from .phase_table import Blend, PhaseTable, force_levels, kept_table, tabulate
 from .runner import V_STICK, Runner
@@ -267,6 +268,8 @@ def table_key(slide: Slide, fid: Fidelity, plan: PhasePlan, force_n: float) -> s
     the code that solves it and the BLAS kernel; nothing of the slide's speed, step, seed or
     window, which the table does not depend on."""
     opts = {k: v for k, v in keyed(slide.how).items() if k not in ("path", "solve_every")}
+    if not solved_spectrally(fid, slide.pad, slide.how.skin_solver):
+        opts.pop("device", None)  # a dense skin's table is solved on the CPU either way
     grid = {
         k: getattr(fid, k)
         for k in ("level", "pitch_m", "pitch_y_m", "winkler_k_pa_per_m", "clipped", "wall_m")
@@ -295,6 +298,7 @@ def solve_table(
     slide asks for it)."""
     at = replace(proto, offset_y_m=plan.y_m, force_n=force_n)
     scene = runner_for(slide, at, fid, plan.x_ref, cache)
+    many = batched_held(scene.hold, slide.how.device)
     return tabulate(
         scene.hold,
         scene.d_dyn.qpos,
@@ -307,4 +311,5 @@ def solve_table(
         scene.s.layout.n,
         fid.pitch_m,
         check=lambda z, f, top: scene.check_held(z, force_n, f, top),
+        many=many,
     )
