@@ -223,3 +223,19 @@ def test_the_plan_checks_the_repetition_on_the_plates_own_features():
 
     a, b = phase._repeating_span(feats, surface_of(plate).period_m)
     assert a >= b  # no span repeats
+
+
+def test_auto_presses_once_to_the_equilibrium_the_per_step_press_reaches(cache):
+    """Under a held force, ``auto`` presses the pad once to its equilibrium (the held step
+    at the force, taken again until its height holds) where the per-step reference
+    approaches, ramps and settles over some 150-300 held steps; the slide is the same: the
+    dense skin's equilibrium is unique, and here the recordings are equal bit for bit. The
+    description says so (another key)."""
+    slide = _task_slide("finger7-v1", "finger7/ridges-4", 0.4)
+    assert slide.held_press and slide.describe()["press"] == "held"
+    step = replace(slide, options=STEP)
+    assert not step.held_press and "press" not in step.describe()
+    a, b = run(slide, cache).recording, run(step, cache).recording
+    assert np.abs(b.data).max() > 0
+    np.testing.assert_allclose(a.data, b.data, rtol=1e-9, atol=1e-12)
+    assert np.array_equal(a.meta["x_pad_m"], b.meta["x_pad_m"])

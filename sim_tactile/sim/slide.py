@@ -31,6 +31,7 @@ from .plan.protocol import (
 )
 from .plan.slide import Slide
 from .step.build import runner_for
+from .step.phase_table import SETTLE_M, SETTLE_STEPS
 from .step.runner import Runner, drag_factor, drag_warning
 from .step.sampling import SampleAverager, SimResult, sensor_output, versions
 from .step.strokes import Strokes
@@ -170,6 +171,8 @@ def _press(slide: Slide, proto: Protocol, fid: Fidelity, window: SlideWindow, ca
     warnings_ = list(fid.warnings)
     if proto.force_control == "position":
         _touch(runner, proto.force_n)  # then held at that height
+    elif slide.held_press and runner.hold is not None:
+        _held_press(runner, proto.force_n)
     else:
         _approach(runner, proto.force_n)
         warnings_ += _press_and_settle(runner, proto)
@@ -276,6 +279,19 @@ def _touch(runner: Runner, force_n: float) -> None:
         above = Fs >= force_n
     if not above:  # end on the side that carries the force
         runner.step(z_vel=-h / runner.dt, force_cmd=force_n, slide_v=0.0)
+
+
+def _held_press(runner: Runner, force_n: float) -> None:
+    """The press under quasi-static force control as one equilibrium: the held step at the
+    force, from above the plate, taken again from the height it ends at until that height
+    holds (:data:`~.step.phase_table.SETTLE_M`). The approach, the ramp and the settling
+    reach the same equilibrium step by step (the skin keeps no history at rest, and the pad
+    does not move along the slide), at some 150-300 held steps of a slide's cost."""
+    for _ in range(SETTLE_STEPS):
+        z = runner.z_m
+        runner.step(force_cmd=force_n)
+        if abs(runner.z_m - z) <= SETTLE_M:
+            return
 
 
 def _press_and_settle(runner: Runner, proto: Protocol) -> list[str]:

@@ -170,6 +170,19 @@ class Slide:
         return None, replace(opts, path="per-step", solve_every=every, solve_tol=AUTO_SOLVE_TOL)
 
     @property
+    def held_press(self) -> bool:
+        """Whether the slide's press is one held equilibrium rather than the approach, the
+        ramp and the settling step by step: ``path = auto`` with no knob set by hand, under
+        quasi-static force control (the per-step reference presses step by step)."""
+        opts = self.options
+        return (
+            self.rig is None
+            and opts.path == "auto"
+            and replace(opts, device="cpu") == StepOptions()
+            and self.drawn().force_control == "quasi-static"
+        )
+
+    @property
     def spectral(self) -> bool:
         """Whether the slide's skin is solved spectrally (:func:`~.fidelity.solved_spectrally`)."""
         return solved_spectrally(self.resolved, self.pad, self.options.skin_solver)
@@ -209,6 +222,8 @@ class Slide:
         d.update(keyed(self.how))  # the knobs as the slide runs them
         if self.table_plan() is not None:  # another path, another key
             d["path"] = "phase-table"
+        if self.held_press:
+            d["press"] = "held"
         return d
 
     def meta_head(self) -> dict:

@@ -122,6 +122,12 @@ class Runner:
         return float(self._qpos[self._jx])
 
     @property
+    def z_m(self) -> float:
+        """The press joint's position [m] (the pad's lowest point is ``z0 + z_m`` above
+        the plate's base surface)."""
+        return float(self._qpos[self._jz])
+
+    @property
     def z_speed_m_s(self) -> float:
         return float(self._qvel[self._jz])
 
