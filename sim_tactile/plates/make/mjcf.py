@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from ...errors import GeometryError
 from ..define.geometry import Feature
@@ -46,6 +45,8 @@ def _prism_vertices(f: Feature) -> np.ndarray:
 def check_convex(vertices: np.ndarray, *, rtol: float = 1e-9) -> None:
     """Raise GeometryError unless every vertex is a vertex of the convex hull (so MuJoCo's
     collider, which uses the hull, sees exactly this shape)."""
+    from scipy.spatial import ConvexHull, QhullError  # only a drafted ridge's check needs it
+
     try:
         hull = ConvexHull(vertices)
     except QhullError as exc:

@@ -48,7 +48,9 @@ import math
 import numpy as np
 
 from ..._jit import njit
+from ...cache import setup_memo
 from ...errors import PhysicsError
+from ...hashing import array_digest
 from ...plates.define.spec import Plate
 from ...plates.define.surface import surface_of
 from ..plan.lattices import PAD_SHAPE_CODES, check_anchorable, period_lines, row_lines
@@ -167,6 +169,20 @@ def read_surface(off, cxr, wxr, ny, taxel_x, taxel_hx, oy, f, out):
         out[t] = acc
 
 
+def _compliance(cxb, wxb, P, n_periods, cy, wy, e_star) -> np.ndarray:
+    """:func:`lattice_compliance`, kept in this process by content
+    (:func:`~sim_tactile.cache.setup_memo`): every slide of a scene at one offset has the
+    same lattice, and building it took 80 ms of a finger7 slide's 100 (read-only: the
+    solve never writes it)."""
+    parts = {
+        "lattice": [array_digest(np.asarray(a, dtype=np.float64)) for a in (cxb, wxb, cy, wy)],
+        "period": [float(P), int(n_periods)],
+        "e_star": float(e_star),
+    }
+    compute = lambda: (lattice_compliance(cxb, wxb, P, n_periods, cy, wy, e_star),)  # noqa: E731
+    return setup_memo("anchored lattice compliance", parts, compute, (__name__,))[0]
+
+
 class AnchoredLattice:
     """The lattice of a pad on a plate (see the module docstring) and its contact solve:
     ``pitch_m`` the largest cell along the slide, ``pitch_y_m`` across it, ``wall_m`` the
@@ -191,9 +207,7 @@ class AnchoredLattice:
         self.cy, self.wy = 0.5 * (by[:-1] + by[1:]), np.diff(by)
         self.ny = self.cy.size
         self.n = self.cxr.size * self.ny
-        self.C = lattice_compliance(
-            cxb, wxb, self.P, self.n_periods, self.cy, self.wy, finger.e_star_pa
-        )
+        self.C = _compliance(cxb, wxb, self.P, self.n_periods, self.cy, self.wy, finger.e_star_pa)
         self.boxes = surface_of(plate).boxes
         self.plate_half = np.array([plate.length_m / 2, plate.width_m / 2])
         self.pad = self.pad_of(finger)
