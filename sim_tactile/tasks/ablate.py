@@ -32,7 +32,7 @@ from ..encoders.neurons import izhikevich_preset
 from ..encoders.scaling import RangeScaler
 from ..errors import ConfigError
 from ..tables import markdown_table
-from .registry import Run, TaskSpec, get_task
+from .registry import Run, TaskSpec, use_task
 from .runner import evaluate_task, load_task, stderr_log, task_runs
 
 #: What each ablation parameter (``--set NAME=v1,v2``) changes, with its unit and range.
@@ -214,7 +214,7 @@ def ablate(
     ``store``); returns ``{task, rows: [{params, classifier, label, accuracy_mean,
     accuracy_std}], figures}``."""
     log = log or stderr_log
-    spec = get_task(task_id)
+    spec = use_task(task_id)
     if spec.parts:
         raise ConfigError(
             f"task {task_id} is made of parts; ablate one of them: {', '.join(spec.parts)}"
