@@ -18,7 +18,7 @@ from collections.abc import Iterator, Sequence
 
 from .. import __version__
 from ..errors import SimTactileError, Terminated, os_error_message
-from . import bench, data, plates, sim, tasks
+from . import bench, check, data, plates, sim, tasks
 from ._common import log
 
 DESCRIPTION = (
@@ -51,7 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="Show the traceback of an error instead of its one-line reason.",
     )
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for group in (tasks, plates, sim, data, bench):
+    for group in (tasks, check, plates, sim, data, bench):
         group.add_parsers(sub)
     _sentence_help(p)
     return p

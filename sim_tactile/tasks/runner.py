@@ -34,10 +34,12 @@ from ..slides.plan import slide_plan, task_slide_config
 from .config_task import PREFIX as CONFIG_PREFIX
 from .config_task import config_task, is_config_path
 from .figures import write_figures
+from .intervals import interval_list
 from .methods import Method, as_methods, classify_methods, method_row
 from .precompute import Precomputed
-from .registry import DataRequest, Run, TaskSpec, get_task, with_calibration
+from .registry import DataRequest, Run, TaskSpec, quiet_outdated, use_task, with_calibration
 from .report import Report, ResultRow, compare
+from .result_file import write_result_files
 from .splits import splits_digest, task_splits
 
 
@@ -196,6 +198,7 @@ def run_task(
     store: str | Path | None = None,
     sensor_config: str | Path | None = None,
     methods=None,
+    about=None,
 ) -> dict:
     """Run ``task_id`` and write its report into ``out_dir``; returns the report as JSON data.
     ``task_id`` may also be a configuration file (``.toml`` / ``.json``, :mod:`.config_task`).
@@ -212,6 +215,11 @@ def run_task(
         sensor_config: a calibration file (``sim-tactile calibrate``) for the task's sensor.
         methods: the user's methods, name -> estimator or (encoder, estimator)
             (:mod:`.methods`), scored beside the built-in rows.
+        about: method name -> ``{"version": ..., "link": ...}`` for the user's methods'
+            result files.
+
+    Each row's result file (:mod:`.result_file`) is written into ``out_dir/results`` (not
+    for a configuration file: it is no registered task).
     """
     # a failed run leaves no empty --out behind; a full or read-only disk is one line
     with no_empty_folders_left(Path(out_dir)), write_faults(Path(out_dir)):
@@ -227,11 +235,23 @@ def run_task(
             store,
             sensor_config,
             methods,
+            about,
         )
 
 
 def _run_task(
-    task_id, out_dir, quick, data, classifiers, repeats, seed, log, store, sensor_config, methods
+    task_id,
+    out_dir,
+    quick,
+    data,
+    classifiers,
+    repeats,
+    seed,
+    log,
+    store,
+    sensor_config,
+    methods,
+    about,
 ) -> dict:
     t_start = time.perf_counter()
     log = log or stderr_log
@@ -239,7 +259,7 @@ def _run_task(
         spec, file_seed = config_task(task_id)
         seed = file_seed if seed is None else seed
     else:
-        spec = get_task(task_id)
+        spec = use_task(task_id)
         seed = 0 if seed is None else seed
     if sensor_config is not None:
         spec = with_calibration(spec, load_calibration(sensor_config))
@@ -249,7 +269,7 @@ def _run_task(
     if spec.parts:
         methods = {m.name: m for m in as_methods(methods)} or None  # checked before any part
         return _run_suite(
-            spec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods
+            spec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods, about
         )
     runs = task_runs(spec, classifiers)
     user = as_methods(methods, {r.name for r in runs})
@@ -272,6 +292,8 @@ def _run_task(
         methods=user,
     )
     report.timing["load_s"] = round(task.load_s, 3)
+    if not is_config_path(task_id):
+        report.result_files = write_result_files(spec, report, task.ds.labels, Path(out_dir), about)
     report.timing["wall_s"] = round(time.perf_counter() - t_start, 2)
     report.write(Path(out_dir))
     return report.to_json()
@@ -407,6 +429,7 @@ def _row(spec: TaskSpec, run: Run, r: EvalResult, wall_s: float, quick: bool) ->
         features=get_classifier(run.classifier).features,
         accuracy_mean=round(r.mean, 4),
         accuracy_std=round(r.std, 4),
+        accuracy_ci95=interval_list(r.accuracies),
         paper=cell.to_json() if cell else None,
         repeats=len(r.accuracies),
         comparison=compare(r.mean, cell, spec.notes.get(run.name), quick=quick),
@@ -418,13 +441,14 @@ def _row(spec: TaskSpec, run: Run, r: EvalResult, wall_s: float, quick: bool) ->
 
 
 def _run_suite(
-    spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods=None
+    spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods, about
 ):
     """A task made of parts (one per sensor): each part's report in ``out_dir/<part>``, and
     one report whose rows are the parts' rows, labelled ``<part>: <row>``."""
     t0 = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    quiet_outdated(spec.parts)  # the suite's own warning names its successor
     parts = {}
     for part in spec.parts:
         log(f"{spec.id}: part {part}")
@@ -439,6 +463,7 @@ def _run_suite(
             log=log,
             store=store,
             methods=methods,
+            about=about,
         )
         parts[part] = Report.from_json(doc)
     rows = [
@@ -464,6 +489,7 @@ def _run_suite(
         reference=spec.reference,
         environment=next(iter(parts.values())).environment,
         parts={part: str(out / part / "report.json") for part in parts},
+        result_files=[f for rep in parts.values() for f in rep.result_files or []],
     )
     report.write(out)
     return report.to_json()
