@@ -65,6 +65,7 @@ nitpick_ignore_regex = [
 def _generate(app) -> None:
     _gen.write_api(HERE / "reference" / "api")
     _gen.write_tasks(HERE / "reference" / "tasks")
+    _gen.write_leaderboard(HERE.parent / "leaderboard", HERE / "results" / "leaderboard.md")
 
 
 def _skip(app, what, name, obj, skip, options):
