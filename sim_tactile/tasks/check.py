@@ -221,6 +221,8 @@ def _protocol(spec: TaskSpec, cfg) -> list[str] | None:
         )
     if cfg["interval"] != INTERVAL:
         out.append(f"config.interval = {cfg['interval']!r}; the schema's is {INTERVAL}")
+    if p["split"] != split or p["seed"] != 0:
+        return out  # refused already: its splits are not the task's whatever their digest
     return out + _splits(p, n)
 
 

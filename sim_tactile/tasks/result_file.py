@@ -257,6 +257,10 @@ def write_result_files(
             env=env,
         )
         path = folder / f"{spec.id}--{slug(row.label)}.json"
+        k = 1
+        while str(path) in paths:  # two labels of one slug ("a b", "a-b"): both are kept
+            k += 1
+            path = folder / f"{spec.id}--{slug(row.label)}-{k}.json"
         path.write_text(dumps(doc))
         paths.append(str(path))
     return paths
