@@ -71,7 +71,9 @@ def _tables(text: str) -> dict[str, list[list[str]]]:
 def test_the_page_ranks_one_table_per_task_version_and_track():
     entries = load_entries(BOARD)
     tables = _tables(page(BOARD))
-    assert list(tables) == [f"`{task}`, {track} track" for task, track in groups(entries)]
+    assert list(tables) == [
+        f"`{task}`, {track} track, split {split}" for task, track, split in groups(entries)
+    ]
     for head, rows in tables.items():
         ranks = [r[0] for r in rows]
         n = ranks.count("reported")

@@ -243,3 +243,15 @@ def test_a_methods_version_and_link_are_checked_before_anything_runs():
         evaluate("finger7-v1", {"m": _ridge()}, about={"x": {"version": "1"}})
     with pytest.raises(ConfigError, match="valid: a mapping with 'version' and 'link'"):
         evaluate("finger7-v1", {"m": _ridge()}, about={"m": {"commit": "1"}})
+
+
+def test_the_closed_track_example_is_a_method_on_the_tasks_encoding():
+    import runpy
+
+    from sim_tactile.tasks import TASK_ENCODER
+    from sim_tactile.tasks.methods import as_method
+
+    make = runpy.run_path(str(ROOT / "examples" / "closed_track.py"))["spike_features_logreg"]
+    m = as_method("logreg", make())
+    assert m.encoder is TASK_ENCODER and m.encoder_kind == "task"
+    assert m.describe().startswith("the task's encoder -> Pipeline")

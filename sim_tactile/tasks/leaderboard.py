@@ -5,7 +5,8 @@ A table ranks its entries by mean accuracy (then by the lower end of the interva
 95% interval, the SD and the repeats, the efficiency figures (time to fit and to predict per
 repeat; for spiking rows NeuroBench's parameters, synaptic operations and activation
 sparsity), the method's version and the package version, commit and machine that made the
-entry. The papers' numbers (``reported`` entries) head their task's closed table, unranked:
+entry. Only rows of one split are ranked together (a table per split where a task's rows
+differ in it). The papers' numbers (``reported`` entries) head their task's closed table, unranked:
 they were measured on the papers' own hardware, not re-run here. An entry is a full run
 (``--quick`` files are refused: their protocol is a smoke test's).
 """
@@ -144,16 +145,18 @@ def table(entries: list[Entry]) -> list[str]:
     return markdown_table(HEAD, rows)
 
 
-def groups(entries: list[Entry]) -> dict[tuple[str, str], list[Entry]]:
-    """Entries by (task, track), in the order of the families, versions and tracks."""
-    out: dict[tuple[str, str], list[Entry]] = {}
+def groups(entries: list[Entry]) -> dict[tuple[str, str, str], list[Entry]]:
+    """Entries by (task, track, split): only rows of one split compare (roughness8-v1's
+    rows split 5:5, 7:3 and 9:1), in the registry's order of the tasks, closed first."""
+    out: dict[tuple[str, str, str], list[Entry]] = {}
     for e in entries:
-        out.setdefault((e.config["task"], e.config["track"]), []).append(e)
+        key = (e.config["task"], e.config["track"], str(e.config["protocol"]["split"]))
+        out.setdefault(key, []).append(e)
 
     order = {t: i for i, t in enumerate(task_ids())}
 
     def key(k):
-        return (order.get(k[0], len(order)), k[1] != "closed")
+        return (order.get(k[0], len(order)), k[1] != "closed", k[2])
 
     return {k: out[k] for k in sorted(out, key=key)}
 
@@ -173,18 +176,19 @@ def page(folder: str | Path) -> str:
         "interval is the percentile bootstrap of that mean. The papers' numbers head their "
         "tables as *reported*: measured on the papers' hardware, not re-run here. The times "
         "are the mean seconds per repeat to fit and to predict, on the machine each row "
-        "names; NeuroBench's figures are the spiking rows'. To add an entry, see "
+        "names; NeuroBench's figures are the spiking rows'. Only rows of one split are "
+        "ranked together. To add an entry, see "
         "[submit a result](../how-to/submit-a-result.md).",
         "",
     ]
-    for (task, track), group in groups(entries).items():
+    for (task, track, split), group in groups(entries).items():
         spec = get_task(task)
         notes = []
         if task in core:
             notes.append("in the suite core-v1")
         if latest(task) != task:
             notes.append(f"superseded by `{latest(task)}`")
-        lines += [f"## `{task}`, {track} track", ""]
+        lines += [f"## `{task}`, {track} track, split {split}", ""]
         lines += [f"{spec.title}" + (f" ({'; '.join(notes)})" if notes else "") + ".", ""]
         lines += table(group)
         lines.append("")
