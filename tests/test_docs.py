@@ -162,7 +162,10 @@ def test_no_page_outside_the_results_names_a_commit():
 
 
 def test_each_results_table_says_its_command_machine_and_commit_once_above_it():
-    pages = sorted(RESULTS.glob("*.md"))
+    # (the leaderboard's page is generated: each of its rows names its own commit and machine)
+    pages = sorted(
+        p for p in RESULTS.glob("*.md") if not any(p.is_relative_to(g) for g in GENERATED)
+    )
     assert len(pages) >= 5
     assert [f for p in pages for f in history_in_results_page(p)] == []
 

@@ -100,6 +100,21 @@ def test_evaluate_writes_one_file_per_method_and_each_passes_check(tones):
     assert m["accuracy_ci95"][0] <= m["accuracy"] <= m["accuracy_ci95"][1]
     # Hugging Face's leaderboards read results[task][metric] as a number
     assert isinstance(m["accuracy"], float)
+    # a spiking row carries NeuroBench's figures (here the encoder's spike rate), the raw not
+    spike = _doc(tones, "svm-spike")["results"][TASK]["neurobench"]
+    assert spike["encoder"]["spikes_per_s"] > 0
+    assert "neurobench" not in _doc(tones, "svm-raw")["results"][TASK]
+    from sim_tactile.tasks.leaderboard import neurobench_text
+
+    assert neurobench_text({"neurobench": spike}).startswith("encoder ")
+    snn = {
+        "parameter_count": 768,
+        "activation_sparsity": 0.9,
+        "synaptic_operations": {"effective_acs": 1.5e4},
+    }
+    assert neurobench_text({"neurobench": snn}) == (
+        "768 parameters, 1.5e+04 ACs/sample, activation sparsity 0.900"
+    )
 
 
 def test_the_tracks_follow_what_is_the_methods_own(tones):

@@ -81,18 +81,21 @@ def _seconds(m: dict, name: str) -> str:
     return "-" if v is None else f"{v:.3g}"
 
 
-def _neurobench(m: dict) -> str:
+def neurobench_text(m: dict) -> str:
+    """A row's NeuroBench figures in a cell: the spiking model's parameters, effective
+    accumulates per sample and activation sparsity, and the encoder's spikes per second."""
     nb = m.get("neurobench") or {}
-    if not nb.get("parameter_count"):
-        return "-"
     ops = nb.get("synaptic_operations") or {}
-    acs = ops.get("effective_acs")
-    sparsity = nb.get("activation_sparsity")
-    return (
-        f"{nb['parameter_count']} params, "
-        + ("" if acs is None else f"{acs:.3g} ACs/sample, ")
-        + ("" if sparsity is None else f"sparsity {sparsity:.3f}")
-    )
+    parts = []
+    if nb.get("parameter_count") is not None:
+        parts.append(f"{nb['parameter_count']} parameters")
+    if ops.get("effective_acs") is not None:
+        parts.append(f"{ops['effective_acs']:.3g} ACs/sample")
+    if nb.get("activation_sparsity") is not None:
+        parts.append(f"activation sparsity {nb['activation_sparsity']:.3f}")
+    if (nb.get("encoder") or {}).get("spikes_per_s") is not None:
+        parts.append(f"encoder {nb['encoder']['spikes_per_s']:.4g} spikes/s")
+    return ", ".join(parts) or "-"
 
 
 def _row(rank: str, e: Entry) -> list[str]:
@@ -116,7 +119,7 @@ def _row(rank: str, e: Entry) -> list[str]:
         "-" if sd is None else f"{sd:.4f}",
         str(cfg["protocol"].get("repeats", "-")),
         f"{_seconds(m, 'fit_s')} / {_seconds(m, 'predict_s')}",
-        _neurobench(m),
+        neurobench_text(m),
         str(method.get("version") or "-"),
         made,
     ]
