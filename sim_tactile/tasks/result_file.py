@@ -239,12 +239,14 @@ def write_result_files(
     labels,
     out: Path,
     about: dict | None = None,
+    env: dict | None = None,
 ) -> list[str]:
     """One result file per row of ``report`` into ``out/results``; returns their paths.
-    ``about``: method name -> ``{version, link}`` of the user's methods."""
+    ``about``: method name -> ``{version, link}`` of the user's methods; ``env``: the
+    :func:`environment` taken when the run started (its commit is the code that ran)."""
     folder = out / "results"
     folder.mkdir(parents=True, exist_ok=True)
-    env = environment()
+    env = env or environment()
     paths = []
     for row in report.results:
         doc = result_document(

@@ -9,7 +9,6 @@ task, its checked options and its data.
 
 from __future__ import annotations
 
-import platform
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -18,7 +17,6 @@ from pathlib import Path
 
 from sklearn.pipeline import Pipeline
 
-from .. import __version__
 from .._validate import integer
 from ..datasets.fs import no_empty_folders_left, write_faults
 from ..datasets.reader import open_store, parts_of
@@ -39,7 +37,7 @@ from .methods import Method, as_methods, classify_methods, method_row
 from .precompute import Precomputed
 from .registry import DataRequest, Run, TaskSpec, quiet_outdated, use_task, with_calibration
 from .report import Report, ResultRow, compare
-from .result_file import write_result_files
+from .result_file import environment, write_result_files
 from .splits import splits_digest, task_splits
 
 
@@ -254,6 +252,7 @@ def _run_task(
     about,
 ) -> dict:
     t_start = time.perf_counter()
+    env = environment()  # now: the commit of the code that runs, whatever moves meanwhile
     log = log or stderr_log
     if is_config_path(task_id):
         spec, file_seed = config_task(task_id)
@@ -293,7 +292,9 @@ def _run_task(
     )
     report.timing["load_s"] = round(task.load_s, 3)
     if not is_config_path(task_id):
-        report.result_files = write_result_files(spec, report, task.ds.labels, Path(out_dir), about)
+        report.result_files = write_result_files(
+            spec, report, task.ds.labels, Path(out_dir), about, env
+        )
     report.timing["wall_s"] = round(time.perf_counter() - t_start, 2)
     report.write(Path(out_dir))
     return report.to_json()
@@ -358,11 +359,7 @@ def evaluate_task(
         dataset=ds.describe(),
         remarks=list(spec.remarks),
         reference=spec.reference,
-        environment={
-            "sim_tactile": __version__,
-            "python": platform.python_version(),
-            "machine": platform.machine(),
-        },
+        environment=environment(),  # the package version, commit and machine
     )
     if figures:
         report.figures = write_figures(out, spec, ds, encoded, results, [*runs, *methods])
