@@ -7,6 +7,7 @@ from __future__ import annotations
 import copy
 import itertools
 import json
+import re
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -270,3 +271,15 @@ def test_the_closed_track_example_is_a_method_on_the_tasks_encoding():
     m = as_method("logreg", make())
     assert m.encoder is TASK_ENCODER and m.encoder_kind == "task"
     assert m.describe().startswith("the task's encoder -> Pipeline")
+
+
+def test_the_commit_is_this_repositorys_only(monkeypatch, tmp_path):
+    from sim_tactile.tasks import result_file
+
+    if (ROOT / ".git").exists():
+        assert re.match(r"^[0-9a-f]{7,}(-dirty)?$", result_file._commit())
+    # an installed copy inside some other repository (a project's venv) names no commit
+    monkeypatch.setattr(
+        result_file, "_git", lambda *a: str(tmp_path) if "--show-toplevel" in a else "abc"
+    )
+    assert result_file._commit() is None

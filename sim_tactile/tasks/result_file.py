@@ -74,20 +74,24 @@ def slug(text: str) -> str:
     return re.sub(r"[^a-z0-9.+]+", "-", text.lower()).strip("-") or "method"
 
 
-def _commit() -> str | None:
-    """The package's commit (``git describe --always --dirty``) when it runs from a clone."""
+def _git(*args: str) -> str | None:
     here = Path(__file__).resolve().parent
     try:
         out = subprocess.run(
-            ["git", "-C", str(here), "describe", "--always", "--dirty", "--abbrev=10"],
-            capture_output=True,
-            text=True,
-            timeout=10,
-            check=True,
+            ["git", "-C", str(here), *args], capture_output=True, text=True, timeout=10, check=True
         )
     except (OSError, subprocess.SubprocessError):
         return None
     return out.stdout.strip() or None
+
+
+def _commit() -> str | None:
+    """The package's commit (``git describe --always --dirty``) when it runs from a clone of
+    its own repository (not an installed copy inside some other repository)."""
+    top = _git("rev-parse", "--show-toplevel")
+    if top is None or Path(top).resolve() != Path(__file__).resolve().parents[2]:
+        return None
+    return _git("describe", "--always", "--dirty", "--abbrev=10")
 
 
 def _cpu() -> str:
