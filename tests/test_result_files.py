@@ -283,3 +283,30 @@ def test_the_commit_is_this_repositorys_only(monkeypatch, tmp_path):
         result_file, "_git", lambda *a: str(tmp_path) if "--show-toplevel" in a else "abc"
     )
     assert result_file._commit() is None
+
+
+def _paths(node, path=()):
+    """Every key path of a JSON document (a list's first item stands for the list's)."""
+    yield path
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from _paths(v, (*path, k))
+    elif isinstance(node, list) and node:
+        yield from _paths(node[0], (*path, 0))
+
+
+def test_any_field_replaced_by_any_json_value_is_refused_not_a_crash(tones):
+    """Each field of a valid file, in turn, replaced by a value of another JSON type (or an
+    out-of-range number): check returns its refusals (one line each) and never raises."""
+    doc = _doc(tones, "on-task")
+    doc["results"][TASK]["accuracy_repeats"] = doc["results"][TASK]["accuracy_repeats"][:5]
+    doc["config"]["protocol"]["labels"] = doc["config"]["protocol"]["labels"][:3]
+    for path in list(_paths(doc))[1:]:
+        for value in (None, "x", [], {}, -1, 1e308, True):
+            d = copy.deepcopy(doc)
+            node = d
+            for k in path[:-1]:
+                node = node[k]
+            node[path[-1]] = value
+            refusals = check_document(d)
+            assert all(isinstance(r, str) and "\n" not in r for r in refusals), (path, value)

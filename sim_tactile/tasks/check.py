@@ -45,31 +45,33 @@ from .result_file import (
 from .splits import splits_digest, task_splits
 from .versions import split_task_id
 
-#: The keys every ``config`` block has.
-CONFIG_KEYS = (
-    "model_name",
-    "method",
-    "task",
-    "family",
-    "version",
-    "task_sha256",
-    "track",
-    "reported",
-    "protocol",
-    "interval",
-)
-PROTOCOL_KEYS = (
-    "mode",
-    "split",
-    "repeats",
-    "seed",
-    "splits_sha256",
-    "labels_sha256",
-    "labels",
-    "encoding",
-    "encode_once",
-)
-METHOD_KEYS = ("name", "version", "builtin", "encoder")
+#: The keys every ``config`` block has, with their JSON types (``version``: null for an
+#: id of no version).
+CONFIG_KEYS = {
+    "model_name": str,
+    "method": Mapping,
+    "task": str,
+    "family": str,
+    "version": (int, type(None)),
+    "task_sha256": str,
+    "track": str,
+    "reported": bool,
+    "protocol": Mapping,
+    "interval": Mapping,
+}
+PROTOCOL_KEYS = {
+    "mode": str,
+    "split": str,
+    "repeats": int,
+    "seed": int,
+    "splits_sha256": str,
+    "labels_sha256": str,
+    "labels": list,
+    "encoding": str,
+    "encode_once": bool,
+}
+METHOD_KEYS = {"name": str, "version": str, "builtin": bool, "encoder": str}
+_TYPE_NAMES = {str: "a string", int: "a whole number", bool: "true or false", list: "a list"}
 TRACKS = ("closed", "open")
 
 
@@ -109,20 +111,35 @@ def check_document(doc) -> list[str]:
     if cfg["reported"] is not False:
         out.append(f"config.reported = {cfg['reported']!r}; valid: true or false")
     proto = cfg["protocol"]
-    lines = _protocol(spec, cfg)
-    if lines is None:  # incomplete: nothing below can be read
-        return [*out, _incomplete("config.protocol", proto, PROTOCOL_KEYS)]
-    out += lines
+    if (line := _incomplete("config.protocol", proto, PROTOCOL_KEYS)) is not None:
+        return [*out, line]  # nothing below can be read
+    out += _protocol(spec, cfg)
     out += _metrics(spec.id, proto, metrics)
     if cfg["track"] == "closed":
         out += _closed(spec, cfg)
     return out
 
 
-def _incomplete(where: str, block, keys) -> str:
+def _incomplete(where: str, block, keys) -> str | None:
+    """The refusal of a block that lacks a key or holds one of another JSON type (None: the
+    block is whole)."""
     if not isinstance(block, Mapping):
         return f"{where} is not an object: the file is incomplete"
-    return f"{where} lacks {', '.join(k for k in keys if k not in block)}: the file is incomplete"
+    missing = [k for k in keys if k not in block]
+    if missing:
+        return f"{where} lacks {', '.join(missing)}: the file is incomplete"
+    for k, want in keys.items():
+        v = block[k]
+        bad_int = want is int and isinstance(v, bool)  # JSON's true is no number
+        if not isinstance(v, want) or bad_int:
+            name = _TYPE_NAMES.get(want, "an object" if want is Mapping else "a whole number")
+            return f"{where}.{k} = {_short(v)}; valid: {name}"
+    return None
+
+
+def _short(v) -> str:
+    text = json.dumps(v)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _head(doc):
@@ -140,14 +157,15 @@ def _head(doc):
     cfg, res = doc.get("config"), doc.get("results")
     if not isinstance(cfg, Mapping) or not isinstance(res, Mapping):
         return ["a result file has a config and a results block (objects): the file is incomplete"]
-    if any(k not in cfg for k in CONFIG_KEYS):
-        return [_incomplete("config", cfg, CONFIG_KEYS)]
-    method = cfg["method"]
-    if not isinstance(method, Mapping) or any(k not in method for k in METHOD_KEYS):
-        return [_incomplete("config.method", method, METHOD_KEYS)]
-    task = cfg["task"]
+    for where, block, keys in (
+        ("config", cfg, CONFIG_KEYS),
+        ("config.method", cfg.get("method"), METHOD_KEYS),
+    ):
+        if (line := _incomplete(where, block, keys)) is not None:
+            return [line]
+    task, method = cfg["task"], cfg["method"]
     try:
-        spec = get_task(str(task))
+        spec = get_task(task)
     except UnknownNameError as exc:
         return [f"config.task: {exc}"]
     if spec.id != task:
@@ -182,17 +200,15 @@ def _reported(spec: TaskSpec, cfg, metrics) -> list[str]:
     return out
 
 
-def _protocol(spec: TaskSpec, cfg) -> list[str] | None:
-    """The protocol's fixed fields, the repeats and the split digest (None: incomplete)."""
+def _protocol(spec: TaskSpec, cfg) -> list[str]:
+    """The protocol's fixed fields, the repeats and the split digest."""
     p, method = cfg["protocol"], cfg["method"]
-    if not isinstance(p, Mapping) or any(k not in p for k in PROTOCOL_KEYS):
-        return None
     if p["mode"] not in ("full", "quick"):
         return [f"config.protocol.mode = {p['mode']!r}; valid: full or quick"]
     quick = p["mode"] == "quick"
-    run = run_of(spec, str(method["name"])) if method["builtin"] is True else None
+    run = run_of(spec, method["name"]) if method["builtin"] else None
     out = []
-    if method["builtin"] is True and run is None:
+    if method["builtin"] and run is None:
         out.append(
             f"config.method.name = {method['name']!r} is not a row of {spec.id}; its rows: "
             f"{[r.name for r in spec.all_runs()]}"
@@ -212,7 +228,7 @@ def _protocol(spec: TaskSpec, cfg) -> list[str] | None:
             f"config.protocol.encode_once = {p['encode_once']!r}; {spec.id}'s is {spec.encode_once}"
         )
     n = p["repeats"]
-    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
+    if n < 1:
         return [*out, f"config.protocol.repeats = {n!r}; valid: a whole number >= 1"]
     if n < max(intervals.MIN_REPEATS, need):
         out.append(
@@ -228,14 +244,12 @@ def _protocol(spec: TaskSpec, cfg) -> list[str] | None:
 
 def _splits(p, n: int) -> list[str]:
     labels = p["labels"]
-    if not isinstance(labels, list) or not all(
-        isinstance(v, int) and not isinstance(v, bool) for v in labels
-    ):
+    if not all(isinstance(v, int) and not isinstance(v, bool) for v in labels):
         return ["config.protocol.labels: valid: a list of whole numbers (the class of each sample)"]
     if labels_sha256(labels) != p["labels_sha256"]:
         return ["config.protocol.labels_sha256 is not the digest of config.protocol.labels"]
     try:
-        digest = splits_digest(task_splits(np.asarray(labels), str(p["split"]), n, int(p["seed"])))
+        digest = splits_digest(task_splits(np.asarray(labels), p["split"], n, p["seed"]))
     except (ConfigError, TypeError, ValueError) as exc:
         return [f"config.protocol: the splits cannot be drawn again ({exc})"]
     if digest != p["splits_sha256"]:
@@ -252,9 +266,10 @@ def _metrics(task: str, p, metrics) -> list[str]:
     out = []
     if "accuracy" not in metrics:
         out.append(f"results.{task} has no accuracy: the file is incomplete")
-    for name in METRICS:
-        if name in metrics:
-            out += _metric(f"results.{task}.{name}", name, metrics, p["repeats"])
+    with np.errstate(all="ignore"):  # numbers near the float's limits are refused, not warned of
+        for name in METRICS:
+            if name in metrics:
+                out += _metric(f"results.{task}.{name}", name, metrics, p["repeats"])
     return out
 
 
@@ -320,7 +335,7 @@ def _closed(spec: TaskSpec, cfg) -> list[str]:
             f"closed track: config.protocol.encoding = {p['encoding']!r} is not "
             f"{spec.id}'s ({spec.encoding!r})"
         )
-    run = run_of(spec, str(method["name"])) if method["builtin"] is True else None
+    run = run_of(spec, method["name"]) if method["builtin"] else None
     allowed = {TASK_ENCODER}
     if run is not None and reads_recordings(run.classifier):
         allowed = {NO_ENCODER}  # the task's own raw rows (svm-raw, lstm)
