@@ -83,6 +83,7 @@ def _doc(tones, name: str) -> dict:
 
 def test_evaluate_writes_one_file_per_method_and_each_passes_check(tones):
     assert set(tones.files) == {"svm-raw", "svm-spike", "ridge", "own-enc", "on-task"}
+    assert all(_doc(tones, n)["config"]["variant"] is None for n in tones.files)
     for name, path in tones.files.items():
         assert path.parent.name == "results" and path.name.startswith(f"{TASK}--")
         assert check_file(path) == [], name
@@ -187,6 +188,20 @@ def test_a_closed_entry_on_data_of_its_own_is_refused_and_the_open_one_is_not(to
     assert len(refusals) == 1 and "the labels are not formats-tones-v1's" in refusals[0]
     doc["config"]["track"] = "open"
     assert check_document(doc) == []
+
+
+def test_a_calibrated_sensor_is_a_variant_on_the_open_track():
+    from sim_tactile.sensors.calibration import load_calibration
+    from sim_tactile.tasks import get_task
+    from sim_tactile.tasks.registry import with_calibration
+    from sim_tactile.tasks.result_file import task_sha256, track_of, variant_of
+
+    spec = get_task("textures20-biotac19-v2")
+    cal = with_calibration(spec, load_calibration("biotac19"))
+    assert task_sha256(cal) != task_sha256(spec)
+    assert variant_of(cal, spec).startswith("Sensor calibrated (--sensor-config) on 1000 real")
+    assert track_of({"builtin": True, "encoder": "none"}, own_definition=False) == "open"
+    assert track_of({"builtin": True, "encoder": "none"}, own_definition=True) == "closed"
 
 
 def test_a_broken_or_foreign_file_is_one_line(tmp_path, tones):

@@ -4,7 +4,9 @@
     python tools/leaderboard_add.py --reported TASK ...
 
 The first form copies result files written by ``sim-tactile run`` or ``tasks.evaluate``
-(full runs; each is checked first) as ``leaderboard/<task>--<method>.json``. The second
+(full runs; each is checked first) as ``leaderboard/<task>--<method>.json`` (an open-track
+file of a built-in row, on a definition of its own such as a calibrated sensor, as
+``<task>--<method>--open.json``); a file there already is not replaced. The second
 writes the papers' numbers that ``TASK`` registers, as entries marked ``reported`` (not
 re-run), ``leaderboard/<task>--paper-<row>.json``. A contributor's pull request adds one
 file instead (docs/how-to/submit-a-result.md); the maintainers use this for the built-in
@@ -40,7 +42,12 @@ def main() -> int:
             bad += 1
             continue
         cfg = json.loads(path.read_text())["config"]
-        dest = BOARD / f"{cfg['task']}--{slug(cfg['model_name'])}.json"
+        own = "--open" if cfg["method"]["builtin"] and cfg["track"] == "open" else ""
+        dest = BOARD / f"{cfg['task']}--{slug(cfg['model_name'])}{own}.json"
+        if dest.exists() and dest.read_bytes() != path.read_bytes():
+            print(f"{path}: {dest} exists already (remove it first to replace it)", file=sys.stderr)
+            bad += 1
+            continue
         shutil.copyfile(path, dest)
         print(dest)
     for task in args.reported:

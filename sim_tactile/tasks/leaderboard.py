@@ -102,6 +102,8 @@ def _row(rank: str, e: Entry) -> list[str]:
     m, cfg = e.metrics, e.config
     method = cfg["method"]
     name = method["name"] + (f" ([link]({method['link']}))" if method.get("link") else "")
+    if cfg.get("variant"):  # an open entry on a definition of its own: its first clause
+        name += f" ({cfg['variant'].split(':')[0].rstrip('.')})"
     sd = m.get("accuracy_sd")
     if e.reported:
         made = "the paper's hardware (reported, not re-run)"

@@ -227,6 +227,7 @@ def result_document(
             "version": version,
             "task_sha256": task_sha256(spec),
             "track": track_of(method, own),
+            "variant": None if own else variant_of(spec, registered),
             "reported": False,
             "protocol": protocol,
             "interval": dict(INTERVAL),
@@ -235,6 +236,13 @@ def result_document(
         },
         "results": {spec.id: metrics},
     }
+
+
+def variant_of(spec: TaskSpec, registered: TaskSpec) -> str:
+    """How a run's definition differs from its registered task's: the remarks it adds (a
+    calibrated sensor says so in one), else that the definition differs."""
+    added = [r for r in spec.remarks if r not in registered.remarks]
+    return " ".join(added) or f"another definition of {spec.id} than the registered one"
 
 
 def write_result_files(
@@ -329,6 +337,7 @@ def reported_documents(task_id: str) -> list[dict]:
                     "version": version,
                     "task_sha256": task_sha256(spec),
                     "track": "closed",
+                    "variant": None,
                     "reported": True,
                     "protocol": {
                         "mode": "full",
