@@ -1,5 +1,7 @@
 """Pages of the manual generated from the code at build time (``docs/conf.py`` calls them):
-the API reference and one page per benchmark task, from the task registry.
+the API reference (one page per module, and one per public package listing its ``__all__``),
+one page per benchmark task, from the task registry, and the leaderboard's page, from the
+result files in ``leaderboard/`` at the repository's root.
 
 The API reference is curated by the code: one page per public entry point
 (:data:`ENTRY_POINTS`), a paragraph on what it is for (its docstring) and then the names of
@@ -336,17 +338,43 @@ def _write(path: Path, text: str) -> None:
         path.write_text(text)
 
 
+def version_history(task_id: str) -> list[str]:
+    """The "Version history" section of a task's page: every version of its family, oldest
+    first, with what it changed (``TaskSpec.history``) and what superseded it."""
+    from sim_tactile.tasks import get_task
+    from sim_tactile.tasks.registry import family_versions, successor
+
+    lines = ["", "## Version history", ""]
+    for v in family_versions(task_id):
+        name = f"`{v}` (this page)" if v == task_id else f"[`{v}`]({v}.md)"
+        newer = successor(v)
+        state = f"superseded by [`{newer}`]({newer}.md)" if newer else "current"
+        lines.append(f"- {name}, {state}:")
+        lines += [f"  {h}" for h in get_task(v).history] or ["  (no entry)"]
+    return lines
+
+
 def task_page(task_id: str) -> str:
-    """A task's page: its summary, remarks, paper cells, the ablate parameters it uses and
-    its whole pinned definition, from the registry."""
+    """A task's page: its summary, remarks, paper cells, tracks, version history, the ablate
+    parameters it uses and its whole pinned definition, from the registry."""
     import json
 
     from sim_tactile.cli.tasks import about, task_summary
     from sim_tactile.tasks import get_task
     from sim_tactile.tasks.ablate import PARAM_HELP, used_params
+    from sim_tactile.tasks.registry import latest, suite
 
     spec, s = get_task(task_id), task_summary(task_id)
     lines = [f"# `{task_id}`", "", spec.title, ""]
+    if latest(task_id) != task_id:
+        new = latest(task_id)
+        lines += [
+            ":::{warning}",
+            f"Superseded by [`{new}`]({new}.md): `{task_id}` still runs as released, and "
+            "warns once that it is out of date.",
+            ":::",
+            "",
+        ]
     lines += [
         f"- paper: {spec.reference}",
         f"- sensor: `{s['sensor']}`; classes: {s['classes']}; slides: {s['slides']} "
@@ -362,6 +390,14 @@ def task_page(task_id: str) -> str:
         lines.append(f"- parts: {', '.join(f'`{p}`' for p in spec.parts)}")
     if s["aliases"]:
         lines.append(f"- also known as: {', '.join(f'`{a}`' for a in s['aliases'])}")
+    if task_id in suite("core-v1"):
+        lines.append("- in the suite `core-v1` (`sim-tactile tasks --suite core-v1`)")
+    if not spec.parts:
+        lines.append(
+            "- tracks: *closed* (this task's data, encoder and protocol; only the classifier "
+            "is yours) and *open* (anything else); see [the leaderboard](../../results/"
+            "leaderboard.md)"
+        )
     if spec.remarks:
         lines += ["", "## Remarks", ""] + [f"- {r}" for r in spec.remarks]
     if spec.paper:
@@ -370,6 +406,7 @@ def task_page(task_id: str) -> str:
             f"- `{k}`: {c.mean}" + (f" ({c.std})" if c.std is not None else "") + f", {c.source}"
             for k, c in spec.paper.items()
         ]
+    lines += version_history(task_id)
     used = [p for p in PARAM_HELP if p in used_params(spec)]
     lines += ["", "## Ablation parameters", ""]
     lines += (
@@ -384,22 +421,38 @@ def write_tasks(out_dir: Path) -> list[str]:
     """Write ``out_dir/<task>.md`` for every registered task and an index."""
     from sim_tactile.cli.tasks import about, task_summary
     from sim_tactile.tasks import task_ids
+    from sim_tactile.tasks.registry import suite
 
     out_dir.mkdir(parents=True, exist_ok=True)
     ids = list(task_ids())
     for t in ids:
         _write(out_dir / f"{t}.md", task_page(t))
     rows = [task_summary(t) for t in ids]
+    core = ", ".join(f"[`{t}`]({t}.md)" for t in suite("core-v1"))
     index = ["# The tasks", "", "Generated from the task registry (`sim-tactile tasks`).", ""]
     index += [
-        "| task | paper | sensor | classes | slides | needs | quick |",
-        "|---|---|---|---|---|---|---|",
+        f"The suite **core-v1** lists the ids a paper should report: {core} "
+        "(`sim-tactile tasks --suite core-v1`). A superseded id still runs as released and "
+        "warns once, naming the id that supersedes it.",
+        "",
+        "| task | paper | sensor | classes | slides | needs | quick | status |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     index += [
         f"| [`{r['id']}`]({r['id']}.md) | {r['paper']} | `{r['sensor']}` | {r['classes']} "
-        f"| {r['slides']} | {', '.join(r['needs']) or '-'} | {about(r['quick_s'])} |"
+        f"| {r['slides']} | {', '.join(r['needs']) or '-'} | {about(r['quick_s'])} | "
+        + (f"superseded by `{r['superseded_by']}`" if r["superseded_by"] else "current")
+        + " |"
         for r in rows
     ]
     index += ["", "```{toctree}", ":hidden:", "", *ids, "```", ""]
     _write(out_dir / "index.md", "\n".join(index))
     return ids
+
+
+def write_leaderboard(folder: Path, page: Path) -> None:
+    """Write the leaderboard's page from the result files in ``folder`` (each checked: a
+    refused entry fails the build)."""
+    from sim_tactile.tasks.leaderboard import page as leaderboard_page
+
+    _write(page, leaderboard_page(folder))

@@ -90,6 +90,7 @@ def _generate(app) -> None:
     with mock(app.config.autodoc_mock_imports):  # as autodoc imports the modules
         _gen.write_api(HERE / "reference" / "api")
         _gen.write_tasks(HERE / "reference" / "tasks")
+    _gen.write_leaderboard(HERE.parent / "leaderboard", HERE / "results" / "leaderboard.md")
 
 
 def _skip(app, what, name, obj, skip, options):

@@ -36,8 +36,9 @@ def tone_slide(job):
 
 
 @contextlib.contextmanager
-def tones_task(classifiers=("svm-raw",), snn=None):
-    """Register the task (removed again afterwards); ``snn``: the snn row's parameters."""
+def tones_task(classifiers=("svm-raw",), snn=None, repeats=1):
+    """Register the task (removed again afterwards); ``snn``: the snn row's parameters;
+    ``repeats``: the quick protocol's."""
     from sim_tactile.encoders.encodings import threshold_encoding
     from sim_tactile.sim.plan.protocol import Protocol
     from sim_tactile.slides import SlideSet
@@ -57,7 +58,7 @@ def tones_task(classifiers=("svm-raw",), snn=None):
         ),
         classifiers=tuple(classifiers),
         split="8/4",
-        quick=Settings(repeats=1, split="8/4", params=params),
+        quick=Settings(repeats=repeats, split="8/4", params=params),
         encoder=threshold_encoding,
     )
     register(spec)

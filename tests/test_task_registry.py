@@ -107,3 +107,99 @@ def test_every_simulated_task_is_deterministic(task_id, cache):
     assert a.data.tobytes() == b.data.tobytes()
     assert a.meta["normal_force_n"] == b.meta["normal_force_n"]
     assert a.data.any()
+
+
+# -- versions: successors, history, suites and the error of an unknown id ---------------------
+
+
+@pytest.fixture
+def warned(monkeypatch):
+    """The set of ids warned of this process, empty for the test."""
+    import sim_tactile.tasks.registry as reg
+
+    monkeypatch.setattr(reg, "_WARNED", set())
+    return reg._WARNED
+
+
+def test_each_v2_supersedes_its_v1_and_core_v1_lists_current_ids():
+    from sim_tactile.tasks.registry import latest, successor, suite
+
+    for old, new in (
+        ("finger7-v1", "finger7-v2"),
+        ("multilayer3-v1", "multilayer3-v2"),
+        ("textures20-v1", "textures20-v2"),
+        ("textures20-biotac19-v1", "textures20-biotac19-v2"),
+        ("textures20-icub60-v1", "textures20-icub60-v2"),
+    ):
+        assert successor(old) == new and latest(old) == new and get_task(new).supersedes == old
+    core = suite("core-v1")
+    assert all(latest(t) == t and not get_task(t).parts for t in core)
+    families = {t.rsplit("-v", 1)[0] for t in task_ids() if not get_task(t).parts}
+    assert {t.rsplit("-v", 1)[0] for t in core} == families  # one current id of each
+
+
+def test_a_superseded_id_warns_once_naming_its_successor(warned):
+    from sim_tactile.tasks.registry import OutdatedTaskWarning, use_task
+
+    with pytest.warns(OutdatedTaskWarning, match="textures20-biotac19-v2 supersedes it") as rec:
+        use_task("textures20-biotac19-v1")
+        use_task("textures20-biotac19-v1")
+        use_task("textures20-biotac19-v2")  # current: no warning
+    assert len(rec) == 1 and "still runs as released" in str(rec[0].message)
+
+
+def test_every_version_has_its_own_history_and_one_successor():
+    v1 = get_task("finger7-v1")
+    assert v1.history and v1.history != get_task("finger7-v2").history
+    with pytest.raises(ConfigError, match="its history is finger7-v1's"):
+        register(replace(v1, id="finger7-v3", bench=None))
+    with pytest.raises(ConfigError, match="finger7-v1 is already superseded by finger7-v2"):
+        register(replace(v1, id="finger7-v3", bench=None, history=("x",), supersedes="finger7-v1"))
+    with pytest.raises(ConfigError, match="valid: a registered older version of the family"):
+        register(
+            replace(v1, id="finger7-v3", bench=None, history=("x",), supersedes="roughness8-v1")
+        )
+    assert "finger7-v3" not in task_ids()
+
+
+def test_history_and_succession_are_not_the_definition():
+    d = get_task("finger7-v2").describe()
+    assert "history" not in d and "supersedes" not in d
+
+
+@pytest.mark.parametrize(
+    "asked, message",
+    [
+        ("finger7-v9", "the family finger7 has versions v1, v2: finger7-v1, finger7-v2"),
+        ("finger7", "the family finger7 has versions v1, v2"),
+        ("fingr7-v1", "did you mean 'finger7-v1'"),
+        ("zzz", "is not known; valid: finger7-v1"),
+    ],
+)
+def test_an_unknown_id_names_its_family_or_the_closest(asked, message):
+    with pytest.raises(UnknownNameError, match=message):
+        get_task(asked)
+
+
+def test_a_superseded_suite_warns_once_for_itself_and_its_parts(warned, tmp_path):
+    from sim_tactile.tasks import run_task
+    from sim_tactile.tasks.registry import OutdatedTaskWarning
+
+    with pytest.warns(OutdatedTaskWarning) as rec, pytest.raises(ConfigError, match="nothing"):
+        run_task("textures20-v1", tmp_path / "out", quick=True, classifiers="none")
+    assert [str(w.message).split(":")[0] for w in rec] == ["task textures20-v1 is out of date"]
+    assert "textures20-v2 supersedes it" in str(rec[0].message)
+
+
+@pytest.mark.slow
+def test_run_of_a_superseded_id_warns_once_and_names_the_newer_id(cli, tmp_path):
+    """12 BioTac slides of the quick run (a few seconds), the raw SVM only."""
+    out = tmp_path / "out"
+    p = cli(["run", "textures20-biotac19-v1", "--quick", "--classifiers", "svm-raw", "--out", out])
+    lines = [x for x in p.stderr.splitlines() if "out of date" in x]
+    assert lines == [
+        "sim-tactile: warning: task textures20-biotac19-v1 is out of date: "
+        "textures20-biotac19-v2 supersedes it; textures20-biotac19-v1 still runs as released "
+        "(the ids a paper should report: sim-tactile tasks --suite core-v1)"
+    ]
+    assert (out / "report.json").is_file()

@@ -98,6 +98,12 @@ def test_run_finger7_quick_and_rerun_is_exact(tmp_path, cli):
     assert p3.returncode == 0, p3.stderr
     table = p3.stdout
     assert f"{allt['accuracy_mean']:.3f} ({allt['accuracy_std']:.3f})" in table
+    lo, hi = allt["accuracy_ci95"]
+    assert f"[{lo:.3f}, {hi:.3f}]" in table and lo <= allt["accuracy_mean"] <= hi
+    # one result file per row, each valid
+    files = sorted((out1 / "results").glob("finger7-v1--*.json"))
+    assert len(files) == len(doc["results"]) == len(doc["result_files"])
+    assert cli(["check", *files]).stdout.count(": ok") == len(files)
     assert "svm all taxels" in table and "figure:" in table
 
 

@@ -20,6 +20,8 @@ from sim_tactile.errors import ConfigError
 from sim_tactile.spikes import SpikeFeatures
 from sim_tactile.tasks import evaluate, load
 from sim_tactile.tasks.baseline import compare_baseline, load_baseline, save_baseline
+from sim_tactile.tasks.check import check_file
+from sim_tactile.tasks.intervals import interval
 from sim_tactile.tasks.methods import as_method, as_methods, import_method, prepared
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -161,6 +163,29 @@ def test_the_baseline_passes_within_the_tolerance_and_fails_below_or_missing(tmp
         compare_baseline(base, base, -0.1, "b")
 
 
+def test_the_baseline_compares_with_the_lower_end_of_its_interval(tmp_path):
+    """A row may fall below its baseline's mean by more than the tolerance and pass, as long
+    as it stays within the tolerance of the baseline's 95% interval (its repeats' spread)."""
+    reps = [0.8, 0.85, 0.9, 0.95, 1.0, 0.9]
+    base = _report(rows=(("a", 0.9),))
+    base["results"][0]["accuracies"] = reps
+    lo = interval(reps)[0]
+    assert lo < 0.9 - 0.01  # the interval is wider than the tolerance here
+    ok = compare_baseline(_report(rows=(("a", lo - 0.02 + 0.001),)), base, 0.02, "b")
+    assert not ok.failed and ok.rows[0]["baseline_ci95"] == list(interval(reps))
+    below = compare_baseline(_report(rows=(("a", lo - 0.02 - 0.001),)), base, 0.02, "b")
+    assert below.failed and "its 95% interval" in below.table()[1]
+    # a saved baseline keeps the interval (and compares the same without the repeats)
+    saved = json.loads(
+        save_baseline(
+            {**base, "results": [{**base["results"][0], "accuracy_ci95": list(interval(reps))}]},
+            tmp_path / "b.json",
+        ).read_text()
+    )
+    assert "accuracies" not in saved["results"][0]
+    assert not compare_baseline(_report(rows=(("a", lo - 0.019),)), saved, 0.02, "b").failed
+
+
 # -- on the tasks -------------------------------------------------------------------------------
 
 
@@ -208,6 +233,11 @@ def test_loaded_splits_are_repeatable_and_the_ones_the_builtin_run_used(shared_c
         != load("finger7-v1", quick=True, seed=1).protocol.digest()
     )
     assert (tmp_path / "r" / "report.json").is_file()
+    # a result file of the user's estimator: it passes check (the open track: its own features)
+    (path,) = [p for p in rep["result_files"] if p.endswith("--r.json")]
+    assert (
+        check_file(path) == [] and json.loads(Path(path).read_text())["config"]["track"] == "open"
+    )
     with pytest.raises(ConfigError, match="is a suite of"):
         load("textures20-v1")
 
@@ -237,6 +267,7 @@ def test_run_with_methods_and_the_ci_mode(tmp_path, cli):
     raised = json.loads(base.read_text())
     for r in raised["results"]:
         r["accuracy_mean"] = min(1.0, r["accuracy_mean"] + 0.05)
+        r["accuracy_ci95"] = [min(1.0, v + 0.05) for v in r["accuracy_ci95"]]
     (tmp_path / "raised.json").write_text(json.dumps(raised))
     p = run(tmp_path / "c", "--baseline", tmp_path / "raised.json", "--json", check=False)
     assert p.returncode == 1 and "FAILED" in p.stderr and "below" in p.stderr

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from .. import __version__
 from ..errors import SimTactileError, Terminated, os_error_message
 from ..interrupts import handled, interrupt_of
-from . import bench, data, plates, sim, tasks
+from . import bench, check, data, plates, sim, tasks
 from ._common import compile_notice, log
 
 DESCRIPTION = (
@@ -54,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="Show the traceback of an error instead of its one-line reason.",
     )
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for group in (tasks, plates, sim, data, bench):
+    for group in (tasks, check, plates, sim, data, bench):
         group.add_parsers(sub)
     _sentence_help(p)
     return p

@@ -67,6 +67,7 @@ def task_summary(task_id: str) -> dict:
     from ..slides import SlideSet
     from ..tasks import get_task
     from ..tasks.needs import task_needs
+    from ..tasks.registry import successor
 
     spec = get_task(task_id)
     paper, number = paper_of(spec.reference)
@@ -97,6 +98,7 @@ def task_summary(task_id: str) -> dict:
         "needs": task_needs(spec),
         "quick_s": quick_wall_s(spec),
         "aliases": spec.describe()["aliases"],
+        "superseded_by": successor(spec.id),
     }
 
 
@@ -123,10 +125,13 @@ def _short(text: str, n: int) -> str:
 
 
 def cmd_tasks(args: argparse.Namespace) -> int:
-    """List the registered benchmark tasks, one line each."""
+    """List the registered benchmark tasks, one line each (``--suite``: a suite's; with
+    ``--json`` each says which id supersedes it, ``superseded_by``)."""
     from ..tasks import task_ids
+    from ..tasks.registry import suite
 
-    rows = [task_summary(t) for t in task_ids()]
+    ids = suite(args.suite) if args.suite else task_ids()
+    rows = [task_summary(t) for t in ids]
     head = ["id", "paper", "sensor", "classes", "slides", "needs", "quick"]
     table = [
         [
@@ -151,10 +156,30 @@ def cmd_tasks(args: argparse.Namespace) -> int:
     return 0
 
 
+def about_arg(values: list[str] | None, methods: dict) -> dict | None:
+    """``--about NAME=VERSION[,LINK]`` as ``{name: {version, link}}`` (each name a method's)."""
+    if not values:
+        return None
+    out = {}
+    for v in values:
+        name, eq, rest = v.partition("=")
+        version, _, link = rest.partition(",")
+        if not eq or not name or not version.strip():
+            raise ConfigError(
+                f"--about {v!r} is not valid; valid: NAME=VERSION or NAME=VERSION,LINK"
+            )
+        if name not in methods:
+            raise ConfigError(
+                f"--about {v!r}: {name!r} is not a --method; valid: {', '.join(methods) or '(none)'}"
+            )
+        out[name] = {"version": version.strip(), **({"link": link.strip()} if link.strip() else {})}
+    return out
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     """Run a benchmark task's protocol and write its report; with ``--method``, the user's
-    methods beside the built-in rows; with ``--baseline``, exit 1 when a row falls below the
-    saved report by more than ``--tolerance`` or is missing."""
+    methods beside the built-in rows; with ``--baseline``, exit 1 when a row falls below its
+    saved row's 95% interval by more than ``--tolerance`` or is missing."""
     from ..tasks import run_task
     from ..tasks.baseline import check_tolerance, compare_baseline, load_baseline, save_baseline
     from ..tasks.config_task import config_task, is_config_path
@@ -169,6 +194,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         if m.name in methods:
             raise ConfigError(f"--method names {m.name!r} twice")
         methods[m.name] = m
+    about = about_arg(args.about, methods)
     base = None
     if args.baseline is not None:
         task_id = args.task
@@ -181,6 +207,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         sensor_config=args.sensor_config,
         methods=methods or None,
         export_nir=args.export_nir,
+        about=about,
         # a configuration file's own seed unless --seed is given (as generate takes it)
         **(_task_options(args) | {"seed": args.seed}),
     )
@@ -254,17 +281,24 @@ def _set_help() -> str:
 
 
 def add_parsers(sub) -> None:
-    add_command(
+    tk = add_command(
         sub,
         "tasks",
         cmd_tasks,
         "List the registered benchmark tasks, one line each: id, paper, sensor, classes, slides.",
     )
+    tk.add_argument(
+        "--suite",
+        default=None,
+        metavar="NAME",
+        help="Only the tasks of a named suite: core-v1 lists the ids a paper should report.",
+    )
     rn = add_command(
         sub,
         "run",
         cmd_run,
-        "Run a benchmark task's evaluation protocol and write its report and figures.",
+        "Run a benchmark task's evaluation protocol and write its report, its figures and "
+        "one result file per row (OUT/results/, for 'sim-tactile check').",
         compiles=True,
     )
     add_sensor_config(rn)
@@ -286,17 +320,24 @@ def add_parsers(sub) -> None:
         "which runs its code.",
     )
     rn.add_argument(
+        "--about",
+        action="append",
+        metavar="NAME=VERSION[,LINK]",
+        help="The version (or commit) and a link of a --method, for its result file; repeat "
+        "it for several.",
+    )
+    rn.add_argument(
         "--baseline",
         default=None,
         metavar="REPORT.json",
-        help="Compare the rows with a saved report, and exit 1 when one falls below it by "
-        "more than --tolerance or is missing.",
+        help="Compare the rows with a saved report, and exit 1 when one falls below the "
+        "lower end of its baseline row's 95%% interval by more than --tolerance, or is missing.",
     )
     rn.add_argument(
         "--tolerance",
         type=float,
         default=0.02,
-        help="How far a row's accuracy may fall below the baseline (default 0.02).",
+        help="How far a row's accuracy may fall below its baseline's interval (default 0.02).",
     )
     rn.add_argument(
         "--save-baseline",

@@ -32,7 +32,8 @@ from ..encoders.neurons import izhikevich_preset
 from ..encoders.scaling import RangeScaler
 from ..errors import ConfigError
 from ..tables import markdown_table
-from .registry import Run, TaskSpec, get_task
+from .intervals import interval_text
+from .registry import Run, TaskSpec, use_task
 from .runner import evaluate_task, load_task, stderr_log, task_runs
 
 #: What each ablation parameter (``--set NAME=v1,v2``) changes, with its unit and range.
@@ -212,9 +213,9 @@ def ablate(
 ) -> dict:
     """Sweep the grid ``sets`` (name -> values) over the task's data (or the data set in
     ``store``); returns ``{task, rows: [{params, classifier, label, accuracy_mean,
-    accuracy_std}], figures}``."""
+    accuracy_std, accuracy_ci95}], figures}``."""
     log = log or stderr_log
-    spec = get_task(task_id)
+    spec = use_task(task_id)
     if spec.parts:
         raise ConfigError(
             f"task {task_id} is made of parts; ablate one of them: {', '.join(spec.parts)}"
@@ -270,6 +271,7 @@ def ablate(
                     "label": r.label,
                     "accuracy_mean": r.accuracy_mean,
                     "accuracy_std": r.accuracy_std,
+                    "accuracy_ci95": r.accuracy_ci95,
                     "repeats": r.repeats,
                     "warnings": notes,
                 }
@@ -296,12 +298,14 @@ def ablate(
 
 
 def ablation_rows(report: dict) -> tuple[list[str], list[list[str]]]:
-    """The ablation's table: the swept parameters, the run, its accuracy and repeats."""
+    """The ablation's table: the swept parameters, the run, its accuracy (mean, SD and 95%
+    interval) and repeats."""
     keys = list(report["sets"])
-    head = [*keys, "run", "accuracy (SD)", "repeats"]
+    head = [*keys, "run", "accuracy (SD)", "95% interval", "repeats"]
     rows = [
         [*(str(r["params"][k]) for k in keys), r["label"]]
-        + [f"{r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f})", str(r["repeats"])]
+        + [f"{r['accuracy_mean']:.3f} ({r['accuracy_std']:.3f})"]
+        + [interval_text(r.get("accuracy_ci95")), str(r["repeats"])]
         for r in report["rows"]
     ]
     return head, rows

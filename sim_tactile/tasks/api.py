@@ -21,7 +21,7 @@ import numpy as np
 from .._validate import integer
 from ..errors import ConfigError
 from ..records import TactileDataset
-from .registry import get_task
+from .registry import use_task
 from .runner import load_task, run_task
 from .splits import splits_digest, task_splits
 
@@ -104,7 +104,7 @@ def load(
     reads them from the slide cache; ``data``: the real data set's folder for ``*-real``
     tasks; ``store``: a store made by ``sim-tactile generate``). ``seed`` seeds the splits as
     ``run --seed`` does."""
-    spec = get_task(task_id)
+    spec = use_task(task_id)
     if spec.parts:
         raise ConfigError(f"task {task_id} is a suite of {', '.join(spec.parts)}; load one of them")
     seed = integer("seed", seed, 0, None)
@@ -157,6 +157,7 @@ def evaluate(
     store: str | Path | None = None,
     classifiers: str | list[str] | None = None,
     log: Callable[[str], None] | None = None,
+    about: Mapping[str, Mapping[str, str]] | None = None,
 ) -> dict:
     """Score ``methods`` (name -> an estimator on the raw ``(samples, time, channels)``
     array, or an ``(encoder, estimator)`` pair: :mod:`.methods`) on ``task_id`` under its
@@ -165,16 +166,43 @@ def evaluate(
     figures are written there, as ``run --out`` writes them; without, into a temporary
     folder that is removed. ``seed``: the splits' and models' seed; None, as ``run``
     without ``--seed``: a configuration file's own seed (which its slides and store were
-    made with), else 0."""
+    made with), else 0.
+
+    With ``out``, each row's result file (:mod:`.result_file`; ``report["result_files"]``)
+    is written into ``out/results``, for ``sim-tactile check`` and the leaderboard;
+    ``about`` gives a method's ``version`` (or commit) and ``link`` for its file, by name.
+    A method ``("task", estimator)`` (:data:`~.methods.TASK_ENCODER`) reads the task's own
+    encoding: its file stands in the closed track."""
     if not methods:
         raise ConfigError("methods is empty; give name -> estimator or (encoder, estimator)")
     import tempfile
 
     kw = dict(quick=quick, data=data, classifiers=classifiers, repeats=repeats, seed=seed)
-    kw.update(log=log or _quiet, store=store, methods=methods)
+    kw.update(log=log or _quiet, store=store, methods=methods, about=_about(about, methods))
     if out is not None:
         return run_task(task_id, out, **kw)
     with tempfile.TemporaryDirectory(prefix="sim-tactile-evaluate-") as tmp:
         report = run_task(task_id, Path(tmp) / "report", **kw)
         report["figures"] = []  # they were in the removed folder
+        report["result_files"] = []
         return report
+
+
+def _about(about, methods) -> dict | None:
+    """``about`` checked: method name -> ``{version, link}`` (strings)."""
+    if about is None:
+        return None
+    if not isinstance(about, Mapping):
+        raise ConfigError(f"about must map a method's name to {{version, link}}, got {about!r}")
+    out = {}
+    for name, info in about.items():
+        if name not in methods:
+            raise ConfigError(
+                f"about names {name!r}, which is not a method; valid: {list(methods)}"
+            )
+        if not isinstance(info, Mapping) or set(info) - {"version", "link"}:
+            raise ConfigError(
+                f"about[{name!r}] = {info!r}; valid: a mapping with 'version' and 'link'"
+            )
+        out[name] = {k: str(v) for k, v in info.items() if v is not None}
+    return out

@@ -4,9 +4,11 @@
 serves as well);
 ``--baseline PATH [--tolerance 0.02]`` compares this run's rows with it. A row is the same
 row when its task, label, classifier and features agree (a user's method: its name). The run
-fails (exit 1) when a row's mean accuracy falls below its baseline by more than the
-tolerance, or when a baseline row is missing from the run; rows the baseline does not have
-are listed as new and do not fail it. A baseline of another task or of the other mode (quick
+fails (exit 1) when a row's mean accuracy falls below the lower end of its baseline's 95%
+interval (:mod:`.intervals`, from the baseline's repeats) by more than the tolerance, or when
+a baseline row is missing from the run; a baseline row without an interval (fewer than
+:data:`~.intervals.MIN_REPEATS` repeats) is compared by its mean. Rows the baseline does not
+have are listed as new and do not fail it. A baseline of another task or of the other mode (quick
 or full) is refused before anything runs.
 """
 
@@ -19,6 +21,7 @@ from pathlib import Path
 
 from ..errors import ConfigError
 from ..tables import text_table
+from .intervals import interval_list, interval_text
 
 #: The default tolerance [accuracy] of ``--tolerance``.
 TOLERANCE = 0.02
@@ -97,22 +100,29 @@ class BaselineCheck:
         }
 
     def table(self) -> list[str]:
-        head = ["row", "baseline", "now", "change", "status"]
+        head = ["row", "baseline", "its 95% interval", "now", "change", "status"]
 
         def f(v):
             return "-" if v is None else f"{v:.4f}"
 
         rows = [
-            [r["label"], f(r["baseline"]), f(r["now"]), f(r["change"]), r["status"]]
+            [
+                r["label"],
+                f(r["baseline"]),
+                interval_text(r["baseline_ci95"], 4),
+                f(r["now"]),
+                f(r["change"]),
+                r["status"],
+            ]
             for r in self.rows
         ]
         verdict = (
             f"FAILED: {sum(r['status'] in ('below', 'missing') for r in self.rows)} row(s) "
-            f"below the baseline by more than {self.tolerance:g}, or missing"
+            f"below the baseline's interval by more than {self.tolerance:g}, or missing"
             if self.failed
-            else f"passed: no row below the baseline by more than {self.tolerance:g}"
+            else f"passed: no row below the baseline's interval by more than {self.tolerance:g}"
         )
-        return [f"against {self.baseline}:", *text_table(head, rows, right=(1, 2, 3)), verdict]
+        return [f"against {self.baseline}:", *text_table(head, rows, right=(1, 3, 4)), verdict]
 
 
 def compare_baseline(report: dict, baseline: dict, tolerance: float, name: str) -> BaselineCheck:
@@ -122,20 +132,36 @@ def compare_baseline(report: dict, baseline: dict, tolerance: float, name: str) 
     rows = []
     for key, b in base.items():
         r = now.get(key)
-        bm = float(b["accuracy_mean"])
+        bm, ci = float(b["accuracy_mean"]), baseline_interval(b)
         if r is None:
-            rows.append(_row(key, bm, None, "missing"))
+            rows.append(_row(key, bm, ci, None, "missing"))
             continue
         m = float(r["accuracy_mean"])
-        status = "below" if m < bm - tol - 1e-12 else "ok"
-        rows.append(_row(key, bm, m, status))
+        low = bm if ci is None else min(bm, ci[0])
+        status = "below" if m < low - tol - 1e-12 else "ok"
+        rows.append(_row(key, bm, ci, m, status))
     rows += [
-        _row(k, None, float(r["accuracy_mean"]), "new") for k, r in now.items() if k not in base
+        _row(k, None, None, float(r["accuracy_mean"]), "new")
+        for k, r in now.items()
+        if k not in base
     ]
     return BaselineCheck(rows, tol, name)
 
 
-def _row(key: tuple, base: float | None, now: float | None, status: str) -> dict:
+def baseline_interval(row: dict) -> list[float] | None:
+    """A baseline row's 95% interval: the one it holds, or the one of its repeats (a
+    ``report.json`` of an older version holds the repeats only); None where it has neither
+    (or fewer repeats than an interval needs)."""
+    ci = row.get("accuracy_ci95")
+    if isinstance(ci, list) and len(ci) == 2 and all(isinstance(v, int | float) for v in ci):
+        return [float(ci[0]), float(ci[1])]
+    reps = row.get("accuracies")
+    if isinstance(reps, list) and reps and all(isinstance(v, int | float) for v in reps):
+        return interval_list(reps)
+    return None
+
+
+def _row(key: tuple, base: float | None, ci, now: float | None, status: str) -> dict:
     change = None if base is None or now is None else now - base
     return {
         "task": key[0],
@@ -143,6 +169,7 @@ def _row(key: tuple, base: float | None, now: float | None, status: str) -> dict
         "classifier": key[2],
         "features": key[3],
         "baseline": base,
+        "baseline_ci95": ci,
         "now": now,
         "change": change,
         "status": status,
@@ -156,6 +183,7 @@ BASELINE_ROW_KEYS = (
     "features",
     "accuracy_mean",
     "accuracy_std",
+    "accuracy_ci95",
     "repeats",
     "split",
     "channels",

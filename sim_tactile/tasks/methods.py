@@ -12,7 +12,11 @@ A method is scored under the task's own protocol (:func:`sim_tactile.tasks.evalu
   encodes its recordings once before any split (``TaskSpec.encode_once``: papers 001-003,
   which encoded offline), the encoder is fitted on all samples once and each split fits the
   estimator on its rows, exactly as the built-in rows do; otherwise the pair is one pipeline,
-  fitted per split.
+  fitted per split;
+- a ``(TASK_ENCODER, estimator)`` pair (``("task", estimator)``): the task's own encoder
+  feeds the estimator, as it feeds the built-in spiking rows. Only the classifier is the
+  user's, so its result file stands in the task's *closed* track (an estimator on the raw
+  recordings, or after an encoder of the user's, stands in the *open* one).
 
 Each repeat's estimator gets ``random_state = derive_seed(seed, "model", name, repeat)`` where
 its own is None (the built-in models are seeded the same way), so a run is repeatable; a
@@ -32,23 +36,27 @@ import re
 import sys
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
+from sklearn.pipeline import Pipeline
 
 from ..errors import ConfigError
 from ..hashing import derive_seed
 from ..learn.precomputed import sample_index
 from ..learn.protocols import EvalResult, evaluate
+from .intervals import interval_list
 from .registry import TaskSpec
 from .report import ResultRow
 from .splits import task_splits
 
 #: What a method's name may be: it labels its report row and its baseline key.
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]{0,63}$")
+#: The encoder of a ``(TASK_ENCODER, estimator)`` method: the task's own.
+TASK_ENCODER = "task"
 #: The ``features`` column of a user's row (its baseline key; the method's description is in
 #: the row's ``method``).
 USER_FEATURES = "user method"
@@ -71,7 +79,18 @@ class Method:
 
     def describe(self) -> str:
         est = _short(self.estimator)
-        return est if self.encoder is None else f"{_short(self.encoder)} -> {est}"
+        if self.encoder is None:
+            return est
+        enc = "the task's encoder" if self.encoder is TASK_ENCODER else _short(self.encoder)
+        return f"{enc} -> {est}"
+
+    @property
+    def encoder_kind(self) -> str:
+        """``"task"`` (the task's encoder), ``"none"`` (the recordings) or the user's
+        encoder, described (a result file's ``config.method.encoder``)."""
+        if self.encoder is None:
+            return "none"
+        return TASK_ENCODER if self.encoder is TASK_ENCODER else _short(self.encoder)
 
 
 def _short(obj: Any, limit: int = 300) -> str:
@@ -93,7 +112,10 @@ def as_method(name: str, value: Any) -> Method:
                 f"method {name!r}: a pair is (encoder, estimator), got {len(value)} items"
             )
         encoder, value = value
-        _check(name, "encoder", encoder, ("fit", "transform"))
+        if isinstance(encoder, str) and encoder == TASK_ENCODER:
+            encoder = TASK_ENCODER
+        else:
+            _check(name, "encoder", encoder, ("fit", "transform"))
     _check(name, "estimator", value, ("fit", "predict"))
     return Method(name, value, encoder)
 
@@ -236,7 +258,6 @@ def method_protocol(
 ):
     """What :func:`~sim_tactile.learn.protocols.evaluate` takes for ``method``: ``(X, make,
     times_s, encode_s)``. ``make(repeat)`` builds the repeat's estimator (seeded)."""
-    from sklearn.pipeline import Pipeline
 
     def est(r: int):
         return prepared(method.estimator, derive_seed(seed, "model", method.name, r), rate_hz)
@@ -286,8 +307,11 @@ def classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, see
             f"{spec.id}: {m.name} (your method: {m.describe()}), split {split}, {n_rep[m.name]} repeat(s)"
         )
         t0 = time.perf_counter()
+        run_m = m
+        if m.encoder is TASK_ENCODER:  # the task's own encoder, as its built-in rows have it
+            run_m = replace(m, encoder=Pipeline(spec.encoder(spec.context(ds, quick))))
         x, make, times_s, enc_s = method_protocol(
-            m, ds.data, ds.rate_hz, spec.encode_once, settings.time_points_s, seed
+            run_m, ds.data, ds.rate_hz, spec.encode_once, settings.time_points_s, seed
         )
         enc_total += enc_s
         results[m.name] = _user_call(
@@ -313,13 +337,14 @@ def classify_methods(spec, ds, methods, n_rep, results, wall, splits, quick, see
 
 def method_row(spec: TaskSpec, m: Method, r: EvalResult, wall_s: float, quick: bool) -> ResultRow:
     extra = {k: v for k, v in r.to_json().items() if k not in ("accuracy_mean", "accuracy_std")}
-    extra.update(user_method=True, method=m.describe())
+    extra.update(user_method=True, method=m.describe(), encoder=m.encoder_kind)
     return ResultRow(
         classifier=m.name,
         label=m.name,
         features=USER_FEATURES,
         accuracy_mean=round(r.mean, 4),
         accuracy_std=round(r.std, 4),
+        accuracy_ci95=interval_list(r.accuracies),
         paper=None,
         repeats=len(r.accuracies),
         comparison={"status": "no paper value", "message": "your method"},

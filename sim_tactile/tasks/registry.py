@@ -10,6 +10,7 @@ accuracy-over-time curve) and the numbers of the paper it reproduces.
 from __future__ import annotations
 
 import json
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
@@ -20,6 +21,7 @@ from ..encoders.encodings import Steps, threshold_encoding
 from ..errors import ConfigError, UnknownNameError
 from ..learn.classifiers import LearnContext, get_classifier
 from ..records import TactileDataset
+from .versions import split_task_id, unknown_task
 
 
 @dataclass(frozen=True)
@@ -152,6 +154,10 @@ class TaskSpec:
     choices the paper leaves open). ``features`` are the spike features of svm / lda / knn /
     src. ``get_data`` is None for a suite, whose ``parts`` are tasks of their own.
     ``bench``: the task's scene in the speed-against-error benchmark (None: not in it).
+    ``history``: this version's entries in its family's version history (what it changed,
+    in which release); ``supersedes``: the older id of its family that it replaces (whose
+    users are told once, when they run it, to move here; "" for none). Neither is part of
+    the definition (:meth:`describe`): a family's history grows, a released id does not.
     """
 
     id: str
@@ -174,13 +180,15 @@ class TaskSpec:
     encode_once: bool = False
     parts: tuple[str, ...] = ()
     bench: BenchScene | None = None
+    history: tuple[str, ...] = ()
+    supersedes: str = ""
 
     def describe(self) -> dict:
         """The whole definition as JSON data (a released id's never changes)."""
         data = self.get_data
         if data is not None:
             data = data.describe() if hasattr(data, "describe") else _qualname(data)
-        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        d = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in _NOT_DEFINITION}
         d.update(
             get_data=data,
             encoder=_qualname(self.encoder),
@@ -221,6 +229,10 @@ class TaskSpec:
         )
 
 
+#: TaskSpec fields that are not the definition: the family's record around it
+_NOT_DEFINITION = ("history", "supersedes")
+
+
 def _qualname(f: Callable) -> str:
     return f"{f.__module__}.{f.__qualname__}"
 
@@ -249,8 +261,36 @@ def register(spec: TaskSpec) -> TaskSpec:
     labels = [r.name for r in spec.all_runs()]
     if len(set(labels)) != len(labels):
         raise ConfigError(f"task {spec.id}: two runs share a label: {labels}")
+    _check_family(spec)
     _TASKS[spec.id] = spec
     return spec
+
+
+def _check_family(spec: TaskSpec) -> None:
+    """A version's place in its family: its own history (``replace`` copies the older
+    version's), and at most one successor for each older id of the same family."""
+    family, version = split_task_id(spec.id)
+    kin = [t for t in _TASKS.values() if split_task_id(t.id)[0] == family]
+    for t in kin:
+        if spec.history and spec.history == t.history:
+            raise ConfigError(
+                f"task {spec.id}: its history is {t.id}'s (copied by replace()); give "
+                "history=(...) saying what this version changes"
+            )
+    if not spec.supersedes:
+        return
+    old = _TASKS.get(spec.supersedes)
+    if old is None or split_task_id(old.id)[0] != family or split_task_id(old.id)[1] >= version:
+        raise ConfigError(
+            f"task {spec.id}: supersedes = {spec.supersedes!r}; valid: a registered older "
+            f"version of the family {family!r}"
+        )
+    taken = successor(old.id)
+    if taken is not None:
+        raise ConfigError(
+            f"task {spec.id}: {old.id} is already superseded by {taken}; a version has one "
+            "successor (replace() may have copied supersedes)"
+        )
 
 
 def alias(name: str, task_id: str) -> None:
@@ -277,14 +317,90 @@ def task_ids(*, aliases: bool = False) -> tuple[str, ...]:
 
 
 def get_task(task_id: str) -> TaskSpec:
-    """The task ``task_id`` (an id or an alias)."""
+    """The task ``task_id`` (an id or an alias). An unknown id's error names the versions
+    of its family, or the ids it is close to."""
     try:
         return _TASKS[_ALIASES.get(task_id, task_id)]
     except KeyError:
+        raise UnknownNameError(unknown_task(task_id, (*_TASKS, *_ALIASES))) from None
+
+
+def successor(task_id: str) -> str | None:
+    """The id that supersedes ``task_id`` (registered with ``supersedes``), or None."""
+    tid = _ALIASES.get(task_id, task_id)
+    return next((t.id for t in _TASKS.values() if t.supersedes == tid), None)
+
+
+def latest(task_id: str) -> str:
+    """The end of ``task_id``'s chain of successors (``task_id`` itself when current)."""
+    tid = _ALIASES.get(task_id, task_id)
+    while (nxt := successor(tid)) is not None:
+        tid = nxt
+    return tid
+
+
+class OutdatedTaskWarning(UserWarning):
+    """A superseded task id was run (it still runs, as released)."""
+
+
+_WARNED: set[str] = set()
+
+
+def use_task(task_id: str) -> TaskSpec:
+    """:func:`get_task` for a command that runs the task: a superseded id warns, once per
+    process, and names the id that supersedes it (as Gymnasium warns of an out-of-date
+    environment)."""
+    spec = get_task(task_id)
+    newer = latest(spec.id)
+    if newer != spec.id and spec.id not in _WARNED:
+        _WARNED.add(spec.id)
+        warnings.warn(
+            f"task {spec.id} is out of date: {newer} supersedes it; {spec.id} still runs as "
+            "released (the ids a paper should report: sim-tactile tasks --suite core-v1)",
+            OutdatedTaskWarning,
+            stacklevel=2,
+        )
+    return spec
+
+
+def quiet_outdated(task_ids) -> None:
+    """Count ``task_ids`` as warned already (a suite's parts, when the suite has warned)."""
+    _WARNED.update(task_ids)
+
+
+def family_versions(task_id: str) -> tuple[str, ...]:
+    """The registered ids of ``task_id``'s family, oldest first."""
+    family = split_task_id(task_id)[0]
+    ids = [t for t in _TASKS if split_task_id(t)[0] == family]
+    return tuple(sorted(ids, key=lambda t: split_task_id(t)[1]))
+
+
+#: Named suites of task ids (``sim-tactile tasks --suite NAME``).
+_SUITES: dict[str, tuple[str, ...]] = {}
+
+
+def register_suite(name: str, ids: tuple[str, ...]) -> None:
+    """A named list of registered ids (a suite's name, like an id, never changes meaning)."""
+    if name in _SUITES:
+        raise ConfigError(f"suite {name!r} is already registered; give a new version")
+    for t in ids:
+        get_task(t)
+    _SUITES[name] = tuple(ids)
+
+
+def suite(name: str) -> tuple[str, ...]:
+    """The task ids of the suite ``name`` (``core-v1``: the ids a paper should report)."""
+    try:
+        return _SUITES[name]
+    except KeyError:
         raise UnknownNameError(
-            f"task {task_id!r} is not known{did_you_mean(task_id, [*_TASKS, *_ALIASES])}; "
-            f"valid: {', '.join(_TASKS) or '(none)'}"
+            f"suite {name!r} is not known{did_you_mean(name, list(_SUITES))}; valid: "
+            f"{', '.join(_SUITES) or '(none)'}"
         ) from None
+
+
+def suite_names() -> tuple[str, ...]:
+    return tuple(_SUITES)
 
 
 def with_calibration(spec: TaskSpec, cal) -> TaskSpec:

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..tables import markdown_table, text_table
+from .intervals import MIN_REPEATS, interval_text
 from .registry import PaperCell
 from .report_neuro import neuromorphic_table
 
@@ -54,9 +55,10 @@ def paper_text(cell: dict | None) -> str:
 @dataclass
 class ResultRow:
     """One row of a task's report: a classifier on a set of channels under a split, its
-    accuracy over the repeats, the paper's number and how they compare. ``extra`` holds the
-    per-repeat details (accuracies, confusion, accuracy over time, timings); ``part`` the
-    part of a suite the row comes from."""
+    accuracy over the repeats (its mean, SD and 95% interval, :mod:`.intervals`; None below
+    :data:`~.intervals.MIN_REPEATS` repeats), the paper's number and how they compare.
+    ``extra`` holds the per-repeat details (accuracies, confusion, accuracy over time,
+    timings); ``part`` the part of a suite the row comes from."""
 
     classifier: str
     label: str
@@ -71,6 +73,7 @@ class ResultRow:
     split: str = ""
     part: str | None = None
     extra: dict = field(default_factory=dict)
+    accuracy_ci95: list[float] | None = None
 
     @property
     def over_time(self) -> dict:
@@ -104,6 +107,7 @@ _ROW_KEYS = (
     "wall_s",
     "channels",
     "split",
+    "accuracy_ci95",
 )
 
 
@@ -111,7 +115,7 @@ _ROW_KEYS = (
 class Report:
     """A task's report (``report.json``): its rows and how they were made. A suite's report
     holds its parts' rows, each labelled ``<part>: <row>``, and ``parts`` (part -> its own
-    report's path)."""
+    report's path). ``result_files``: the result file of each row (:mod:`.result_file`)."""
 
     task: str
     title: str
@@ -125,17 +129,19 @@ class Report:
     reference: str
     environment: dict
     parts: dict | None = None
+    result_files: list[str] | None = None
 
     def to_json(self) -> dict:
         d = {k: getattr(self, k) for k in _REPORT_KEYS}
         d["results"] = [r.to_json() for r in self.results]
-        if self.parts is not None:
-            d["parts"] = self.parts
+        for k in _OPTIONAL_KEYS:
+            if getattr(self, k) is not None:
+                d[k] = getattr(self, k)
         return d
 
     @classmethod
     def from_json(cls, d: dict) -> Report:
-        known = {k: d[k] for k in (*_REPORT_KEYS, "parts") if k in d}
+        known = {k: d[k] for k in (*_REPORT_KEYS, *_OPTIONAL_KEYS) if k in d}
         known["results"] = [ResultRow.from_json(r) for r in d["results"]]
         return cls(**known)
 
@@ -163,10 +169,11 @@ class Report:
                 f"{d['channels']} channels, {d['classes']} classes.",
                 "",
             ]
-        head = ["run", "features", "accuracy (SD)", "paper (SD)", "repeats", "vs paper", "wall [s]"]
+        head = ["run", "features", "accuracy (SD)", "95% interval", "paper (SD)", "repeats"]
+        head += ["vs paper", "wall [s]"]
         lines += markdown_table(head, [_cells(r) for r in self.results])
         lines += _flag_lines(self.results, "- ")
-        lines += ["", _timing(self.timing)]
+        lines += ["", INTERVAL_NOTE, "", _timing(self.timing)]
         lines += _over_time_table(self.results)
         lines += neuromorphic_table(self.results)
         users = [r for r in self.results if r.extra.get("user_method")]
@@ -175,6 +182,9 @@ class Report:
             lines += [f"- `{r.label}`: `{r.extra.get('method', '')}`" for r in users]
         if self.parts is not None:
             lines += ["", "Parts: " + ", ".join(f"[{p}]({p}/report.md)" for p in self.parts)]
+        if self.result_files:
+            lines += ["", "Result files (one per row; `sim-tactile check FILE` validates one):", ""]
+            lines += [f"- `{_relative(f, self.parts)}`" for f in self.result_files]
         if self.figures:
             lines += ["", "## Figures", ""]
             lines += [f"![{Path(f).stem}]({_relative(f, self.parts)})" for f in self.figures]
@@ -193,13 +203,16 @@ class Report:
             [
                 _marked(r),
                 f"{r.accuracy_mean:.3f} ({r.accuracy_std:.3f})",
+                interval_text(r.accuracy_ci95),
                 paper_text(r.paper),
                 r.comparison["message"],
             ]
             for r in self.results
         ]
-        lines += text_table(["run", "accuracy", "paper", "vs paper"], rows, right=(1, 2))
+        head = ["run", "accuracy (SD)", "95% interval", "paper", "vs paper"]
+        lines += text_table(head, rows, right=(1, 2, 3))
         lines += _flag_lines(self.results, "")
+        lines += [INTERVAL_NOTE]
         lines += ["", _timing(self.timing)]
         lines += [f"figure: {f}" for f in self.figures]
         return "\n".join(lines)
@@ -232,6 +245,12 @@ _REPORT_KEYS = (
     "reference",
     "environment",
 )
+_OPTIONAL_KEYS = ("parts", "result_files")
+#: What the interval column is, under each table of a report.
+INTERVAL_NOTE = (
+    "95% interval: of the mean over the repeats (percentile bootstrap); '-' below "
+    f"{MIN_REPEATS} repeats."
+)
 
 
 def _marked(r: ResultRow) -> str:
@@ -250,6 +269,7 @@ def _cells(r: ResultRow) -> list[str]:
         _marked(r),
         r.features,
         f"{r.accuracy_mean:.3f} ({r.accuracy_std:.3f})",
+        interval_text(r.accuracy_ci95),
         paper_text(r.paper),
         str(r.repeats),
         r.comparison["message"],

@@ -9,7 +9,6 @@ task, its checked options and its data.
 
 from __future__ import annotations
 
-import platform
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -18,7 +17,6 @@ from pathlib import Path
 
 from sklearn.pipeline import Pipeline
 
-from .. import __version__
 from .._validate import integer
 from ..datasets.fs import no_empty_folders_left, write_faults
 from ..datasets.reader import open_store, parts_of
@@ -35,12 +33,14 @@ from .config_task import PREFIX as CONFIG_PREFIX
 from .config_task import config_task, is_config_path
 from .figures import write_figures
 from .flags import flag_rows
+from .intervals import interval_list
 from .methods import Method, as_methods, classify_methods, method_row
 from .needs import check_torch
 from .nir_export import check_nir_export, export_snn, nir_row
 from .precompute import Precomputed
-from .registry import DataRequest, Run, TaskSpec, get_task, with_calibration
+from .registry import DataRequest, Run, TaskSpec, quiet_outdated, use_task, with_calibration
 from .report import Report, ResultRow, compare
+from .result_file import environment, write_result_files
 from .splits import splits_digest, task_splits
 
 
@@ -199,6 +199,7 @@ def run_task(
     sensor_config: str | Path | None = None,
     methods=None,
     export_nir: str | Path | None = None,
+    about=None,
 ) -> dict:
     """Run ``task_id`` and write its report into ``out_dir``; returns the report as JSON data.
     ``task_id`` may also be a configuration file (``.toml`` / ``.json``, :mod:`.config_task`).
@@ -217,6 +218,11 @@ def run_task(
             (:mod:`.methods`), scored beside the built-in rows.
         export_nir: save the snn row's network (its last repeat) there as a NIR graph
             (:mod:`.nir_export`).
+        about: method name -> ``{"version": ..., "link": ...}`` for the user's methods'
+            result files.
+
+    Each row's result file (:mod:`.result_file`) is written into ``out_dir/results`` (not
+    for a configuration file: it is no registered task).
     """
     # a failed run leaves no empty --out behind; a full or read-only disk is one line
     with no_empty_folders_left(Path(out_dir)), write_faults(Path(out_dir)):
@@ -233,6 +239,7 @@ def run_task(
             sensor_config,
             methods,
             export_nir,
+            about,
         )
 
 
@@ -249,14 +256,16 @@ def _run_task(
     sensor_config,
     methods,
     export_nir=None,
+    about=None,
 ) -> dict:
     t_start = time.perf_counter()
+    env = environment()  # now: the commit of the code that runs, whatever moves meanwhile
     log = log or stderr_log
     if is_config_path(task_id):
         spec, file_seed = config_task(task_id)
         seed = file_seed if seed is None else seed
     else:
-        spec = get_task(task_id)
+        spec = use_task(task_id)
         seed = 0 if seed is None else seed
     if sensor_config is not None:
         spec = with_calibration(spec, load_calibration(sensor_config))
@@ -268,7 +277,7 @@ def _run_task(
     if spec.parts:
         methods = {m.name: m for m in as_methods(methods)} or None  # checked before any part
         return _run_suite(
-            spec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods
+            spec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods, about
         )
     runs = task_runs(spec, classifiers)
     user = as_methods(methods, {r.name for r in runs})
@@ -292,6 +301,10 @@ def _run_task(
         export_nir=export_nir,
     )
     report.timing["load_s"] = round(task.load_s, 3)
+    if not is_config_path(task_id):
+        report.result_files = write_result_files(
+            spec, report, task.ds.labels, Path(out_dir), about, env
+        )
     report.timing["wall_s"] = round(time.perf_counter() - t_start, 2)
     report.write(Path(out_dir))
     return report.to_json()
@@ -362,11 +375,7 @@ def evaluate_task(
         dataset=ds.describe(),
         remarks=list(spec.remarks),
         reference=spec.reference,
-        environment={
-            "sim_tactile": __version__,
-            "python": platform.python_version(),
-            "machine": platform.machine(),
-        },
+        environment=environment(),  # the package version, commit and machine
     )
     flag_rows(report.results, ds.duration_s, lambda m: log(f"{spec.id}: {m}"))
     if figures:
@@ -435,6 +444,7 @@ def _row(spec: TaskSpec, run: Run, r: EvalResult, wall_s: float, quick: bool) ->
         features=get_classifier(run.classifier).features,
         accuracy_mean=round(r.mean, 4),
         accuracy_std=round(r.std, 4),
+        accuracy_ci95=interval_list(r.accuracies),
         paper=cell.to_json() if cell else None,
         repeats=len(r.accuracies),
         comparison=compare(r.mean, cell, spec.notes.get(run.name), quick=quick),
@@ -446,13 +456,14 @@ def _row(spec: TaskSpec, run: Run, r: EvalResult, wall_s: float, quick: bool) ->
 
 
 def _run_suite(
-    spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods=None
+    spec: TaskSpec, out_dir, quick, data, classifiers, repeats, seed, log, store, methods, about
 ):
     """A task made of parts (one per sensor): each part's report in ``out_dir/<part>``, and
     one report whose rows are the parts' rows, labelled ``<part>: <row>``."""
     t0 = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    quiet_outdated(spec.parts)  # the suite's own warning names its successor
     parts = {}
     for part in spec.parts:
         log(f"{spec.id}: part {part}")
@@ -467,6 +478,7 @@ def _run_suite(
             log=log,
             store=store,
             methods=methods,
+            about=about,
         )
         parts[part] = Report.from_json(doc)
     rows = [
@@ -492,6 +504,7 @@ def _run_suite(
         reference=spec.reference,
         environment=next(iter(parts.values())).environment,
         parts={part: str(out / part / "report.json") for part in parts},
+        result_files=[f for rep in parts.values() for f in rep.result_files or []],
     )
     report.write(out)
     return report.to_json()

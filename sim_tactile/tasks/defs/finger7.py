@@ -11,6 +11,8 @@ rate and mean ISI per taxel, 24/8 per plate over 1000 splits.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from ...encoders import IzhikevichEncoder
 from ...encoders.encodings import EncodingContext, Steps
 from ...sensors import get_sensor
@@ -48,7 +50,7 @@ def finger7_encoding(ctx: EncodingContext) -> Steps:
 
 _TAXELS = {f"t{i}": (i,) for i in range(9)}
 
-register(
+FINGER7_V1 = register(
     TaskSpec(
         id="finger7-v1",
         title="Soft finger, grid3x3 (2 x 2 mm taxels at 2.5 mm), 7 plates x 32 slides, "
@@ -97,6 +99,10 @@ register(
         ),
         reference=FINGER7_REF,
         bench=BenchScene("finger7", "finger7/ridges-4"),
+        history=(
+            "0.1.0: first release: a flat 12 x 12 mm pad held at 1 N crosses the 36 mm "
+            "textured area from flat ground to flat ground.",
+        ),
     )
 )
 
@@ -109,43 +115,27 @@ FINGER7_V2_FINGER = Finger(
     shape="ellipsoid", radii_m=(0.015, 0.009, 0.009), size_m=(0.022, 0.016)
 ).layered(get_sensor("grid3x3").with_paper_stack().finger.stack)
 
-register(
-    TaskSpec(
+#: finger7-v2 is finger7-v1 with the paper's finger and protocol: only what changed is given
+FINGER7_V2 = register(
+    replace(
+        FINGER7_V1,
         id="finger7-v2",
         title="Soft finger as built: grid3x3 on a curved silicone finger (paper stack), "
         "brought down to touch, palpating at 60 mm/s at that height, 7 plates x 32, 9 s "
         "windows, 100 Hz (simulated)",
-        get_data=SlideSet(
-            plates=FINGER7_PLATES,
-            sensor="grid3x3",
-            protocol=Protocol(
-                speed_m_s=0.06,
+        get_data=replace(
+            FINGER7_V1.get_data,
+            protocol=replace(
+                FINGER7_V1.get_data.protocol,
                 force_n=0.05,
                 duration_s=9.0,
                 force_control="position",
                 speed_jitter=0.01,
-                offset_jitter_m=0.5e-3,
+                force_jitter=0.0,
             ),
-            slides=32,
-            quick_slides=8,
             finger=FINGER7_V2_FINGER,
             pitch_m=0.25e-3,
         ),
-        classifiers=("svm",),
-        split="24/8",
-        encoder=finger7_encoding,
-        encoding="SA-I Izhikevich (a 0.02, b 0.2, c -65, d 8) per taxel, input = 15 x "
-        "min-max normalised output, RK4 at 0.1 ms",
-        features=("rate_hz", "mean_isi_s"),
-        encode_once=True,
-        channel_sets=_TAXELS,
-        runs=(
-            Run("svm", label="svm all taxels", paper=PaperCell(0.9921, None, "paper 002, Fig. 6")),
-            *(Run("svm", channels=name, label=f"svm {name} only") for name in _TAXELS),
-            Run("svm-raw", label="svm-raw all taxels (no encoding)"),
-        ),
-        full=Settings(repeats=1000),
-        quick=Settings(repeats=50, split="6/2"),
         remarks=(
             "The finger (paper 002, II.B-C): the 3x3 array on the palmar surface of the "
             "uninflated Dragon Skin 10 finger, its skin the paper's stack (sensors."
@@ -168,6 +158,12 @@ register(
             "independent solver serves a layered curved finger (docs/finger7_v2.md).",
             "Normalisation, features and SVM as finger7-v1.",
         ),
-        reference=FINGER7_REF,
+        bench=None,
+        history=(
+            "0.1.0: the paper's finger and protocol: the array on a curved Dragon Skin finger "
+            "with the paper's stack, lowered to a touch and palpating at that height "
+            "(position control) in 9 s windows; supersedes finger7-v1.",
+        ),
+        supersedes="finger7-v1",
     )
 )

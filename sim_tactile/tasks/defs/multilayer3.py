@@ -9,6 +9,8 @@ LDA, linear SVM and SRC on spike features, 10/200 per texture over 1000 splits.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from ...encoders import IzhikevichEncoder
 from ...encoders.encodings import EncodingContext, Steps
 from ...sensors import get_sensor
@@ -46,7 +48,7 @@ def multilayer_encoding(ctx: EncodingContext) -> Steps:
 
 
 _ML = PaperCell  # the paper gives the means of Fig. 5A (both layers) without SDs
-register(
+MULTILAYER3_V1 = register(
     TaskSpec(
         id="multilayer3-v1",
         title="Multilayer sensor, 2 x 3x3 elements (3 x 3 mm at 5 mm), 3 textures, 5 N, "
@@ -98,53 +100,30 @@ register(
         ),
         reference=MULTILAYER_REF,
         bench=BenchScene("multilayer3", "multilayer3/grating-9"),
+        history=(
+            "0.1.0: first release: a flat 16 x 16 mm pad carrying the two layers presses "
+            "with 5 N and crosses the 36 mm textured area.",
+        ),
     )
 )
 
 
-register(
-    TaskSpec(
+#: multilayer3-v2 is multilayer3-v1 on the paper's probe rig: only what changed is given
+MULTILAYER3_V2 = register(
+    replace(
+        MULTILAYER3_V1,
         id="multilayer3-v2",
         title="Multilayer sensor on the rig's bed under a sliding textured probe (36 x 36 mm, "
         "5 N, 65 mm/s both ways, 5 s windows), 2 x 3x3 elements, 3 textures, 100 Hz "
         "(simulated)",
-        get_data=SlideSet(
-            plates=("multilayer3/flat", "multilayer3/grating-9", "multilayer3/hemispheres-6x6"),
-            sensor="multilayer3x3x2",
-            protocol=Protocol(
-                speed_m_s=0.065,
-                force_n=5.0,
-                duration_s=5.0,
-                speed_jitter=0.02,
-                force_jitter=0.02,
-                offset_jitter_m=0.5e-3,
-            ),
-            slides=210,
-            quick_slides=10,
+        get_data=replace(
+            MULTILAYER3_V1.get_data,
+            protocol=replace(MULTILAYER3_V1.get_data.protocol, duration_s=5.0),
             finger=get_sensor("multilayer3x3x2").with_paper_stack().finger,
             rig=ProbeRig(),
         ),
-        classifiers=("lda", "svm", "src"),
-        split="10/200",
-        encoder=multilayer_encoding,
-        encoding="FS (top layer) / RS (bottom layer) Izhikevich, gains for 200 / 100 Hz at "
-        "each element's maximum, Euler 1 ms (Izhikevich 2003), the 100 Hz samples held "
-        "(zero-order) on the 1 ms grid",
-        features=("rate_nonzero_hz", "mean_isi_s"),
-        encode_once=True,
-        channel_sets={"top": _TOP, "bottom": _BOTTOM},
-        runs=tuple(
-            Run(
-                clf,
-                channels=layer,
-                label=f"{clf} {layer}",
-                paper=_ML(mean, None, "paper 003, Fig. 5A") if layer == "all" else None,
-            )
-            for clf, mean in (("lda", 0.953), ("svm", 0.966), ("src", 0.970))
-            for layer in ("all", "top", "bottom")
-        ),
-        full=Settings(repeats=1000),
-        quick=Settings(repeats=50, split="3/7"),
+        encoding=MULTILAYER3_V1.encoding + ", the 100 Hz samples held (zero-order) on the 1 ms "
+        "grid",
         remarks=(
             "The rig (paper 003, Fig. 3): the sensor lies on the rig's rigid loading bed and "
             "stays; a rigid probe carrying the 36 x 36 mm texture, features across the slide "
@@ -168,6 +147,12 @@ register(
             "the non-zero 100 ms bin rates and mean ISI per element (18 per layer); SRC: "
             "OMP with sparsity 5 on standardised, unit-norm samples.",
         ),
-        reference=MULTILAYER_REF,
+        bench=None,
+        history=(
+            "0.1.0: the paper's rig: the sensor lies on the rig's bed and a rigid probe "
+            "carrying the texture slides over it at 5 N, both ways, in 5 s windows; "
+            "supersedes multilayer3-v1.",
+        ),
+        supersedes="multilayer3-v1",
     )
 )

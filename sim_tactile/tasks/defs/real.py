@@ -207,5 +207,12 @@ ICUB_TASK = register(
 alias("biotac20-real", BIOTAC_TASK.id)
 alias("icub20-real", ICUB_TASK.id)
 
+#: SHA-256 of each real-data task's labels (int64, in the loader's order) on the public data
+#: set: ``sim-tactile check`` verifies a closed-track result's data by them, without the data
+LABELS_SHA256 = {
+    "biotac20-real-v1": "51317e3e786b88027cf00d4dad006eabc74a50c81eb86ec4aec01ccac0e761aa",
+    "icub20-real-v1": "6131e89b822683616670b5114d8060c6de3c9e017e012f5cfc8399226b4aaffc",
+}
+
 #: the real-data task of each sensor (the simulated textures20 parts reuse their settings)
 TASKS_BY_SENSOR = {"biotac19": BIOTAC_TASK, "icub60": ICUB_TASK}

@@ -30,21 +30,20 @@ TEXTURES20_REF = (
 )
 
 
-def _textures20_part(
-    sensor: str, protocol: Protocol, times, quick_times, bench, remarks, version="v1", long=False
-):
+def _textures20_part(sensor: str, protocol: Protocol, times, quick_times, bench, remarks, history):
+    """The ``-v1`` part of ``sensor``: the real-data task's encoding, networks and paper
+    cells on the 20 synthetic plates."""
     real_spec = real.TASKS_BY_SENSOR[sensor]
-    family = "textures20-long" if long else "textures20"
     return TaskSpec(
-        id=f"textures20-{sensor}-{version}",
-        title=f"{sensor} on the 20 {family} plates x 50 slides (simulated)",
+        id=f"textures20-{sensor}-v1",
+        title=f"{sensor} on the 20 textures20 plates x 50 slides (simulated)",
         get_data=SlideSet(
-            plates=tuple(_long_names(TEXTURES20_PLATES)) if long else TEXTURES20_PLATES,
+            plates=TEXTURES20_PLATES,
             sensor=sensor,
             protocol=protocol,
             slides=50,
             quick_slides=3,
-            quick_plates=tuple(_long_names(TEXTURES20_QUICK)) if long else TEXTURES20_QUICK,
+            quick_plates=TEXTURES20_QUICK,
         ),
         classifiers=real.MODELS,
         split="7:3",
@@ -60,6 +59,30 @@ def _textures20_part(
         ),
         reference=TEXTURES20_REF,
         bench=bench,
+        history=history,
+    )
+
+
+def _textures20_v2(v1: TaskSpec, protocol: Protocol, times, quick_times, remarks, history):
+    """The ``-v2`` part: ``v1`` on the long strips, under the paper's whole protocol (only
+    what changed from ``v1`` is given)."""
+    real_spec = real.TASKS_BY_SENSOR[v1.get_data.sensor]
+    return replace(
+        v1,
+        id=v1.id.removesuffix("-v1") + "-v2",
+        title=v1.title.replace("textures20 plates", "textures20-long plates"),
+        get_data=replace(
+            v1.get_data,
+            plates=tuple(_long_names(TEXTURES20_PLATES)),
+            quick_plates=tuple(_long_names(TEXTURES20_QUICK)),
+            protocol=protocol,
+        ),
+        full=real.paper000_settings(times, real_spec.full.params),
+        quick=real.paper000_settings(quick_times, real_spec.quick.params, quick=True, split="2/1"),
+        remarks=(v1.remarks[0], *remarks),
+        bench=None,
+        history=history,
+        supersedes=v1.id,
     )
 
 
@@ -82,7 +105,7 @@ ICUB_V1 = Protocol(
     speed_m_s=0.04, force_n=1.0, speed_jitter=0.15, force_jitter=0.25, offset_jitter_m=1e-3
 )
 
-register(
+BIOTAC_V1 = register(
     _textures20_part(
         "biotac19",
         Protocol(
@@ -100,9 +123,13 @@ register(
             "+- 1% speed, +- 3% force), crossing the 36 mm textured area from flat ground to "
             "flat ground in 2.48 s (the paper's window: 4 s of a 20 cm slide on the material).",
         ),
+        history=(
+            "0.1.0: first release: the pad crosses the 36 mm textured area from flat ground "
+            "to flat ground.",
+        ),
     )
 )
-register(
+ICUB60_V1 = register(
     _textures20_part(
         "icub60",
         ICUB_V1,
@@ -120,9 +147,13 @@ register(
             "driven arm: +- 15% speed, +- 25% force, +- 1 mm offset, one SD per slide), "
             "crossing the textured area in 1.92 s (the paper's window: 1.5 s).",
         ),
+        history=(
+            "0.1.0: first release: the pad crosses the 36 mm textured area from flat ground "
+            "to flat ground.",
+        ),
     )
 )
-register(
+TEXTURES20_V1 = register(
     TaskSpec(
         id="textures20-v1",
         title="Seed paper 000's protocol on 20 synthetic textures: BioTac and iCub (simulated)",
@@ -135,6 +166,10 @@ register(
             "slides each, split 2/1 per class.",
         ),
         reference=TEXTURES20_REF,
+        history=(
+            "0.1.0: first release: each part's pad crosses the 36 mm textured area from flat "
+            "ground to flat ground.",
+        ),
     )
 )
 
@@ -151,8 +186,8 @@ ICUB_LEVEL_CV = 0.14
 ICUB_WITHIN_CLIP_CV = 0.064
 
 register(
-    _textures20_part(
-        "biotac19",
+    _textures20_v2(
+        BIOTAC_V1,
         Protocol(
             speed_m_s=0.025,
             force_n=BIOTAC_FORCE_N,
@@ -164,7 +199,6 @@ register(
         ),
         (0.25, 0.5, 1.0, 2.0, 3.0, 4.0),
         (0.5, 4.0),
-        None,
         remarks=(
             "BioTac slides as seed 000 made them: 2.5 cm/s under force and velocity control "
             "(KUKA iiwa) on a strip that the pad never leaves, recorded for the paper's 4 s "
@@ -178,17 +212,19 @@ register(
             "first second 2.4x its last): the static pressure relaxing under a held force, "
             "which the simulation does not model (docs/real_data.md).",
         ),
-        version="v2",
-        long=True,
+        history=(
+            "0.1.0: the paper's protocol whole: the pad stays on a 156 mm textured strip for "
+            "the paper's whole window, its force and the force's variation measured from the "
+            "real recordings; supersedes textures20-biotac19-v1.",
+        ),
     )
 )
 register(
-    _textures20_part(
-        "icub60",
+    _textures20_v2(
+        ICUB60_V1,
         replace(ICUB_V1, force_jitter=ICUB_LEVEL_CV, duration_s=1.5, start="texture"),
         (0.25, 0.5, 1.0, 1.5),
         (0.5, 1.5),
-        None,
         remarks=(
             "iCub slides on a strip that the patch never leaves, for the paper's 1.5 s clips "
             "(75 samples at 50 Hz).",
@@ -202,23 +238,31 @@ register(
             f"taxel's level is steady within a clip (its loaded samples vary by "
             f"{ICUB_WITHIN_CLIP_CV:.1%}), so no fluctuation can be timed.",
         ),
-        version="v2",
-        long=True,
+        history=(
+            "0.1.0: the paper's protocol whole: the pad stays on a 156 mm textured strip for "
+            "the paper's whole window, its force and the force's variation measured from the "
+            "real recordings; supersedes textures20-icub60-v1.",
+        ),
     )
 )
+#: textures20-v2 is textures20-v1 with the v2 parts: only what changed is given
 register(
-    TaskSpec(
+    replace(
+        TEXTURES20_V1,
         id="textures20-v2",
         title="Seed paper 000's protocol, whole, on 20 synthetic textures: BioTac and iCub "
         "(simulated)",
-        get_data=None,
-        classifiers=(),
         parts=("textures20-biotac19-v2", "textures20-icub60-v2"),
         remarks=(
             "Two parts, one per sensor, each with its own report in a sub-folder; the quick "
             "run uses 4 of the long plates (flat, grating-4.0mm, boxes-4.5mm, "
             "hemispheres-6.0mm), 3 slides each, split 2/1 per class.",
         ),
-        reference=TEXTURES20_REF,
+        history=(
+            "0.1.0: the paper's protocol whole: the pad stays on a 156 mm textured strip for "
+            "the paper's whole window, its force and the force's variation measured from the "
+            "real recordings; supersedes textures20-v1.",
+        ),
+        supersedes="textures20-v1",
     )
 )
