@@ -374,6 +374,25 @@ def _write(run: _Run, k: int, i: int, x: np.ndarray, warnings, wall_s: float) ->
     run.written += 1
 
 
+def _check_device(device: str) -> None:
+    """Refuse a device that is not here (asked for and absent: one line, nothing made)."""
+    v.one_of("--device", device, DEVICES)
+    if device != "cpu":
+        from .sim.skin.contact.device import require_device
+
+        require_device(device)
+
+
+def _on_device(plans, device: str) -> None:
+    """Set the slides of ``plans`` to solve their phase tables on ``device`` (where they are
+    solved, not what a slide is: the store's configuration is the same)."""
+    if device == "cpu":
+        return
+    for plan in plans:
+        if plan.jobs is not None:
+            plan.jobs = [replace(j, options=replace(j.options, device=device)) for j in plan.jobs]
+
+
 def generate(
     target: str,
     out: str | Path,
@@ -415,17 +434,11 @@ def generate(
     if workers is not None:
         workers = v.integer("--workers", workers, 1, MAX_WORKERS)
     out = Path(out)
-    v.one_of("--device", device, DEVICES)
-    if device != "cpu":  # asked for and absent: one line, and nothing made
-        from .sim.skin.contact.device import require_device
-
-        require_device(device)
+    _check_device(device)
     plans, root_attrs = resolve(
         target, quick=quick, seed=seed, data=data, log=log, sensor_config=sensor_config
     )
-    for plan in plans:  # the device says where the tables are solved, not what a slide is
-        if plan.jobs is not None and device != "cpu":
-            plan.jobs = [replace(j, options=replace(j.options, device=device)) for j in plan.jobs]
+    _on_device(plans, device)
     for plan in plans:  # what a store cannot hold is refused before anything is made
         check_fits(plan.spec, f"{target}" + (f" ({plan.group})" if plan.group else ""))
     total = sum(p.spec.n_slides for p in plans)

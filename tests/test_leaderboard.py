@@ -109,8 +109,9 @@ def test_check_exits_0_for_valid_files_and_1_with_a_line_per_refusal(cli, tmp_pa
     assert out["ok"] is False and [f["ok"] for f in out["files"]] == [True, False]
     lines = p.stderr.strip().splitlines()
     assert lines == [
-        f"{tmp_path / 'edited.json'}: config.task: task 'finger7-v9' is not known; the family "
-        "finger7 has versions v1, v2: finger7-v1, finger7-v2",
+        f"{tmp_path / 'edited.json'}: config.task: task 'finger7-v9' is not known (did you "
+        "mean 'finger7-v2' or 'finger7-v1'?); the family finger7 has versions v1, v2: "
+        "finger7-v1, finger7-v2",
         "sim-tactile: check: 1 of 2 file(s) refused",
     ]
 

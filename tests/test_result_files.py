@@ -213,8 +213,8 @@ def test_a_broken_or_foreign_file_is_one_line(tmp_path, tones):
     doc = _doc(tones, "ridge")
     doc["config"]["task"] = "formats-tones-v2"
     assert check_document(doc) == [
-        "config.task: task 'formats-tones-v2' is not known; the family formats-tones has "
-        "versions v1: formats-tones-v1"
+        "config.task: task 'formats-tones-v2' is not known (did you mean 'formats-tones-v1'?); "
+        "the family formats-tones has versions v1: formats-tones-v1"
     ]
 
 

@@ -25,6 +25,9 @@ LONG_MODULES: dict[str, str] = {
     "generate.py": "one resumable write of a data set: the target resolved, the store opened or "
     "resumed (its index checked and repaired), the backend drained into it, the run recorded; "
     "every step reads and updates the one run's state (_Run)",
+    "tasks/runner.py": "one task's run, end to end: the task resolved and its data loaded, each "
+    "row evaluated under the protocol, the report, the figures, the result files and the "
+    "spiking network's export written from the one run's rows",
 }
 #: Longest function [lines] (declared data tables are module-level values, not functions).
 MAX_FUNCTION_LINES = 100

@@ -317,7 +317,7 @@ def _closed(spec: TaskSpec, cfg) -> list[str]:
     """The closed track: the task's own definition, data and encoding; only the classifier
     is the method's."""
     p, method, out = cfg["protocol"], cfg["method"], []
-    if cfg["task_sha256"] != task_sha256(spec):
+    if cfg["task_sha256"] != task_sha256(spec, p["mode"] == "quick"):
         out.append(
             f"closed track: config.task_sha256 is not {spec.id}'s definition (a calibrated "
             "sensor, data of your own or another package version's task): the open track"

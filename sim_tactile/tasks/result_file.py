@@ -58,10 +58,14 @@ INTERVAL = {
 NO_ENCODER = "none"
 
 
-def task_sha256(spec: TaskSpec) -> str:
-    """SHA-256 of a task's whole definition (:meth:`TaskSpec.describe`): a file made with
-    another definition (a calibrated sensor, a development version) does not match."""
-    text = json.dumps(spec.describe(), sort_keys=True, default=str)
+def task_sha256(spec: TaskSpec, quick: bool = False) -> str:
+    """SHA-256 of a task's definition for a full run, or a quick one (``quick``)
+    (:meth:`TaskSpec.describe`, without the settings of the other form: the quick form's
+    settings change nothing of a full run): a file made with another definition (a
+    calibrated sensor, a development version) does not match."""
+    d = dict(spec.describe())
+    d.pop("full" if quick else "quick", None)
+    text = json.dumps(d, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -215,7 +219,7 @@ def result_document(
         metrics[f"{name}_repeats"] = s["repeats"]
     if row.extra.get("neuromorphic"):
         metrics["neurobench"] = row.extra["neuromorphic"]
-    own = task_sha256(spec) == task_sha256(registered)
+    own = task_sha256(spec, quick) == task_sha256(registered, quick)
     return {
         "schema": dict(SCHEMA),
         "config": {
@@ -225,7 +229,7 @@ def result_document(
             "task": spec.id,
             "family": family,
             "version": version,
-            "task_sha256": task_sha256(spec),
+            "task_sha256": task_sha256(spec, quick),
             "track": track_of(method, own),
             "variant": None if own else variant_of(spec, registered),
             "reported": False,

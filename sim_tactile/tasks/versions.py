@@ -39,6 +39,4 @@ def unknown_task(task_id: str, known: Iterable[str]) -> str:
     if kin:
         versions = ", ".join(f"v{split_task_id(t)[1]}" for t in kin)
         return f"{head}; the family {family} has versions {versions}: {', '.join(kin)}"
-    if "did you mean" in head:
-        return f"{head} (every task: sim-tactile tasks)"
     return f"{head}; valid: {', '.join(known) or '(none)'}"
