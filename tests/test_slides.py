@@ -217,26 +217,36 @@ def test_an_edited_preset_is_simulated_again(tmp_path):
 
 @pytest.mark.slow
 def test_every_tasks_slides_keep_their_descriptions():
-    """A slide's description (its cache key's content) is the one it had before ``Slide``
-    described it once (tests/data/slide_descriptions.json, written from SlideJob.describe at
-    4c60226 by ``python tools/slide_descriptions.py``): key for key, on every simulated
-    task's quick and full slides, but for the one key a slide on the phase table adds
-    (``path``, present exactly where the slide takes it)."""
+    """A slide's description (its cache key's content) on the per-step reference path is the
+    one it had before ``Slide`` described it once (tests/data/slide_descriptions.json, written
+    from SlideJob.describe at 4c60226 by ``python tools/slide_descriptions.py``): key for key,
+    on every simulated task's quick and full slides. The default path (``auto``) differs from
+    it only by the keys it adds: ``path`` exactly where the slide is read off a phase table,
+    ``press`` exactly where it presses once under a held force, and the knobs it chose
+    (``solve_tol``, ``solve_every``), so nothing either path made is served for the other."""
     import json
+    from dataclasses import replace
     from pathlib import Path
 
     from sim_tactile.hashing import content_hash
     from sim_tactile.tasks import get_task, task_ids
 
     released = json.loads((Path(__file__).parent / "data" / "slide_descriptions.json").read_text())
+    chosen = {"path", "press", "solve_tol", "solve_every"}
     for t, runs in released.items():
         ss = get_task(t).get_data
         for run, digest in runs.items():
             jobs = ss.jobs(seed=0, quick=run == "quick")
-            described = [j.describe() for j in jobs]
-            for j, d in zip(jobs, described, strict=True):
+            reference = []
+            for j in jobs:
+                d = j.describe()
                 assert ("path" in d) == (j.table_plan() is not None), j.label
-            before = [{k: x for k, x in d.items() if k != "path"} for d in described]
-            assert content_hash(before) == digest, (t, run)
+                assert ("press" in d) == j.held_press, j.label
+                ref = replace(j, options=replace(j.options, path="per-step")).describe()
+                reference.append(ref)
+                assert {k: x for k, x in d.items() if k not in chosen} == {
+                    k: x for k, x in ref.items() if k not in chosen
+                }, j.label
+            assert content_hash(reference) == digest, (t, run)
     simulated = {t for t in task_ids() if isinstance(get_task(t).get_data, SlideSet)}
     assert set(released) == simulated, "a simulated task was added or removed"
