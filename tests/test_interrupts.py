@@ -14,6 +14,7 @@ import json
 import os
 import signal
 import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -146,9 +147,20 @@ FIRST_SLIDE_S = 600.0
 SENDS = [(signal.SIGTERM, 0.05), (signal.SIGTERM, 0.4), (signal.SIGINT, 0.2)]
 
 
+#: starts a command with SIGINT at its default, as a terminal starts it: a suite run as a
+#: background job (``make test &``) hands its children SIGINT ignored, which Python keeps
+#: (no KeyboardInterrupt), and exec keeps a default disposition
+_DEFAULT_SIGINT = (
+    sys.executable,
+    "-c",
+    "import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); "
+    "os.execv(sys.argv[1], sys.argv[1:])",
+)
+
+
 def _stop_generate(cfg: Path, out: Path, env: dict, signum: int, delay_s: float):
     p = subprocess.Popen(
-        [EXE, "generate", str(cfg), "--out", str(out), "--workers", "1"],
+        [*_DEFAULT_SIGINT, EXE, "generate", str(cfg), "--out", str(out), "--workers", "1"],
         env=env,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
