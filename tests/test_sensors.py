@@ -59,6 +59,31 @@ def test_piezoelectric_output_averages_to_zero_on_a_flat_slide(cache):
     assert np.abs(y.mean(axis=0)).max() < 4 * noise / np.sqrt(len(y)) + 1e-4
 
 
+@pytest.mark.parametrize("n", [1, 2, 250, 20_001])
+def test_the_piezoelectric_high_pass_is_scipys_lfilter_bit_for_bit(n, monkeypatch):
+    """The high-pass runs its own loop on a slide's samples (no scipy.signal to load) and
+    lfilter on long recordings: both equal scipy.signal.lfilter, the reference, bit for bit,
+    on loads of every scale; and a loop that skipped the state (a plain scale) would not be."""
+    from scipy.signal import lfilter
+
+    from sim_tactile.sensors import transducers
+
+    rng = np.random.default_rng(n)
+    x = rng.lognormal(0.0, 2.0, (n, 3)) * rng.choice([-1.0, 1.0], (n, 3))
+    for a in (0.9937, 0.5, 1.0 / 3.0):
+        ref = lfilter([a, -a], [1.0, -a], x, axis=0)
+        got = transducers.high_pass(x, a)
+        assert got.shape == ref.shape and np.array_equal(got, ref), (n, a)
+        if n > 2:
+            assert not np.allclose(got, a * np.diff(x, axis=0, prepend=0.0))
+    if n == 250:  # the loop itself serves the long branch's lengths too
+        monkeypatch.setattr(transducers, "HIGH_PASS_LOOP_MAX", 10**9)
+        y = rng.normal(size=(3000, 2))
+        assert np.array_equal(
+            transducers.high_pass(y, 0.99), lfilter([0.99, -0.99], [1, -0.99], y, axis=0)
+        )
+
+
 @pytest.mark.parametrize("sensor", ["grid3x3", "icub60"])
 def test_resistive_and_capacitive_hold_a_steady_level_plus_noise(sensor, cache):
     y = _steady(sensor, cache)

@@ -113,14 +113,34 @@ class Piezoelectric:
         v.positive("piezoelectric.cutoff_hz", self.cutoff_hz)
 
     def apply(self, load_n: np.ndarray, rate_hz: float) -> np.ndarray:
-        from scipy.signal import lfilter
-
         rc = 1.0 / (2 * np.pi * self.cutoff_hz)
         a = rc / (rc + 1.0 / rate_hz)
         x = np.asarray(load_n, float)
         # y[n] = a (y[n-1] + x[n] - x[n-1]), started at rest on the first sample
-        y = lfilter([a, -a], [1.0, -a], x - x[:1], axis=0)
-        return self.sensitivity_v_per_n * y
+        return self.sensitivity_v_per_n * high_pass(x - x[:1], a)
+
+
+#: Samples up to which :func:`high_pass` runs its own loop; longer recordings go to
+#: ``scipy.signal.lfilter``, whose import (0.6 s: scipy.stats and scipy.interpolate come
+#: with it) is then small beside the recording
+HIGH_PASS_LOOP_MAX = 20_000
+
+
+def high_pass(x: np.ndarray, a: float) -> np.ndarray:
+    """The first-order high-pass ``y[n] = a (y[n-1] + x[n] - x[n-1])`` along axis 0 of ``x``,
+    from rest: ``scipy.signal.lfilter([a, -a], [1, -a], x, axis=0)`` bit for bit (its
+    transposed direct form, ``y = z + a x; z = -a x + a y``, in the same order of operations),
+    without loading scipy.signal for the short recordings of a data set's slides."""
+    if len(x) > HIGH_PASS_LOOP_MAX:
+        from scipy.signal import lfilter
+
+        return lfilter([a, -a], [1.0, -a], x, axis=0)
+    y = np.empty_like(x)
+    z = np.zeros(x.shape[1:])
+    for n in range(len(x)):
+        y[n] = z + a * x[n]
+        z = x[n] * -a - y[n] * -a
+    return y
 
 
 Transducer = PiezoResistive | Capacitive | Impedance | Piezoelectric
