@@ -17,6 +17,7 @@ import subprocess
 import sys
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import pytest
@@ -207,3 +208,14 @@ def test_a_signal_during_the_kernels_of_one_worker_is_reported_and_recorded(tmp_
         runs = json.loads((tmp_path / f"run{k}.zarr" / "zarr.json").read_text())["attributes"]
         assert runs["runs"][-1]["interrupted"] is True, case
         assert runs["runs"][-1]["signal"] == ("SIGTERM" if term else None), case
+
+
+def test_an_interrupted_commands_unawaited_coroutines_say_nothing_after_its_line():
+    """A signal that cuts a store's write short leaves zarr's coroutines never awaited; their
+    warnings at exit would follow the one line (seen on SIGINT during a write)."""
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        assert cli._stopped(KeyboardInterrupt()) == 130
+        warnings.warn("coroutine '_runner' was never awaited", RuntimeWarning, stacklevel=1)
+        warnings.warn("another warning", RuntimeWarning, stacklevel=1)
+    assert [str(w.message) for w in got] == ["another warning"]

@@ -113,7 +113,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _stopped(exc: KeyboardInterrupt) -> int:
-    """The one line and exit status of a command stopped by a signal or Ctrl-C."""
+    """The one line and exit status of a command stopped by a signal or Ctrl-C. The store's
+    writes that the signal cut short leave coroutines of zarr's that were never awaited;
+    their warnings at exit would follow the one line, and say nothing the line does not."""
+    warnings.filterwarnings("ignore", r"coroutine .* was never awaited", RuntimeWarning)
     if isinstance(exc, Terminated):
         log(f"sim-tactile: stopped by signal {signal.Signals(exc.signum).name}")
         return 128 + exc.signum
