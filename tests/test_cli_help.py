@@ -59,6 +59,26 @@ def test_building_the_command_line_imports_no_heavy_library():
     assert out == "[]"
 
 
+def test_the_command_line_leaves_mujocos_opengl_unloaded_unless_asked():
+    """Start-up: MuJoCo's OpenGL back-end (glfw, cffi; some 50 ms of every simulating
+    command) is not loaded by the command line, which never renders; an environment that
+    names a back-end keeps it."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import os, sys; import sim_tactile.cli; import mujoco; "
+        "print(os.environ['MUJOCO_GL'], 'glfw' in sys.modules)"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    out = subprocess.check_output([sys.executable, "-c", code], text=True, env=env).split()
+    assert out == ["disable", "False"]
+    env["MUJOCO_GL"] = "egl"
+    out = subprocess.check_output([sys.executable, "-c", code], text=True, env=env).split()
+    assert out[0] == "egl"
+
+
 def test_tasks_lists_every_registered_task_one_line_each(cli):
     lines = cli(["tasks"]).stdout.strip().split("\n\n")[0].splitlines()
     assert lines[0].split() == ["id", "paper", "sensor", "classes", "slides", "needs", "quick"]

@@ -13,10 +13,15 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import signal
 import sys
 import warnings
 from collections.abc import Sequence
+
+# The command line never renders: MuJoCo's OpenGL back-end (glfw, cffi and pycparser, some
+# 50 ms of every command's start-up) is left unloaded, unless the environment names one.
+os.environ.setdefault("MUJOCO_GL", "disable")
 
 from .. import __version__
 from ..errors import SimTactileError, Terminated, os_error_message
