@@ -33,9 +33,13 @@ SOLVE_TOL_RANGE = (1e-12, 1e-3)
 #: 5e-6 on the iCub's scenes (1.8x faster; perf/bench_response.py) ...
 AUTO_SOLVE_TOL = 1e-4
 #: ... and the skin solved at every this-many steps of a held slide, the loads between on
-#: the line between two solves (1.1% rel L2 on the iCub's scenes, 0.7% on its v2 strips;
-#: with the tolerance, 4.6-5.4x faster), where a sample spans at least this many steps.
-AUTO_SOLVE_EVERY = 4
+#: the line between two solves, where a sample spans at least this many steps. Measured
+#: against the per-step solve on every spectral plate of textures20-icub60-v1 (the first
+#: slide of each, and three of the five worst): at every 2nd step at most 1.62% rel L2
+#: (0.15-0.34% on the v2 strips' rough plates); at every 4th, five plates beyond 2% (boxes,
+#: cylinders and hemispheres of 3-4.5 mm, the drafted grating: up to 2.91%), where a wall's
+#: jump is smeared over four steps' travel.
+AUTO_SOLVE_EVERY = 2
 #: How a held slide's taxel loads are computed (``StepOptions.path``): ``auto`` (the phase
 #: table where the scene allows it and its measured error is within target, else the
 #: per-step solve), ``per-step`` (the skin solved at every step: the reference) or
