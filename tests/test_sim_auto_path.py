@@ -1,0 +1,121 @@
+"""``path = auto`` against the per-step reference on one plate of every simulated task.
+
+``auto`` is the default: it reads a held slide off a phase table, presses once to the
+held equilibrium, or loosens a spectral skin's per-step solve (``solve_every``,
+``solve_tol``), each only where its error against the per-step solve is measured within
+2% (relative L2 of the taxel loads over a slide). Here every task's scene is run both
+ways, on a plate whose slide touches its texture, and the default's loads must lie within
+that target of the reference. The probe rig (multilayer3-v2) has its own slide, which
+``auto`` leaves as it is.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from sim_tactile.sim import Slide, StepOptions, run
+from sim_tactile.tasks import get_task, task_ids
+
+#: The default's error target against the per-step solve (relative L2 over a slide).
+REL_L2_TARGET = 0.02
+
+STEP = StepOptions(path="per-step")
+
+#: task, plate, window [s] (None: the task's), protocol changes; the path ``auto`` takes.
+CASES = [
+    pytest.param("finger7-v1", "finger7/bumps-4x4", 0.5, {}, "per-step", id="finger7-v1"),
+    pytest.param("finger7-v2", "finger7/ridges-4", 0.3, {}, "per-step", id="finger7-v2"),
+    pytest.param(
+        "multilayer3-v1", "multilayer3/hemispheres-6x6", 0.4, {}, "per-step", id="multilayer3-v1"
+    ),
+    pytest.param("roughness8-v1", "roughness8/ra-50", 0.25, {}, "per-step", id="roughness8-v1"),
+    pytest.param(
+        "textures20-biotac19-v1",
+        "textures20/hemispheres-4.5mm",
+        None,
+        {},
+        "per-step",
+        id="textures20-biotac19-v1",
+    ),
+    pytest.param(
+        "textures20-icub60-v1",
+        "textures20/boxes-4.5mm",
+        None,
+        {},
+        "per-step",
+        id="textures20-icub60-v1",
+        marks=pytest.mark.slow,
+    ),
+    pytest.param(
+        "textures20-biotac19-v2",
+        "textures20-long/hemispheres-4.5mm",
+        0.5,
+        {},
+        "phase-table",
+        id="textures20-biotac19-v2",
+    ),
+    pytest.param(
+        "textures20-icub60-v2",
+        "textures20-long/grating-3.0mm",
+        0.2,
+        {},
+        "phase-table",
+        id="textures20-icub60-v2",
+        marks=pytest.mark.slow,
+    ),
+]
+
+
+def _task_slide(task: str, plate: str, duration_s: float | None, **proto) -> Slide:
+    """The first slide of ``plate`` in ``task`` (its seed, sensor, fidelity and protocol),
+    recording the ideal loads, its window shortened to ``duration_s`` where given."""
+    jobs = get_task(task).get_data.jobs(seed=0, quick=False)
+    job = next(j for j in jobs if j.plate.name == plate)
+    if duration_s is not None:
+        proto = {"duration_s": duration_s, **proto}
+    return Slide(
+        job.plate,
+        job.sensor_def,
+        replace(job.protocol, **proto),
+        job.seed,
+        job.fidelity,
+        True,
+        job.finger,
+        job.pitch_m,
+        rig=job.rig,
+    )
+
+
+def test_the_cases_cover_every_simulated_task():
+    from sim_tactile.slides import SlideSet
+
+    simulated = {t for t in task_ids() if isinstance(get_task(t).get_data, SlideSet)}
+    covered = {p.values[0] for p in CASES} | {"multilayer3-v2"}
+    assert covered == simulated
+
+
+@pytest.mark.parametrize(("task", "plate", "duration", "changes", "path"), CASES)
+def test_the_default_is_within_its_target_of_the_per_step_solve(
+    task, plate, duration, changes, path, cache
+):
+    slide = _task_slide(task, plate, duration, **changes)
+    assert slide.how.path == path
+    auto = run(slide, cache).recording
+    step = run(replace(slide, options=STEP), cache).recording
+    ref = step.data.astype(float)
+    assert np.abs(ref).max() > 0  # the pad touched the plate
+    rel = float(np.linalg.norm(auto.data.astype(float) - ref) / np.linalg.norm(ref))
+    assert rel <= REL_L2_TARGET, f"{task} on {plate}: {rel:.2%} from the per-step solve"
+    assert auto.meta["protocol"] == step.meta["protocol"]
+
+
+def test_the_probe_rigs_slide_is_left_as_it_is():
+    jobs = get_task("multilayer3-v2").get_data.jobs(seed=0, quick=True)
+    slide = Slide(jobs[0].plate, jobs[0].sensor_def, jobs[0].protocol, jobs[0].seed, rig=jobs[0].rig)
+    assert slide.rig is not None
+    assert slide.how == replace(StepOptions(), path="per-step")
+    assert not slide.held_press
+    assert "path" not in slide.describe()
