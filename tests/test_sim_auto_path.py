@@ -114,7 +114,9 @@ def test_the_default_is_within_its_target_of_the_per_step_solve(
 
 def test_the_probe_rigs_slide_is_left_as_it_is():
     jobs = get_task("multilayer3-v2").get_data.jobs(seed=0, quick=True)
-    slide = Slide(jobs[0].plate, jobs[0].sensor_def, jobs[0].protocol, jobs[0].seed, rig=jobs[0].rig)
+    slide = Slide(
+        jobs[0].plate, jobs[0].sensor_def, jobs[0].protocol, jobs[0].seed, rig=jobs[0].rig
+    )
     assert slide.rig is not None
     assert slide.how == replace(StepOptions(), path="per-step")
     assert not slide.held_press

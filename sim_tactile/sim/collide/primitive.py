@@ -59,6 +59,30 @@ class PrimitiveProbe(NamedTuple):
     cell_top: np.ndarray
 
 
+def grid_buckets(lo, hi, tops, origin, cell: float, shape):
+    """The broad phase's cells: ``(start, items, cell_top)``, the geoms whose footprint
+    ``[lo, hi]`` (G, 2) overlaps each cell of the ``shape`` grid of side ``cell`` from
+    ``origin``, listed cell by cell (row-major) in ascending geom order (cell ``c`` holds
+    ``items[start[c]:start[c + 1]]``), and each cell's highest geom top (``tops``; -inf in
+    an empty cell)."""
+    n0, n1 = int(shape[0]), int(shape[1])
+    first = np.floor((lo - origin) / cell).astype(int)
+    last = np.floor((hi - origin) / cell).astype(int)
+    ia, ib = np.maximum(first[:, 0], 0), np.minimum(last[:, 0], n0 - 1)
+    ja, jb = np.maximum(first[:, 1], 0), np.minimum(last[:, 1], n1 - 1)
+    ni, nj = np.maximum(ib - ia + 1, 0), np.maximum(jb - ja + 1, 0)
+    count = ni * nj
+    geom = np.repeat(np.arange(len(count)), count)
+    k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    cells = (ia[geom] + k // nj[geom]) * n1 + (ja[geom] + k % nj[geom])
+    order = np.lexsort((geom, cells))
+    start = np.zeros(n0 * n1 + 1, dtype=np.int64)
+    start[1:] = np.cumsum(np.bincount(cells, minlength=n0 * n1))
+    cell_top = np.full(n0 * n1, -np.inf)
+    np.maximum.at(cell_top, cells, np.asarray(tops, dtype=np.float64)[geom])
+    return start, geom[order].astype(np.int64), cell_top
+
+
 class PrimitiveCollider:
     """Penetration depths of the skin's probe spheres against a static plate of boxes,
     spheres, upright cylinders and drafted ridges. Built once per scene from the compiled
@@ -89,22 +113,8 @@ class PrimitiveCollider:
         self.origin = lo.min(axis=0) if len(kind) else np.zeros(2)
         n = np.maximum(np.ceil((hi.max(axis=0) - self.origin) / self.cell).astype(np.int64), 1)
         self.shape = n
-        buckets: list[list[int]] = [[] for _ in range(int(n[0] * n[1]))]
-        for g in range(len(kind)):
-            i0, j0 = np.floor((lo[g] - self.origin) / self.cell).astype(int)
-            i1, j1 = np.floor((hi[g] - self.origin) / self.cell).astype(int)
-            for i in range(max(i0, 0), min(i1, n[0] - 1) + 1):
-                for j in range(max(j0, 0), min(j1, n[1] - 1) + 1):
-                    buckets[i * n[1] + j].append(g)
-        self.start = np.zeros(len(buckets) + 1, dtype=np.int64)
-        self.start[1:] = np.cumsum([len(b) for b in buckets])
-        self.items = np.array([g for b in buckets for g in b], dtype=np.int64)
-        # each cell's highest point of its geoms: a node whose sphere is more than its margin
-        # above it is out of reach of every geom there (each one's distance is at least the
-        # height between them), and is not measured (-inf, as the distances would give)
-        tops = pos[:, 2] + half[:, 2]
-        self.cell_top = np.array(
-            [max((tops[g] for g in b), default=-np.inf) for b in buckets], dtype=np.float64
+        self.start, self.items, self.cell_top = grid_buckets(
+            lo, hi, pos[:, 2] + half[:, 2], self.origin, self.cell, n
         )
         #: the depth kernel's arguments after the bone's position
         self.probe = PrimitiveProbe(
