@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from sim_tactile.sim import Slide, StepOptions, run
+from sim_tactile.sim.plan.options import AUTO_SOLVE_TOL
 from sim_tactile.tasks import get_task, task_ids
 
 #: The default's error target against the per-step solve (relative L2 over a slide).
@@ -47,6 +48,15 @@ CASES = [
         {},
         "per-step",
         id="textures20-icub60-v1",
+        marks=pytest.mark.slow,
+    ),
+    pytest.param(
+        "textures20-icub60-v1",
+        "textures20/hemispheres-6.0mm",
+        0.4,
+        {},
+        "per-step",
+        id="textures20-icub60-v1-spectral",
         marks=pytest.mark.slow,
     ),
     pytest.param(
@@ -121,3 +131,49 @@ def test_the_probe_rigs_slide_is_left_as_it_is():
     assert slide.how == replace(StepOptions(), path="per-step")
     assert not slide.held_press
     assert "path" not in slide.describe()
+
+
+def test_a_flat_pads_full_dense_problem_is_solved_spectrally_and_keyed_so():
+    """The iCub's flat pad on bumps: the dense solve's contact set starts as the whole face
+    and pays |S|^2 for each node that leaves it, so ``auto`` solves the same problem
+    spectrally, to its loosened tolerance, at every step; its key says so. Problems that
+    reduce by column (gratings), a curved pad (the BioTac) and the per-step reference stay
+    dense."""
+    icub = _task_slide("textures20-icub60-v1", "textures20/hemispheres-6.0mm", None)
+    assert not icub.spectral  # the dense solve by the node count
+    how = icub.how
+    assert (how.path, how.skin_solver, how.solve_every) == ("per-step", "spectral", 1)
+    assert how.solve_tol == AUTO_SOLVE_TOL
+    assert icub.describe()["skin_solver"] == "spectral"
+    step = replace(icub, options=STEP)
+    assert step.how.skin_solver == "auto" and step.describe() != icub.describe()
+    grating = _task_slide("textures20-icub60-v1", "textures20/grating-3.0mm", None)
+    assert grating.how.skin_solver == "auto" and not grating.spectral
+    biotac = _task_slide("textures20-biotac19-v1", "textures20/hemispheres-6.0mm", None)
+    assert biotac.how.skin_solver == "auto" and not biotac.spectral
+
+
+@pytest.mark.parametrize(
+    ("task", "plate"),
+    [
+        ("textures20-icub60-v1", "textures20/hemispheres-6.0mm"),
+        ("textures20-icub60-v1", "textures20/grating-3.0mm"),
+        ("textures20-icub60-v1", "textures20/flat"),
+        ("textures20-biotac19-v1", "textures20/boxes-3.0mm"),
+        ("roughness8-v1", "roughness8/ra-50"),
+        ("multilayer3-v1", "multilayer3/hemispheres-6x6"),
+    ],
+)
+def test_the_planners_reading_of_the_column_reduction_is_the_held_steps(task, plate, cache):
+    """``depths_by_column`` (the planner's, from the plate's surface) agrees with the test the
+    compiled held step makes on its collider (``y_invariant`` at the bone's offset)."""
+    from sim_tactile.sim.collide.choose import make_collider
+    from sim_tactile.sim.plan.phase import depths_by_column
+    from sim_tactile.sim.step.build import scene_for
+
+    slide = _task_slide(task, plate, None)
+    proto = slide.drawn()
+    scene, _ = scene_for(slide, proto, slide.resolved, slide.window.x_start_m, cache)
+    collider = make_collider(scene, True)
+    columns = collider.y_invariant(float(collider.bone0[1]))
+    assert depths_by_column(slide.plate, slide.pad.patch_m, proto.offset_y_m) == columns

@@ -203,6 +203,26 @@ def _features_repeat(features, a: float, b: float, period: float) -> bool:
     return True
 
 
+def depths_by_column(plate: Plate, patch_m: tuple[float, float], offset_y_m: float) -> bool:
+    """Whether every node of a pad of ``patch_m`` (x, y) [m] at ``offset_y_m`` reads a depth
+    that does not depend on its y: a flat plate, ridges that run past the whole pad (boxes
+    or drafted prisms, by more than the smaller of their half-width and height), a 1-D
+    profile wider than the pad. The dense held step then solves one node per column and
+    halves the problem by its mirror (:class:`~sim_tactile.sim.step.held.CompiledHeldStep`,
+    whose collider decides); this is the planner's reading of the same condition, for
+    ``auto``'s choice of solver (:func:`~.solver.dense_is_dear`)."""
+    ry = float(patch_m[1]) / 2 + REACH_MARGIN_M
+    surf = surface_of(plate)
+    if surf.features:
+        return all(
+            f.kind in ("box", "prism") and abs(offset_y_m - f.y) + ry < f.hy - min(f.hx, f.height_m)
+            for f in surf.features
+        )
+    if surf.arrays is None:  # flat: no feature, no samples
+        return True
+    return surf.y_invariant(np.array([offset_y_m - ry, offset_y_m + ry]))
+
+
 @memoized("plates' offset-free widths", maxsize=256)
 def _y_free_half_width(plate: Plate, rx: float) -> float:
     """The half-width [m] about the plate's centre line within which its surface does not
@@ -248,4 +268,4 @@ def _repeats(surf, lo, hi, period, rx, y, step) -> bool:
     return True
 
 
-__all__ = ["MIN_PERIODS", "PhasePlan", "phase_plan", "table_plan", "travel"]
+__all__ = ["MIN_PERIODS", "PhasePlan", "depths_by_column", "phase_plan", "table_plan", "travel"]

@@ -25,9 +25,10 @@ from ...plates.define.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
 from .fidelity import Fidelity, choose_fidelity, solved_spectrally
 from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, keyed
-from .phase import PhasePlan, table_plan, travel
+from .phase import PhasePlan, depths_by_column, table_plan, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
+from .solver import dense_is_dear
 
 
 @dataclass(frozen=True)
@@ -140,6 +141,9 @@ class Slide:
         by step; under ``auto`` with a spectral skin, to
         :data:`~.options.AUTO_SOLVE_TOL` and at every :data:`~.options.AUTO_SOLVE_EVERY`-th
         step where the force is held (their errors measured within 2% on the task scenes);
+        where the force is held on a flat pad whose dense problem would be full and large
+        (:func:`~.solver.dense_is_dear`), spectrally to :data:`~.options.AUTO_SOLVE_TOL`
+        at every step instead (the same problem, within 0.005% of the dense solve);
         ``per-step`` is the reference, the knobs as given. The resolved options say which
         (``path`` ``phase-table`` or ``per-step``). The probe rig has its own slide."""
         opts = self.options
@@ -161,13 +165,25 @@ class Slide:
         if plan is not None:
             tol = AUTO_SOLVE_TOL if auto and self.spectral else opts.solve_tol
             return plan, replace(opts, path="phase-table", solve_tol=tol)
+        held = proto.force_control == "quasi-static"
+        if auto and held and self._dense_is_dear(proto):
+            return None, replace(
+                opts, path="per-step", skin_solver="spectral", solve_tol=AUTO_SOLVE_TOL
+            )
         if not (auto and self.spectral):
             return None, replace(opts, path="per-step")
-        held = proto.force_control == "quasi-static"
         every = (
             AUTO_SOLVE_EVERY if held and self.resolved.steps_per_sample >= AUTO_SOLVE_EVERY else 1
         )
         return None, replace(opts, path="per-step", solve_every=every, solve_tol=AUTO_SOLVE_TOL)
+
+    def _dense_is_dear(self, proto: Protocol) -> bool:
+        """Whether ``auto`` takes the spectral solve for a skin it would solve densely
+        (:func:`~.solver.dense_is_dear`: a flat pad's full problem of many nodes)."""
+        if self.spectral or not self.resolved.coupled:
+            return False
+        by_column = depths_by_column(self.plate, self.pad.patch_m, proto.offset_y_m)
+        return dense_is_dear(self.resolved, self.pad, by_column)
 
     @property
     def held_press(self) -> bool:

@@ -1,0 +1,46 @@
+"""Which solver ``path = auto`` gives a held slide's skin where the node count alone would
+choose the dense one: :func:`dense_is_dear`.
+
+The dense solve (:class:`~sim_tactile.sim.skin.contact.ActiveSet`) and the spectral one
+(:class:`~sim_tactile.sim.skin.contact.spectral.Spectral`) solve the same discrete problem;
+:func:`~.fidelity.solved_spectrally` takes the spectral one above
+:data:`~.fidelity.DENSE_MAX_NODES` nodes, where the dense matrices and their factorisation
+grow too large. What a dense step costs also depends on the contact set, which the node
+count does not see. This module loads neither MuJoCo nor numba.
+"""
+
+from __future__ import annotations
+
+from .fidelity import Fidelity, solved_spectrally
+from .measured_errors import node_count
+
+#: Fewest nodes of a flat pad's lattice at which ``path = auto`` solves a held slide's skin
+#: spectrally where it would be a full dense problem (:func:`dense_is_dear`). A flat pad on
+#: flat ground touches with nearly its whole face (the iCub: 2223 of 2835 nodes at 1 N), and
+#: every node that leaves the contact set as it rides onto a texture costs an update of
+#: |S|^2: the iCub's first steps onto textures20-v1's hemispheres took 0.1-0.4 s each, 3.3 s
+#: of a 3.6 s slide. Whole slides of textures20-icub60-v1, dense against spectral at 1e-4
+#: (perf/bench_solver.py, slides 1-3, one core): cylinders-4.5mm 4.3-20.6 s against
+#: 1.4-2.9 s, hemispheres-6.0mm 3.9-9.0 s against 0.7-0.8 s, the loads within 0.005%.
+#: The BioTac's curved pad touches on a patch: its full problems at 2835 nodes stay dense
+#: (0.22-0.26 s a slide against 0.63-1.06 s spectral); so do the pads' problems that reduce
+#: by column and mirror (the iCub's gratings at 1449 reduced nodes, 1.9-3.6 s against
+#: 3.0-4.9 s at the reference tolerance). finger7's bumps on grid3x3's flat pad (at
+#: a5d399a): 2401 nodes 9.6 s dense against 6.5 s, 1089 nodes 0.9 s against 3.1 s.
+FLAT_SPECTRAL_MIN_NODES = 2000
+
+
+def dense_is_dear(fid: Fidelity, finger, by_column: bool) -> bool:
+    """Whether ``auto`` solves a held slide's skin spectrally though it would be solved
+    densely (:func:`~.fidelity.solved_spectrally`): a flat pad of at least
+    :data:`FLAT_SPECTRAL_MIN_NODES` nodes on its own lattice, whose depths do not reduce by
+    column (``by_column``: :func:`~.phase.depths_by_column`), and whose skin the spectral
+    solve takes. Both solve the same discrete problem; see the constant for the costs."""
+    if by_column or finger.shape != "flat":
+        return False
+    if solved_spectrally(fid, finger) or not solved_spectrally(fid, finger, "spectral"):
+        return False
+    return node_count(finger, fid.pitch_m, fid.pitch_y_m) >= FLAT_SPECTRAL_MIN_NODES
+
+
+__all__ = ["FLAT_SPECTRAL_MIN_NODES", "dense_is_dear"]
