@@ -38,7 +38,7 @@ def main() -> int:
     args = ap.parse_args()
 
     from sim_tactile.cache import ArtefactCache
-    from sim_tactile.sim import Slide, StepOptions, run
+    from sim_tactile.sim import StepOptions, run
     from sim_tactile.sim.plan.options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL
     from sim_tactile.tasks import get_task
 
@@ -61,17 +61,7 @@ def main() -> int:
             mine = [j for j in jobs if j.plate.name == plate]
             for k in (int(s) for s in args.slides.split(",")):
                 job = mine[k]
-                slide = Slide(
-                    job.plate,
-                    job.sensor_def,
-                    job.protocol,
-                    job.seed,
-                    job.fidelity,
-                    True,
-                    job.finger,
-                    job.pitch_m,
-                    rig=job.rig,
-                )
+                slide = replace(job, ideal=True)  # a task's job is a Slide
                 if slide.spectral or slide.rig is not None or not slide.resolved.coupled:
                     continue
                 row = {"plate": plate, "slide": k}
