@@ -39,12 +39,10 @@ from __future__ import annotations
 import os
 import warnings
 from collections.abc import Callable
+from functools import lru_cache
 from pathlib import Path
 
-import numba
-from numba.core import caching
-
-from ._kernel_files import ProvenCacheFile
+from . import _aot
 from .errors import CacheWarning, os_error_message
 from .hashing import PACKAGE, code_version
 
@@ -74,55 +72,6 @@ def kernel_root() -> Path:
     if numba_dir:
         return Path(numba_dir) / "sim_tactile"
     return Path.home() / ".cache" / "sim_tactile-kernels"
-
-
-class _ContentLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
-    """A kernel of this package kept under :func:`kernel_root` by its module's name and
-    :func:`kernel_stamp` (not by its file's path); None for other modules, or where the
-    folder cannot be written (numba's own locators then serve)."""
-
-    def __init__(self, py_func, py_file) -> None:
-        self._py_file = py_file
-        self._lineno = py_func.__code__.co_firstlineno
-        self._module = py_func.__module__
-        stamp = kernel_stamp(self._module)
-        self._stamp = stamp
-        self._cache_path = str(kernel_root() / self._module / stamp)
-
-    def get_cache_path(self) -> str:
-        return self._cache_path
-
-    def get_source_stamp(self):
-        return (super().get_source_stamp(), self._stamp)
-
-    @classmethod
-    def from_function(cls, py_func, py_file):
-        if py_func.__module__.split(".")[0] != PACKAGE or not os.path.exists(py_file):
-            return None
-        self = cls(py_func, py_file)
-        try:
-            self.ensure_cache_path()
-        except OSError as exc:  # numba's own places serve, where they can be written
-            _once(
-                f"the kernel folder cannot be written ({os_error_message(exc, kernel_root())}): "
-                "the kernels are kept in numba's own cache folders where one can be written "
-                "(set SIM_TACTILE_KERNELS to a writable folder)"
-            )
-            return None
-        _prune(Path(self._cache_path))
-        return self
-
-
-class _ReadOnlyContentLocator(_ContentLocator):
-    """The kernel folder as it is, where no folder can be written: what it holds is read
-    (proven), and what is compiled is not kept (:meth:`VersionedFunctionCache.save_overload`
-    says so)."""
-
-    @classmethod
-    def from_function(cls, py_func, py_file):
-        if py_func.__module__.split(".")[0] != PACKAGE or not os.path.exists(py_file):
-            return None
-        return cls(py_func, py_file)
 
 
 _said: set[str] = set()
@@ -159,80 +108,349 @@ def _prune(current: Path) -> None:
             shutil.rmtree(old, ignore_errors=True)
 
 
-def _versioned(base: type) -> type:
-    """A numba cache locator like ``base`` whose source stamp also holds the kernel's
-    module's :func:`kernel_stamp` (for this package's modules; others as ``base``)."""
+@lru_cache(maxsize=1)
+def _cache_classes():
+    """numba's cache machinery, subclassed (on first need: numba is imported only where a
+    kernel is compiled or loaded by numba, :func:`numba_module`); returns
+    :class:`VersionedFunctionCache`."""
+    from numba.core import caching
 
-    class Locator(base):
+    from ._kernel_files import ProvenCacheFile
+
+    class _ContentLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
+        """A kernel of this package kept under :func:`kernel_root` by its module's name and
+        :func:`kernel_stamp` (not by its file's path); None for other modules, or where the
+        folder cannot be written (numba's own locators then serve)."""
+
         def __init__(self, py_func, py_file) -> None:
-            super().__init__(py_func, py_file)
+            self._py_file = py_file
+            self._lineno = py_func.__code__.co_firstlineno
             self._module = py_func.__module__
+            stamp = kernel_stamp(self._module)
+            self._stamp = stamp
+            self._cache_path = str(kernel_root() / self._module / stamp)
+
+        def get_cache_path(self) -> str:
+            return self._cache_path
 
         def get_source_stamp(self):
-            stamp = super().get_source_stamp()
-            if self._module.split(".")[0] != PACKAGE:
-                return stamp
-            return (stamp, kernel_stamp(self._module))
+            return (super().get_source_stamp(), self._stamp)
 
-    Locator.__name__ = Locator.__qualname__ = f"Versioned{base.__name__}"
-    return Locator
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if py_func.__module__.split(".")[0] != PACKAGE or not os.path.exists(py_file):
+                return None
+            self = cls(py_func, py_file)
+            try:
+                self.ensure_cache_path()
+            except OSError as exc:  # numba's own places serve, where they can be written
+                _once(
+                    f"the kernel folder cannot be written ({os_error_message(exc, kernel_root())}): "
+                    "the kernels are kept in numba's own cache folders where one can be written "
+                    "(set SIM_TACTILE_KERNELS to a writable folder)"
+                )
+                return None
+            _prune(Path(self._cache_path))
+            return self
 
+    class _ReadOnlyContentLocator(_ContentLocator):
+        """The kernel folder as it is, where no folder can be written: what it holds is read
+        (proven), and what is compiled is not kept (:meth:`VersionedFunctionCache.save_overload`
+        says so)."""
 
-class _Impl(caching.CompileResultCacheImpl):
-    _locator_classes = [
-        _ContentLocator,
-        *(
-            _versioned(c) if issubclass(c, caching._SourceFileBackedLocatorMixin) else c
-            for c in caching.CompileResultCacheImpl._locator_classes
-        ),
-        _ReadOnlyContentLocator,
-    ]
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if py_func.__module__.split(".")[0] != PACKAGE or not os.path.exists(py_file):
+                return None
+            return cls(py_func, py_file)
 
+    def _versioned(base: type) -> type:
+        """A numba cache locator like ``base`` whose source stamp also holds the kernel's
+        module's :func:`kernel_stamp` (for this package's modules; others as ``base``)."""
 
-class VersionedFunctionCache(caching.FunctionCache):
-    """numba's per-function cache, its entries stamped with :func:`kernel_stamp` and each
-    of its files proven before it is read (:class:`~._kernel_files.ProvenCacheFile`)."""
+        class Locator(base):
+            def __init__(self, py_func, py_file) -> None:
+                super().__init__(py_func, py_file)
+                self._module = py_func.__module__
 
-    _impl_class = _Impl
+            def get_source_stamp(self):
+                stamp = super().get_source_stamp()
+                if self._module.split(".")[0] != PACKAGE:
+                    return stamp
+                return (stamp, kernel_stamp(self._module))
 
-    def __init__(self, py_func) -> None:
-        super().__init__(py_func)
-        locator = self._impl.locator
-        self._cache_file = ProvenCacheFile(
-            self._cache_path,
-            self._impl.filename_base,
-            locator.get_source_stamp(),
-            stamp=_stamp_of(py_func.__module__),
-            own_folder=isinstance(locator, _ContentLocator),
-        )
+        Locator.__name__ = Locator.__qualname__ = f"Versioned{base.__name__}"
+        return Locator
 
-    def save_overload(self, sig, data) -> None:
-        """Keep a compiled kernel; where it cannot be kept (a full disk, a read-only
-        folder), the run goes on with it, and a warning says that nothing was kept."""
-        try:
-            super().save_overload(sig, data)
-        except OSError as exc:
-            root = kernel_root()
-            where = root if Path(self._cache_path).is_relative_to(root) else self._cache_path
-            _once(
-                f"compiled kernels cannot be kept: {os_error_message(exc, where)}; this run "
-                "compiles them and keeps nothing (set SIM_TACTILE_KERNELS to a writable "
-                "folder with free space)"
+    class _Impl(caching.CompileResultCacheImpl):
+        _locator_classes = [
+            _ContentLocator,
+            *(
+                _versioned(c) if issubclass(c, caching._SourceFileBackedLocatorMixin) else c
+                for c in caching.CompileResultCacheImpl._locator_classes
+            ),
+            _ReadOnlyContentLocator,
+        ]
+
+    class VersionedFunctionCache(caching.FunctionCache):
+        """numba's per-function cache, its entries stamped with :func:`kernel_stamp` and each
+        of its files proven before it is read (:class:`~._kernel_files.ProvenCacheFile`)."""
+
+        _impl_class = _Impl
+
+        def __init__(self, py_func) -> None:
+            super().__init__(py_func)
+            locator = self._impl.locator
+            self._cache_file = ProvenCacheFile(
+                self._cache_path,
+                self._impl.filename_base,
+                locator.get_source_stamp(),
+                stamp=_stamp_of(py_func.__module__),
+                own_folder=isinstance(locator, _ContentLocator),
             )
+
+        def save_overload(self, sig, data) -> None:
+            """Keep a compiled kernel; where it cannot be kept (a full disk, a read-only
+            folder), the run goes on with it, and a warning says that nothing was kept."""
+            try:
+                super().save_overload(sig, data)
+            except OSError as exc:
+                root = kernel_root()
+                where = root if Path(self._cache_path).is_relative_to(root) else self._cache_path
+                _once(
+                    f"compiled kernels cannot be kept: {os_error_message(exc, where)}; this run "
+                    "compiles them and keeps nothing (set SIM_TACTILE_KERNELS to a writable "
+                    "folder with free space)"
+                )
+
+    return VersionedFunctionCache
+
+
+_numba = None
+_hooks: list[Callable] = []
+
+
+def when_numba(fn: Callable) -> Callable:
+    """Run ``fn(numba)`` once numba is imported for the package's kernels
+    (:func:`numba_module`), or now if it is: what a module registers with numba (an
+    ``overload``) costs nothing to a process that numba never serves."""
+    if _numba is not None:
+        fn(_numba)
+    else:
+        _hooks.append(fn)
+    return fn
+
+
+def numba_module():
+    """numba, imported (once) with what the package registers with it: the hooks of
+    :func:`when_numba`, and the type of an ahead-of-time kernel referred to from a compiled
+    one (numba's dispatcher's)."""
+    global _numba
+    if _numba is None:
+        import numba
+        from numba.core import types
+        from numba.extending import typeof_impl
+
+        @typeof_impl.register(_aot.Kernel)
+        def _typeof_kernel(val, c):
+            return types.Dispatcher(val.dispatcher)
+
+        _numba = numba
+        while _hooks:
+            _hooks.pop(0)(numba)
+    return _numba
+
+
+def _dispatcher(f: Callable, options: dict):
+    """numba's dispatcher of ``f``, with the versioned on-disk cache."""
+    disp = numba_module().njit(**options)(f)
+    disp._cache = _cache_classes()(f)  # what numba's enable_caching() does
+    return disp
+
+
+def stamp_folder(module: str) -> Path:
+    """The kernel folder of ``module``'s current code version."""
+    return kernel_root() / module / kernel_stamp(module)
+
+
+_ahead: dict[str, dict | None] = {}
+
+
+def _marker() -> Path | None:
+    """The file that says kernels were built ahead of time for this CPU in the kernel
+    folder (:func:`build_ahead` writes it)."""
+    key = _aot.cpu_key()
+    return None if key is None else kernel_root() / f"aot-{key}"
+
+
+@lru_cache(maxsize=1)
+def built_ahead() -> bool:
+    """Whether kernels were built ahead of time here (then every kernel waits for its first
+    call to import numba, so that a process that the extensions serve never does)."""
+    m = _marker()
+    return _aot.enabled() and m is not None and m.exists()
+
+
+def ahead_of_time(module: str) -> dict | None:
+    """The entry points of ``module``'s ahead-of-time extension by kernel
+    (:func:`sim_tactile._aot.load`), loaded once a process; None where there is none."""
+    if module not in _ahead:
+        found = None
+        if _aot.enabled() and module.split(".")[0] == PACKAGE:
+            found = _aot.load(_aot.folder(stamp_folder(module)))
+        _ahead[module] = found
+    return _ahead[module]
 
 
 def njit(fn: Callable | None = None, **options):
     """``numba.njit(**options)`` with the versioned on-disk cache; use as ``@njit`` or
-    ``@njit(inline="always")`` (``cache`` is always on: it may not be given)."""
+    ``@njit(inline="always")`` (``cache`` is always on: it may not be given). Where the
+    module has an ahead-of-time extension (:mod:`sim_tactile._aot`), an
+    :class:`~sim_tactile._aot.Kernel` that calls it where it can, and numba (imported then)
+    where it cannot."""
     if "cache" in options:
         raise TypeError("njit caches always (with a versioned stamp); do not pass cache=")
 
     def wrap(f: Callable):
-        disp = numba.njit(**options)(f)
-        disp._cache = VersionedFunctionCache(f)  # what numba's enable_caching() does
-        return disp
+        if not built_ahead():
+            return _dispatcher(f, options)
+        ahead = ahead_of_time(f.__module__)
+        # a module with no extension, where others have one, waits for its first call to
+        # import numba
+        entries = () if ahead is None else ahead.get(f.__name__, ())
+        return _aot.Kernel(f, lambda: _dispatcher(f, options), entries)
 
     return wrap if fn is None else wrap(fn)
 
 
-__all__ = ["KERNEL_LIBRARIES", "VersionedFunctionCache", "kernel_root", "kernel_stamp", "njit"]
+def __getattr__(name: str):
+    if name == "VersionedFunctionCache":
+        return _cache_classes()
+    raise AttributeError(name)
+
+
+__all__ = [
+    "KERNEL_LIBRARIES",
+    "kernel_root",
+    "kernel_stamp",
+    "njit",
+    "numba_module",
+    "when_numba",
+]
+
+
+def _kernels_of(module: str) -> dict[str, object]:
+    """The numba dispatchers of ``module``'s kernels, by name (imported)."""
+    import importlib
+
+    mod = importlib.import_module(module)
+    out = {}
+    for name, obj in vars(mod).items():
+        disp = obj.dispatcher if isinstance(obj, _aot.Kernel) else obj
+        fn = getattr(disp, "py_func", None)
+        if fn is not None and fn.__module__ == module and hasattr(disp, "overloads"):
+            out[name] = disp
+    return out
+
+
+def _cached_signatures(disp) -> list:
+    """The signatures numba has cached for ``disp`` at the current code version, on this
+    CPU (its index's entries whose code and target are today's)."""
+    cache = disp._cache
+    codegen = disp.targetctx.codegen()
+    out = []
+    for key in cache._cache_file._load_index():
+        sig = key[0]
+        if cache._index_key(sig, codegen) == key:
+            out.append(sig)
+    return out
+
+
+def build_ahead(modules=None, log: Callable[[str], None] = lambda s: None) -> list[dict]:
+    """Compile ahead of time (:mod:`sim_tactile._aot`) every signature numba has cached for
+    ``modules`` (default: every module of the package with a kernel folder at its current
+    code version) into each module's extension; returns, per module, what was built (or
+    why not). Replaces an extension that is there."""
+    import hashlib
+    import json
+    import shutil
+    import sys
+    import tempfile
+
+    if _aot.cpu_key() is None:
+        raise OSError("this machine's CPU cannot be named (no /proc/cpuinfo): nothing is built")
+    numba = numba_module()
+    root = kernel_root()
+    if modules is None:
+        modules = sorted(
+            d.name
+            for d in (root.iterdir() if root.is_dir() else ())
+            if d.is_dir() and d.name.split(".")[0] == PACKAGE
+        )
+    root.mkdir(parents=True, exist_ok=True)
+    _marker().write_text("kernels built ahead of time for this CPU (sim-tactile kernels build)\n")
+    done = []
+    for module in modules:
+        try:
+            where = stamp_folder(module)
+        except Exception as exc:  # not a module of this version of the package
+            done.append({"module": module, "built": 0, "why": f"not a module ({exc})"})
+            continue
+        if not where.is_dir():
+            done.append({"module": module, "built": 0, "why": "nothing compiled yet"})
+            continue
+        exports, kernels = [], {}
+        for name, disp in sorted(_kernels_of(module).items()):
+            for sig in _cached_signatures(disp):
+                specs = [_aot.spec_of(t) for t in sig]
+                if None in specs:
+                    continue
+                disp.compile(sig)  # loaded from numba's cache: the return type
+                full = disp.overloads[tuple(sig)].signature
+                export = f"{name}__{len(exports)}"
+                exports.append((export, full, disp.py_func))
+                kernels.setdefault(name, []).append({"export": export, "args": specs})
+        if not exports:
+            done.append({"module": module, "built": 0, "why": "no signature it can serve"})
+            continue
+        from numba.pycc import CC
+
+        tag = hashlib.sha256(f"{module}:{where.name}".encode()).hexdigest()[:12]
+        ext = f"_sim_tactile_aot_{tag}"
+        staged = Path(tempfile.mkdtemp(prefix=".aot-", dir=where))
+        try:
+            cc = CC(ext)
+            cc.output_dir = str(staged)
+            cc.target_cpu = "host"
+            cc.verbose = False
+            for export, full, fn in exports:
+                cc.export(export, full)(fn)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", numba.NumbaPendingDeprecationWarning)
+                cc.compile()
+            (so,) = staged.glob(f"{ext}*.so")
+            doc = {
+                "format": _aot.FORMAT,
+                "module": module,
+                "stamp": where.name,
+                "python": sys.implementation.cache_tag,
+                "cpu": _aot.cpu_key(),
+                "numba": numba.__version__,
+                "file": so.name,
+                "sha256": hashlib.sha256(so.read_bytes()).hexdigest(),
+                "kernels": kernels,
+            }
+            (staged / _aot.INDEX).write_text(json.dumps(doc, indent=1, sort_keys=True))
+            for f in staged.iterdir():  # pycc's intermediate files
+                if f.name not in (so.name, _aot.INDEX):
+                    shutil.rmtree(f) if f.is_dir() else f.unlink()
+            final = _aot.folder(where)
+            if final.exists():  # the one it replaces, out of the way first
+                final.rename(staged.with_name(staged.name + "-old"))
+            staged.rename(final)
+        finally:
+            shutil.rmtree(staged, ignore_errors=True)
+            shutil.rmtree(staged.with_name(staged.name + "-old"), ignore_errors=True)
+        done.append({"module": module, "built": len(exports), "kernels": sorted(kernels)})
+        log(f"{module}: {len(exports)} signature(s) of {len(kernels)} kernel(s)")
+    return done

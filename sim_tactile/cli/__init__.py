@@ -26,7 +26,7 @@ os.environ.setdefault("MUJOCO_GL", "disable")
 from .. import __version__
 from ..errors import SimTactileError, Terminated, os_error_message
 from ..interrupts import handled, interrupt_of
-from . import bench, check, data, plates, sim, tasks
+from . import bench, check, data, kernels, plates, sim, tasks
 from ._common import compile_notice, log
 
 DESCRIPTION = (
@@ -59,7 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="Show the traceback of an error instead of its one-line reason.",
     )
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for group in (tasks, check, plates, sim, data, bench):
+    for group in (tasks, check, plates, sim, data, bench, kernels):
         group.add_parsers(sub)
     _sentence_help(p)
     return p

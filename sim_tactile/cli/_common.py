@@ -164,34 +164,44 @@ def compile_notice(say: Callable[[str], None] = log) -> Iterator[None]:
     compile while the block runs: numba's ``numba:compile`` event, which it fires on a
     cache miss, never for a kernel it loads from disk. Once a command, also across the
     worker processes it forks (a flag in memory they share)."""
-    try:
-        from numba.core import event
-    except ImportError:  # no numba: nothing compiles
-        yield
-        return
     import multiprocessing
 
+    from .._jit import when_numba
+
     said, lock = multiprocessing.RawValue("b", 0), multiprocessing.Lock()
+    registered = []  # (event module, listener), once numba is imported (never, where the
+    # kernels are served ahead of time: nothing then compiles)
+    active = [True]
 
-    class Notice(event.Listener):
-        def on_start(self, ev) -> None:
-            fn = getattr((ev.data or {}).get("dispatcher"), "py_func", None)
-            if not str(getattr(fn, "__module__", "")).startswith("sim_tactile."):
-                return
-            with lock:
-                first, said.value = not said.value, 1
-            if first:
-                say(COMPILE_NOTICE)
+    def register(numba) -> None:
+        if not active[0]:
+            return
+        from numba.core import event
 
-        def on_end(self, ev) -> None:
-            pass
+        class Notice(event.Listener):
+            def on_start(self, ev) -> None:
+                fn = getattr((ev.data or {}).get("dispatcher"), "py_func", None)
+                if not str(getattr(fn, "__module__", "")).startswith("sim_tactile."):
+                    return
+                with lock:
+                    first, said.value = not said.value, 1
+                if first:
+                    say(COMPILE_NOTICE)
 
-    listener = Notice()
-    event.register("numba:compile", listener)
+            def on_end(self, ev) -> None:
+                pass
+
+        listener = Notice()
+        event.register("numba:compile", listener)
+        registered.append((event, listener))
+
+    when_numba(register)
     try:
         yield
     finally:
-        event.unregister("numba:compile", listener)
+        active[0] = False
+        for event, listener in registered:
+            event.unregister("numba:compile", listener)
 
 
 PLATE_HELP = (

@@ -6,9 +6,7 @@ collider."""
 
 from __future__ import annotations
 
-from numba.extending import overload
-
-from ..._jit import njit
+from ..._jit import njit, when_numba
 from ...plates.define.surface import surface_of
 from .height import SurfaceCollider, SurfaceProbe, surface_depths
 from .primitive import PrimitiveCollider, PrimitiveProbe, depths_kernel
@@ -36,7 +34,6 @@ def node_depths(bone, probe, pen):
     raise NotImplementedError("node_depths runs in compiled code only")
 
 
-@overload(node_depths)
 def _node_depths(bone, probe, pen):
     kind = getattr(probe, "instance_class", None)
     if kind is PrimitiveProbe:
@@ -63,6 +60,14 @@ def _node_depths(bone, probe, pen):
             bone, probe.local, probe.radius, probe.margin, probe.surface, pen
         )
     return None
+
+
+@when_numba
+def _register(numba) -> None:
+    """The compiled implementation of :func:`node_depths`."""
+    from numba.extending import overload
+
+    overload(node_depths)(_node_depths)
 
 
 @njit

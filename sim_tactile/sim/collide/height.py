@@ -24,9 +24,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba.extending import overload
 
-from ..._jit import njit
+from ..._jit import njit, when_numba
 from ...plates.define.surface import MapArrays, ProfileArrays, Surface, surface_of
 
 
@@ -201,7 +200,6 @@ def surface_at(x, y, s):
     raise NotImplementedError("surface_at runs in compiled code only")
 
 
-@overload(surface_at)
 def _surface_at(x, y, s):
     kind = getattr(s, "instance_class", None)
     if kind is ProfileArrays:
@@ -209,6 +207,14 @@ def _surface_at(x, y, s):
     if kind is MapArrays:
         return lambda x, y, s: map_surface_at(x, y, s.z, s.pixel, s.ax, s.ay, s.sx, s.sy)
     return None
+
+
+@when_numba
+def _register(numba) -> None:
+    """The compiled implementation of :func:`surface_at`."""
+    from numba.extending import overload
+
+    overload(surface_at)(_surface_at)
 
 
 @njit
