@@ -139,9 +139,11 @@ def matcher(specs):
             want = {"C": _C, "F": _F, "A": 0}[layout]
             want |= (_ALIGNED if aligned else 0) | (_WRITEABLE if mutable else 0)
             lines.append(
-                f"    if type({v}) is not ndarray or {v}.dtype is not {dt} "
-                f"or {v}.ndim != {int(ndim)} or ({v}.flags.num & {mask}) != {want}: return False"
+                f"    if type({v}) is not ndarray or {v}.ndim != {int(ndim)} "
+                f"or ({v}.flags.num & {mask}) != {want}: return False"
             )
+            # a dtype equal to the signature's need not be its object (an unpickled array's)
+            lines.append(f"    if {v}.dtype is not {dt} and {v}.dtype != {dt}: return False")
         elif kind == "f":
             lines.append(f"    if type({v}) is not float and type({v}) is not f8: return False")
         elif kind == "i":
