@@ -11,6 +11,15 @@ an installation that has run before (its compiled kernels warm). The real-time f
 core is the set's simulated seconds over the command's CPU seconds (user + system of the
 process and its children: the machine is shared, wall time is not a measure).
 
+The runs write and reuse Python's bytecode (``__pycache__``) as an installation does:
+``PYTHONDONTWRITEBYTECODE``, where the shell sets it, is dropped from their environment (it
+made every run compile the package's hundred modules from source, 0.13 s).
+
+``--fixed`` measures a set's fixed cost instead (the command's start-up and a worker's
+set-up, warm caches: its phase tables are kept too): each configuration, and the same with
+twice its slides a plate, alternately; the fixed cost is ``2 T(N) - T(2N)`` of their median
+CPU seconds, and a slide's own cost ``(T(2N) - T(N)) / N``.
+
 ``--against PATH`` runs each configuration alternately with this checkout and the one at
 PATH (another commit, ``git worktree add``), ``--rounds`` times each, A B A B, after one
 warm-up run of each side (which fills that side's artefact cache and compiles its
@@ -23,6 +32,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import resource
 import shutil
 import statistics
@@ -50,9 +60,9 @@ def commit(checkout: Path) -> str:
     return out.stdout.strip() or "unknown"
 
 
-def _strip_results(cache: Path) -> None:
+def _strip_results(cache: Path, results=RESULTS) -> None:
     for p in sorted(cache.rglob("*"), key=lambda q: len(q.parts), reverse=True):
-        if any(r in p.name for r in RESULTS) and p.exists():
+        if any(r in p.name for r in results) and p.exists():
             if p.is_dir():
                 shutil.rmtree(p)
             else:
@@ -65,7 +75,7 @@ def run_once(checkout: Path, config: Path, seed_cache: Path) -> dict:
     try:
         cache = work / "cache"
         shutil.copytree(seed_cache, cache)
-        env = dict(os.environ, SIM_TACTILE_CACHE=str(cache), PYTHONPATH=str(checkout))
+        env = _env(checkout, cache)
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         proc = subprocess.run(
@@ -124,10 +134,27 @@ def _simulated_seconds(store: Path, checkout: Path) -> float:
         return float("nan")
 
 
-def seed(checkout: Path, config: Path) -> Path:
-    """A warm-up run's cache with its results removed: the artefacts a counted run reuses."""
+def _env(checkout: Path, cache: Path) -> dict:
+    """A run's environment: this checkout first on the path, its own cache, bytecode kept."""
+    env = dict(os.environ, SIM_TACTILE_CACHE=str(cache), PYTHONPATH=str(checkout))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
+def doubled(config: Path, into: Path) -> Path:
+    """``config`` with twice its slides a plate, written into the folder ``into``."""
+    text = config.read_text()
+    n = int(re.search(r"(?m)^slides_per_plate\s*=\s*(\d+)", text).group(1))
+    out = into / f"{config.stem}-x2.toml"
+    out.write_text(re.sub(r"(?m)^slides_per_plate\s*=\s*\d+", f"slides_per_plate = {2 * n}", text))
+    return out
+
+
+def seed(checkout: Path, config: Path, keep_tables: bool = False) -> Path:
+    """A warm-up run's cache with its results removed (its slides; its phase tables too
+    unless ``keep_tables``): the artefacts a counted run reuses."""
     work = Path(tempfile.mkdtemp(prefix="bench-dataset-seed-"))
-    env = dict(os.environ, SIM_TACTILE_CACHE=str(work / "cache"), PYTHONPATH=str(checkout))
+    env = _env(checkout, work / "cache")
     subprocess.run(
         [*CLI, "generate", str(config), "--out", str(work / "set.zarr"), "--workers", "1"],
         env=env,
@@ -137,7 +164,7 @@ def seed(checkout: Path, config: Path) -> Path:
         check=True,
     )
     shutil.rmtree(work / "set.zarr", ignore_errors=True)
-    _strip_results(work / "cache")
+    _strip_results(work / "cache", RESULTS[:1] if keep_tables else RESULTS)
     return work / "cache"
 
 
@@ -147,8 +174,11 @@ def main() -> int:
     ap.add_argument("--against", type=Path, default=None, help="another checkout (B)")
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--fixed", action="store_true", help="measure the fixed cost (see above)")
     args = ap.parse_args()
     sides = [("A", ROOT)] + ([("B", args.against.resolve())] if args.against else [])
+    if args.fixed:
+        return fixed_costs(args, sides)
     rows = []
     for config in args.configs:
         config = config.resolve()
@@ -184,6 +214,54 @@ def main() -> int:
             if "speed_up" in row:
                 line += f"; A is {row['speed_up']}x B"
             print(line, flush=True)
+    if args.json:
+        print(json.dumps(rows, indent=1))
+    return 0
+
+
+def fixed_costs(args, sides) -> int:
+    """``--fixed``: each configuration and its double, A B A B; the fixed cost."""
+    rows = []
+    for config in args.configs:
+        config = config.resolve()
+        tmp = Path(tempfile.mkdtemp(prefix="bench-dataset-x2-"))
+        both = {"N": config, "2N": doubled(config, tmp)}
+        # one warm cache a side, from the double: its tables and artefacts serve both sets
+        seeds = {name: seed(path, both["2N"], keep_tables=True) for name, path in sides}
+        runs = {(name, k): [] for name, _ in sides for k in both}
+        for _ in range(args.rounds):
+            for name, path in sides:
+                for k, c in both.items():
+                    runs[name, k].append(run_once(path, c, seeds[name]))
+        for s in seeds.values():
+            shutil.rmtree(s.parent, ignore_errors=True)
+        shutil.rmtree(tmp, ignore_errors=True)
+        row = {"config": config.name}
+        for name, path in sides:
+            t1 = statistics.median(r["cpu_s"] for r in runs[name, "N"])
+            t2 = statistics.median(r["cpu_s"] for r in runs[name, "2N"])
+            n = runs[name, "N"][0]["sim_s"]
+            row[name] = {
+                "commit": commit(path),
+                "cpu_s": round(t1, 3),
+                "cpu_2n_s": round(t2, 3),
+                "fixed_s": round(2 * t1 - t2, 3),
+                "runs_cpu_s": [round(r["cpu_s"], 2) for r in runs[name, "N"]],
+                "runs_cpu_2n_s": [round(r["cpu_s"], 2) for r in runs[name, "2N"]],
+                "sim_s": n,
+            }
+        rows.append(row)
+        if not args.json:
+            print(
+                f"{config.name}: "
+                + "; ".join(
+                    f"{k} {row[k]['commit']} fixed cost {row[k]['fixed_s']:.2f} s (CPU "
+                    f"{row[k]['runs_cpu_s']} for the set, {row[k]['runs_cpu_2n_s']} for its "
+                    "double)"
+                    for k, _ in sides
+                ),
+                flush=True,
+            )
     if args.json:
         print(json.dumps(rows, indent=1))
     return 0
