@@ -39,7 +39,6 @@ import os
 import platform
 import sys
 import warnings
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -58,7 +57,6 @@ def enabled() -> bool:
     return os.environ.get(ENV, "1") != "0"
 
 
-@lru_cache(maxsize=1)
 def cpu_key() -> str | None:
     """A name for this machine's CPU, as the compiled code depends on it (the model and its
     instruction-set flags, the architecture and this Python's ABI); None where it cannot be

@@ -39,7 +39,6 @@ from __future__ import annotations
 import os
 import warnings
 from collections.abc import Callable
-from functools import lru_cache
 from pathlib import Path
 
 from . import _aot
@@ -108,14 +107,8 @@ def _prune(current: Path) -> None:
             shutil.rmtree(old, ignore_errors=True)
 
 
-@lru_cache(maxsize=1)
-def _cache_classes():
-    """numba's cache machinery, subclassed (on first need: numba is imported only where a
-    kernel is compiled or loaded by numba, :func:`numba_module`); returns
-    :class:`VersionedFunctionCache`."""
-    from numba.core import caching
-
-    from ._kernel_files import ProvenCacheFile
+def _content_locators(caching) -> tuple[type, type]:
+    """The kernel folder's locators, subclassing numba's (``caching``, imported)."""
 
     class _ContentLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
         """A kernel of this package kept under :func:`kernel_root` by its module's name and
@@ -163,6 +156,26 @@ def _cache_classes():
             if py_func.__module__.split(".")[0] != PACKAGE or not os.path.exists(py_file):
                 return None
             return cls(py_func, py_file)
+
+    return _ContentLocator, _ReadOnlyContentLocator
+
+
+#: numba's cache machinery subclassed, once numba is imported (code, as numba's dispatchers
+#: are: not a memo of values)
+_CACHE_CLASS: list[type] = []
+
+
+def _cache_classes():
+    """numba's cache machinery, subclassed (on first need: numba is imported only where a
+    kernel is compiled or loaded by numba, :func:`numba_module`); returns
+    :class:`VersionedFunctionCache`."""
+    if _CACHE_CLASS:
+        return _CACHE_CLASS[0]
+    from numba.core import caching
+
+    from ._kernel_files import ProvenCacheFile
+
+    _ContentLocator, _ReadOnlyContentLocator = _content_locators(caching)
 
     def _versioned(base: type) -> type:
         """A numba cache locator like ``base`` whose source stamp also holds the kernel's
@@ -223,6 +236,7 @@ def _cache_classes():
                     "folder with free space)"
                 )
 
+    _CACHE_CLASS.append(VersionedFunctionCache)
     return VersionedFunctionCache
 
 
@@ -273,7 +287,10 @@ def stamp_folder(module: str) -> Path:
     return kernel_root() / module / kernel_stamp(module)
 
 
-_ahead: dict[str, dict | None] = {}
+#: The extensions loaded in this process, per kernel folder and setting (code, as numba's
+#: dispatchers are: not a memo of values, and an extension cannot be unloaded): whether
+#: kernels were built ahead of time there, and each module's entry points.
+_LOADED: dict[tuple[str, bool], dict] = {}
 
 
 def _marker() -> Path | None:
@@ -283,23 +300,32 @@ def _marker() -> Path | None:
     return None if key is None else kernel_root() / f"aot-{key}"
 
 
-@lru_cache(maxsize=1)
+def _state() -> dict:
+    key = (str(kernel_root()), _aot.enabled())
+    state = _LOADED.get(key)
+    if state is None:
+        m = _marker() if key[1] else None
+        state = _LOADED[key] = {"built": m is not None and m.exists(), "modules": {}}
+    return state
+
+
 def built_ahead() -> bool:
-    """Whether kernels were built ahead of time here (then every kernel waits for its first
-    call to import numba, so that a process that the extensions serve never does)."""
-    m = _marker()
-    return _aot.enabled() and m is not None and m.exists()
+    """Whether kernels were built ahead of time in the kernel folder (then every kernel
+    waits for its first call to import numba, so that a process that the extensions serve
+    never does)."""
+    return _state()["built"]
 
 
 def ahead_of_time(module: str) -> dict | None:
     """The entry points of ``module``'s ahead-of-time extension by kernel
     (:func:`sim_tactile._aot.load`), loaded once a process; None where there is none."""
-    if module not in _ahead:
+    modules = _state()["modules"]
+    if module not in modules:
         found = None
-        if _aot.enabled() and module.split(".")[0] == PACKAGE:
+        if module.split(".")[0] == PACKAGE and built_ahead():
             found = _aot.load(_aot.folder(stamp_folder(module)))
-        _ahead[module] = found
-    return _ahead[module]
+        modules[module] = found
+    return modules[module]
 
 
 def njit(fn: Callable | None = None, **options):
@@ -389,6 +415,7 @@ def build_ahead(modules=None, log: Callable[[str], None] = lambda s: None) -> li
         )
     root.mkdir(parents=True, exist_ok=True)
     _marker().write_text("kernels built ahead of time for this CPU (sim-tactile kernels build)\n")
+    _LOADED.clear()  # this process looks again
     done = []
     for module in modules:
         try:

@@ -4,6 +4,7 @@ module when asked for, and the held step is chosen in one function."""
 from __future__ import annotations
 
 import ast
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -14,8 +15,16 @@ SIM = Path(sim_tactile.__file__).parent / "sim"
 
 
 def _run(code: str) -> subprocess.CompletedProcess:
+    # numba's kernels, not those built ahead of time (sim_tactile/_aot.py), which load no
+    # numba where they serve
+    env = {**os.environ, "SIM_TACTILE_AOT": "0"}
     return subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=False, timeout=300
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=300,
+        env=env,
     )
 
 
