@@ -397,15 +397,21 @@ def build_ahead(modules=None, log: Callable[[str], None] = lambda s: None) -> li
     ``modules`` (default: every module of the package with a kernel folder at its current
     code version) into each module's extension; returns, per module, what was built (or
     why not). Replaces an extension that is there."""
-    import hashlib
-    import json
-    import shutil
-    import sys
-    import tempfile
+    from .errors import MissingDependencyError
 
     if _aot.cpu_key() is None:
-        raise OSError("this machine's CPU cannot be named (no /proc/cpuinfo): nothing is built")
+        raise MissingDependencyError(
+            "kernels are built ahead of time only where the CPU can be named (/proc/cpuinfo, "
+            "Linux): numba serves them here, as before"
+        )
     numba = numba_module()
+    try:
+        from numba.pycc import CC
+    except ImportError as exc:
+        raise MissingDependencyError(
+            f"numba {numba.__version__} has no pycc ({exc}): the kernels cannot be built ahead "
+            "of time with it; numba serves them, as before"
+        ) from exc
     root = kernel_root()
     if modules is None:
         modules = sorted(
@@ -440,44 +446,60 @@ def build_ahead(modules=None, log: Callable[[str], None] = lambda s: None) -> li
         if not exports:
             done.append({"module": module, "built": 0, "why": "no signature it can serve"})
             continue
-        from numba.pycc import CC
-
-        tag = hashlib.sha256(f"{module}:{where.name}".encode()).hexdigest()[:12]
-        ext = f"_sim_tactile_aot_{tag}"
-        staged = Path(tempfile.mkdtemp(prefix=".aot-", dir=where))
         try:
-            cc = CC(ext)
-            cc.output_dir = str(staged)
-            cc.target_cpu = "host"
-            cc.verbose = False
-            for export, full, fn in exports:
-                cc.export(export, full)(fn)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", numba.NumbaPendingDeprecationWarning)
-                cc.compile()
-            (so,) = staged.glob(f"{ext}*.so")
-            doc = {
-                "format": _aot.FORMAT,
-                "module": module,
-                "stamp": where.name,
-                "python": sys.implementation.cache_tag,
-                "cpu": _aot.cpu_key(),
-                "numba": numba.__version__,
-                "file": so.name,
-                "sha256": hashlib.sha256(so.read_bytes()).hexdigest(),
-                "kernels": kernels,
-            }
-            (staged / _aot.INDEX).write_text(json.dumps(doc, indent=1, sort_keys=True))
-            for f in staged.iterdir():  # pycc's intermediate files
-                if f.name not in (so.name, _aot.INDEX):
-                    shutil.rmtree(f) if f.is_dir() else f.unlink()
-            final = _aot.folder(where)
-            if final.exists():  # the one it replaces, out of the way first
-                final.rename(staged.with_name(staged.name + "-old"))
-            staged.rename(final)
-        finally:
-            shutil.rmtree(staged, ignore_errors=True)
-            shutil.rmtree(staged.with_name(staged.name + "-old"), ignore_errors=True)
+            _compile_extension(CC, numba, module, where, exports, kernels)
+        except Exception as exc:  # a C compiler missing or failing: numba serves the module
+            why = f"pycc failed ({type(exc).__name__}: {(str(exc).strip().splitlines() or [''])[0]})"
+            done.append({"module": module, "built": 0, "why": why})
+            log(f"{module}: {why}")
+            continue
         done.append({"module": module, "built": len(exports), "kernels": sorted(kernels)})
         log(f"{module}: {len(exports)} signature(s) of {len(kernels)} kernel(s)")
     return done
+
+
+def _compile_extension(CC, numba, module: str, where: Path, exports, kernels) -> None:
+    """pycc's extension of ``exports`` (name, signature, function) and its index, staged in
+    the module's kernel folder ``where`` and moved into place whole."""
+    import hashlib
+    import json
+    import shutil
+    import sys
+    import tempfile
+
+    tag = hashlib.sha256(f"{module}:{where.name}".encode()).hexdigest()[:12]
+    ext = f"_sim_tactile_aot_{tag}"
+    staged = Path(tempfile.mkdtemp(prefix=".aot-", dir=where))
+    try:
+        cc = CC(ext)
+        cc.output_dir = str(staged)
+        cc.target_cpu = "host"  # numba's JIT compiles for this CPU too
+        cc.verbose = False
+        for export, full, fn in exports:
+            cc.export(export, full)(fn)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", numba.NumbaPendingDeprecationWarning)
+            cc.compile()
+        (so,) = staged.glob(f"{ext}*.so")
+        doc = {
+            "format": _aot.FORMAT,
+            "module": module,
+            "stamp": where.name,
+            "python": sys.implementation.cache_tag,
+            "cpu": _aot.cpu_key(),
+            "numba": numba.__version__,
+            "file": so.name,
+            "sha256": hashlib.sha256(so.read_bytes()).hexdigest(),
+            "kernels": kernels,
+        }
+        (staged / _aot.INDEX).write_text(json.dumps(doc, indent=1, sort_keys=True))
+        for f in staged.iterdir():  # pycc's intermediate files
+            if f.name not in (so.name, _aot.INDEX):
+                shutil.rmtree(f) if f.is_dir() else f.unlink()
+        final = _aot.folder(where)
+        if final.exists():  # the one it replaces, out of the way first
+            final.rename(staged.with_name(staged.name + "-old"))
+        staged.rename(final)
+    finally:
+        shutil.rmtree(staged, ignore_errors=True)
+        shutil.rmtree(staged.with_name(staged.name + "-old"), ignore_errors=True)

@@ -231,3 +231,26 @@ print(json.dumps(res))
     for k in ("contig", "strided", "fortran", "f32"):
         assert aot[k] == jit[k], k
     assert jit["strided"] == jit["contig"] == jit["fortran"]  # whatever the layout
+
+
+def test_a_module_pycc_cannot_compile_is_said_and_left_to_numba(tmp_path, monkeypatch):
+    """A C compiler missing or failing fails the module's build, not the command: it says
+    why, keeps nothing, and numba serves the module as before."""
+    import numba.pycc
+    from _kernels import compile_into
+
+    from sim_tactile import _jit
+
+    compile_into(tmp_path)  # numba caches clipped's kernels in the test's folder
+    monkeypatch.setenv("SIM_TACTILE_KERNELS", str(tmp_path))
+
+    class Failing(numba.pycc.CC):
+        def compile(self):
+            raise OSError("gcc: command not found")
+
+    monkeypatch.setattr(numba.pycc, "CC", Failing)
+    (done,) = _jit.build_ahead([MODULE])
+    assert done["built"] == 0 and "gcc: command not found" in done["why"]
+    stamp = tmp_path / MODULE / kernel_stamp(MODULE)
+    assert not _aot.folder(stamp).exists()
+    assert [p.name for p in stamp.iterdir() if p.name.startswith(".aot")] == []
