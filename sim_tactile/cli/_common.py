@@ -135,14 +135,20 @@ def kernels_to_compile(modules: Sequence[str] = ("sim_tactile.sim.slide",)) -> i
         from numba.core.registry import CPUDispatcher
     except ImportError:
         return None
+    from .._aot import Kernel
+
     kernels = {
         id(obj): obj
         for name, mod in list(sys.modules.items())
         if name.startswith("sim_tactile.") and mod is not None
         for obj in list(vars(mod).values())
-        if isinstance(obj, CPUDispatcher)  # once each, also where other modules import it
+        if isinstance(obj, (CPUDispatcher, Kernel))  # once each, also where imported
     }
-    return sum(not _cached_on_disk(k) for k in kernels.values())
+    # a kernel built ahead of time (sim_tactile/_aot.py) compiles nothing for what it serves
+    return sum(
+        not (getattr(k, "served_ahead", 0) or _cached_on_disk(getattr(k, "dispatcher", k)))
+        for k in kernels.values()
+    )
 
 
 def _cached_on_disk(dispatcher) -> bool:
