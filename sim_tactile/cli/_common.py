@@ -172,7 +172,10 @@ def compile_notice(say: Callable[[str], None] = log) -> Iterator[None]:
     worker processes it forks (a flag in memory they share)."""
     import multiprocessing
 
-    from .._jit import when_numba
+    from .._jit import numba_module, when_numba
+
+    if "numba" in sys.modules:  # imported already (by numba's kernels, or by a caller)
+        numba_module()
 
     said, lock = multiprocessing.RawValue("b", 0), multiprocessing.Lock()
     registered = []  # (event module, listener), once numba is imported (never, where the
