@@ -6,10 +6,10 @@
 ``perf/bench_response.py`` gives one figure a scene over a few plates; a plate the choice of
 plates misses can be far from it. This runs the task's own slides (``--slides``: their
 indices among each plate's slides of the full task, seed 0), whole windows, the ideal
-loads, on every plate of the scene whose skin is solved spectrally (the others are solved
-densely, step by step, whatever ``auto`` is told; ``--plates`` names some), once per step
-(the reference: ``path = per-step``) and once per setting (``solve_every = n``,
-``solve_tol = 1e-4``, as ``auto`` takes them), and prints, per plate and slide, the relative
+loads, on every plate of the scene whose skin is solved spectrally (with ``--dense``, the
+densely solved ones too; ``--plates`` names some), once per step (the reference: ``path =
+per-step``) and once per setting (``solve_every = n``, and ``solve_tol = 1e-4`` on a
+spectral skin, as ``auto`` takes them), and prints, per plate and slide, the relative
 L2 of the taxel loads over the slide against the reference and the largest one-taxel
 difference over the largest load, in percent.
 """
@@ -30,6 +30,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_arguments(ap, slides="0")
     ap.add_argument("--settings", default="2,4", help="comma-separated solve_every values")
+    ap.add_argument("--dense", action="store_true", help="the densely solved plates too")
     args = ap.parse_args()
 
     from sim_tactile.cache import ArtefactCache
@@ -41,14 +42,16 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         cache = ArtefactCache(tmp)
         for plate, k, slide in task_slides(args):
-            if not slide.spectral:
-                rows.append({"plate": plate, "slide": k, "skin": "dense"})
+            skin = "spectral" if slide.spectral else "dense"
+            if skin == "dense" and not args.dense:
+                rows.append({"plate": plate, "slide": k, "skin": skin})
                 continue
             ref = run(replace(slide, options=StepOptions(path="per-step")), cache)
             b = ref.recording.data.astype(float)
-            row = {"plate": plate, "slide": k, "skin": "spectral"}
+            row = {"plate": plate, "slide": k, "skin": skin}
             for n in settings:
-                opts = StepOptions(solve_every=n, solve_tol=AUTO_SOLVE_TOL)
+                tol = {"solve_tol": AUTO_SOLVE_TOL} if skin == "spectral" else {}
+                opts = StepOptions(solve_every=n, **tol)
                 a = run(replace(slide, options=opts), cache).recording.data.astype(float)
                 row[f"every {n}"] = {
                     "rel_l2_pct": round(100 * float(np.linalg.norm(a - b) / np.linalg.norm(b)), 2),
@@ -61,7 +64,7 @@ def main() -> int:
                     for key, v in row.items()
                     if key.startswith("every")
                 )
-                print(f"{plate} slide {k}: {cells}", flush=True)
+                print(f"{plate} slide {k} ({skin}): {cells}", flush=True)
     if args.json:
         print(json.dumps(rows, indent=1))
     return 0

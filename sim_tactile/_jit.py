@@ -449,7 +449,9 @@ def build_ahead(modules=None, log: Callable[[str], None] = lambda s: None) -> li
         try:
             _compile_extension(CC, numba, module, where, exports, kernels)
         except Exception as exc:  # a C compiler missing or failing: numba serves the module
-            why = f"pycc failed ({type(exc).__name__}: {(str(exc).strip().splitlines() or [''])[0]})"
+            why = (
+                f"pycc failed ({type(exc).__name__}: {(str(exc).strip().splitlines() or [''])[0]})"
+            )
             done.append({"module": module, "built": 0, "why": why})
             log(f"{module}: {why}")
             continue
