@@ -28,7 +28,7 @@ from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, keyed
 from .phase import PhasePlan, depths_by_column, table_plan, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
-from .solver import dense_is_dear
+from .solver import dense_is_dear, dense_step_is_dear
 
 
 @dataclass(frozen=True)
@@ -170,6 +170,8 @@ class Slide:
             return None, replace(
                 opts, path="per-step", skin_solver="spectral", solve_tol=AUTO_SOLVE_TOL
             )
+        if auto and held and self._dense_step_is_dear(proto):
+            return None, replace(opts, path="per-step", solve_every=AUTO_SOLVE_EVERY)
         if not (auto and self.spectral):
             return None, replace(opts, path="per-step")
         every = (
@@ -184,6 +186,12 @@ class Slide:
             return False
         by_column = depths_by_column(self.plate, self.pad.patch_m, proto.offset_y_m)
         return dense_is_dear(self.resolved, self.pad, by_column)
+
+    def _dense_step_is_dear(self, proto: Protocol) -> bool:
+        """Whether ``auto`` solves the slide's dense skin at every
+        :data:`~.options.AUTO_SOLVE_EVERY`-th step (:func:`~.solver.dense_step_is_dear`)."""
+        by_column = depths_by_column(self.plate, self.pad.patch_m, proto.offset_y_m)
+        return dense_step_is_dear(self.resolved, self.pad, by_column, self.spectral)
 
     @property
     def held_press(self) -> bool:

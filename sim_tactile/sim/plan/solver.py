@@ -1,5 +1,6 @@
 """Which solver ``path = auto`` gives a held slide's skin where the node count alone would
-choose the dense one: :func:`dense_is_dear`.
+choose the dense one (:func:`dense_is_dear`), and where it solves a dense skin at fewer
+steps than the dynamics (:func:`dense_step_is_dear`).
 
 The dense solve (:class:`~sim_tactile.sim.skin.contact.ActiveSet`) and the spectral one
 (:class:`~sim_tactile.sim.skin.contact.spectral.Spectral`) solve the same discrete problem;
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 from .fidelity import Fidelity, solved_spectrally
 from .measured_errors import node_count
+from .options import AUTO_SOLVE_EVERY
 
 #: Fewest nodes of a flat pad's lattice at which ``path = auto`` solves a held slide's skin
 #: spectrally where it would be a full dense problem (:func:`dense_is_dear`). A flat pad on
@@ -43,4 +45,18 @@ def dense_is_dear(fid: Fidelity, finger, by_column: bool) -> bool:
     return node_count(finger, fid.pitch_m, fid.pitch_y_m) >= FLAT_SPECTRAL_MIN_NODES
 
 
-__all__ = ["FLAT_SPECTRAL_MIN_NODES", "dense_is_dear"]
+def dense_step_is_dear(fid: Fidelity, finger, by_column: bool, spectral: bool) -> bool:
+    """Whether ``auto`` solves a held slide's dense skin at every
+    :data:`~.options.AUTO_SOLVE_EVERY`-th step only: the coupled half-space or layered skin
+    on the pad's own lattice (not the plate-anchored lattice, nor clipped patches, nor L0's
+    Winkler bed), solved densely (not ``spectral``) as a full problem (its depths do not
+    reduce by column: ``by_column``), where a sample spans at least that many steps. Its
+    step is then a block update of the contact set's inverse on most steps (multilayer3-v1's
+    hemispheres: 326 us a step, 6.4 of a set's 9.3 s). See
+    :data:`~.options.AUTO_SOLVE_EVERY` for the measured errors."""
+    if spectral or by_column or not fid.coupled or fid.clipped or fid.wall_m is not None:
+        return False
+    return fid.steps_per_sample >= AUTO_SOLVE_EVERY
+
+
+__all__ = ["FLAT_SPECTRAL_MIN_NODES", "dense_is_dear", "dense_step_is_dear"]
