@@ -38,7 +38,10 @@ AUTO_SOLVE_TOL = 1e-4
 #: slide of each, and three of the five worst): at every 2nd step at most 1.62% rel L2
 #: (0.15-0.34% on the v2 strips' rough plates); at every 4th, five plates beyond 2% (boxes,
 #: cylinders and hemispheres of 3-4.5 mm, the drafted grating: up to 2.91%), where a wall's
-#: jump is smeared over four steps' travel.
+#: jump is smeared over four steps' travel. The same on a held slide's dense skin solved as a
+#: full problem (:func:`~.solver.dense_step_is_dear`), measured on every plate where auto
+#: takes it (perf/bench_every_plate.py --dense, slides 0-2): multilayer3-v1's hemispheres
+#: 0.95-1.10% (every 3rd: 1.92-2.21%), textures20-biotac19-v1's seven grids 0.11-1.06%.
 AUTO_SOLVE_EVERY = 2
 #: How a held slide's taxel loads are computed (``StepOptions.path``): ``auto`` (the phase
 #: table where the scene allows it and its measured error is within target, else the

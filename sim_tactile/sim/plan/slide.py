@@ -143,7 +143,9 @@ class Slide:
         step where the force is held (their errors measured within 2% on the task scenes);
         where the force is held on a flat pad whose dense problem would be full and large
         (:func:`~.solver.dense_is_dear`), spectrally to :data:`~.options.AUTO_SOLVE_TOL`
-        at every step instead (the same problem, within 0.005% of the dense solve);
+        at every step instead (the same problem, within 0.005% of the dense solve); where
+        it is held on a dense skin solved as a full problem (:func:`~.solver.dense_step_is_dear`),
+        at every :data:`~.options.AUTO_SOLVE_EVERY`-th step;
         ``per-step`` is the reference, the knobs as given. The resolved options say which
         (``path`` ``phase-table`` or ``per-step``). The probe rig has its own slide."""
         opts = self.options
