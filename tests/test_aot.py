@@ -239,7 +239,7 @@ def test_a_module_pycc_cannot_compile_is_said_and_left_to_numba(tmp_path, monkey
     import numba.pycc
     from _kernels import compile_into
 
-    from sim_tactile import _jit
+    from sim_tactile import _aot_build
 
     compile_into(tmp_path)  # numba caches clipped's kernels in the test's folder
     monkeypatch.setenv("SIM_TACTILE_KERNELS", str(tmp_path))
@@ -249,7 +249,7 @@ def test_a_module_pycc_cannot_compile_is_said_and_left_to_numba(tmp_path, monkey
             raise OSError("gcc: command not found")
 
     monkeypatch.setattr(numba.pycc, "CC", Failing)
-    (done,) = _jit.build_ahead([MODULE])
+    (done,) = _aot_build.build_ahead([MODULE])
     assert done["built"] == 0 and "gcc: command not found" in done["why"]
     stamp = tmp_path / MODULE / kernel_stamp(MODULE)
     assert not _aot.folder(stamp).exists()

@@ -137,7 +137,7 @@ def test_a_slide_with_the_reduced_skin_equals_the_full_one(plate, cache):
             protocol=Protocol(duration_s=0.5, offset_jitter_m=1e-3),
             ideal=True,
             seed=5,
-            options=StepOptions(reduce_skin=reduce),
+            options=StepOptions(reduce_skin=reduce, path="per-step"),  # not auto's choice
             cache=cache,
         ).recording
 
@@ -215,7 +215,7 @@ def test_the_compiled_held_step_on_ridges_and_cylinders(plate, cache):
     collider."""
 
     kw = dict(fidelity="L1", seed=4, cache=cache)
-    fast = _ideal_slide(plate, "grid3x3", 0.5, StepOptions(), **kw)
+    fast = _ideal_slide(plate, "grid3x3", 0.5, StepOptions(path="per-step"), **kw)
     slow = _ideal_slide(plate, "grid3x3", 0.5, StepOptions(compiled_hold=False), **kw)
     assert slow.meta["skin_problem"] == "full problem"
     assert fast.data.max() > 0.05

@@ -10,7 +10,8 @@ from ._common import add_command, emit, log
 def cmd_kernels_build(args: argparse.Namespace) -> int:
     """Compile every kernel signature that numba has cached at the current code version
     into one extension a module (:mod:`sim_tactile._aot`)."""
-    from .._jit import build_ahead, kernel_root
+    from .._aot_build import build_ahead
+    from .._jit import kernel_root
 
     modules = args.modules.split(",") if args.modules else None
     done = build_ahead(modules, log=log)
