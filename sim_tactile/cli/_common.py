@@ -62,6 +62,13 @@ class LazyHelpFormatter(argparse.HelpFormatter):
         return super()._format_action(action)
 
 
+def add_group(parent, name: str, help: str):
+    """A command of subcommands (``sim-tactile NAME SUBCOMMAND``), one of which must be
+    given; returns the subparsers to add them to (:func:`add_command`)."""
+    group = parent.add_parser(name, help=help, description=help)
+    return group.add_subparsers(dest=f"{name}_command", required=True)
+
+
 def add_command(
     parent, name: str, func, help: str, *, compiles: bool = False
 ) -> argparse.ArgumentParser:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import add_command, emit, log
+from ._common import add_command, add_group, emit, log
 
 
 def cmd_kernels_build(args: argparse.Namespace) -> int:
@@ -33,12 +33,7 @@ def cmd_kernels_build(args: argparse.Namespace) -> int:
 
 
 def add_parsers(sub) -> None:
-    k = sub.add_parser(
-        "kernels",
-        help="Compile the package's kernels ahead of time.",
-        description="Compile the package's kernels ahead of time.",
-    )
-    ksub = k.add_subparsers(dest="kernels_command", required=True)
+    ksub = add_group(sub, "kernels", "Compile the package's kernels ahead of time.")
     b = add_command(
         ksub,
         "build",

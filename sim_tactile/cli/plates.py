@@ -6,7 +6,15 @@ import argparse
 
 from ..errors import ConfigError
 from ..tables import text_table
-from ._common import PLATE_FRAME_HELP, PLATE_HELP, add_command, emit, log, plate_of
+from ._common import (
+    PLATE_FRAME_HELP,
+    PLATE_HELP,
+    add_command,
+    add_group,
+    emit,
+    log,
+    plate_of,
+)
 
 
 def cmd_plates_list(args: argparse.Namespace) -> int:
@@ -52,12 +60,7 @@ def cmd_plates_build(args: argparse.Namespace) -> int:
 
 
 def add_parsers(sub) -> None:
-    plates = sub.add_parser(
-        "plates",
-        help="List and build the textured plates.",
-        description="List and build the textured plates.",
-    )
-    psub = plates.add_subparsers(dest="plates_command", required=True)
+    psub = add_group(sub, "plates", "List and build the textured plates.")
     add_command(psub, "list", cmd_plates_list, "List the preset plates with their family and hash.")
     b = add_command(
         psub,
