@@ -31,6 +31,7 @@ source. The extension is machine code: the kernel folder is trusted as code is.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.machinery
 import importlib.util
@@ -57,10 +58,11 @@ def enabled() -> bool:
     return os.environ.get(ENV, "1") != "0"
 
 
+@functools.cache
 def cpu_key() -> str | None:
     """A name for this machine's CPU, as the compiled code depends on it (the model and its
     instruction-set flags, the architecture and this Python's ABI); None where it cannot be
-    read (no ``/proc/cpuinfo``): no extension is then used or built."""
+    read (no ``/proc/cpuinfo``): no extension is then used or built. Read once a process."""
     try:
         text = Path("/proc/cpuinfo").read_text(errors="replace")
     except OSError:
@@ -123,7 +125,7 @@ def matcher(specs):
         consts[name] = value
         return name
 
-    def emit(expr: str, spec, depth: int) -> None:
+    def emit(expr: str, spec) -> None:
         v = f"v{counter[0]}"
         counter[0] += 1
         lines.append(f"    {v} = {expr}")
@@ -153,12 +155,12 @@ def matcher(specs):
             items = spec[-1]
             lines.append(f"    if type({v}) is not {cls} or len({v}) != {len(items)}: return False")
             for k, item in enumerate(items):
-                emit(f"{v}[{k}]", item, depth + 1)
+                emit(f"{v}[{k}]", item)
         else:
             raise ValueError(f"unknown argument spec {spec!r}")
 
     for k, spec in enumerate(specs):
-        emit(f"args[{k}]", spec, 0)
+        emit(f"args[{k}]", spec)
     # the source holds names, indices and integers only: the spec's dtypes and classes are
     # values in the namespace, never text
     source = "def ok(args):\n" + "\n".join(lines) + "\n    return True\n"
@@ -205,8 +207,9 @@ def _warn(message: str) -> None:
 def load(where: Path | None) -> dict[str, list] | None:
     """The entry points of the extension in ``where`` (:func:`folder`), by kernel: for each,
     ``(matcher, function)`` pairs; None where there is none, or it is not this code
-    version's, this Python's or whole."""
-    if where is None or not enabled():
+    version's, this Python's or whole. (Whether the extensions are enabled at all is the
+    caller's question: :func:`sim_tactile._jit.built_ahead` asks it.)"""
+    if where is None:
         return None
     index = where / INDEX
     try:
