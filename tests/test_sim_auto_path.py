@@ -28,6 +28,8 @@ STEP = StepOptions(path="per-step")
 #: task, plate, window [s] (None: the task's), protocol changes; the path ``auto`` takes.
 CASES = [
     pytest.param("finger7-v1", "finger7/bumps-4x4", 0.5, {}, "per-step", id="finger7-v1"),
+    # from flat ground over ridges across the pad: the set's slides share the tables
+    pytest.param("finger7-v1", "finger7/ridges-4", None, {}, "phase-table", id="finger7-v1-shared"),
     pytest.param("finger7-v2", "finger7/ridges-4", 0.3, {}, "per-step", id="finger7-v2"),
     pytest.param(
         "multilayer3-v1", "multilayer3/hemispheres-6x6", 0.4, {}, "per-step", id="multilayer3-v1"

@@ -23,7 +23,7 @@ from sim_tactile.cache import ArtefactCache, forget_process_memos
 from sim_tactile.errors import CacheWarning, ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.sim import Protocol, Slide, StepOptions, run
-from sim_tactile.sim.plan.phase import phase_plan
+from sim_tactile.sim.plan.phase import phase_plan, travel
 from sim_tactile.sim.step.phase_table import LEVELS_PER_OCTAVE, TABLE_EXT, force_levels
 from sim_tactile.tasks import get_task
 
@@ -125,10 +125,23 @@ def test_a_flat_plate_is_one_phase_and_the_per_step_slide(cache):
 def test_auto_takes_the_table_where_the_window_lies_on_the_texture_and_says_so():
     on = _task_slide("finger7-v1", "finger7/bumps-6x6", 0.25, start="texture")
     assert on.table_plan() is not None and on.describe()["path"] == "phase-table"
-    # from flat ground over a plate-anchored lattice (cheap dense steps): per step, and the
-    # description, hence the key, is the per-step slide's
-    across = _task_slide("finger7-v1", "finger7/ridges-4", 0.9)
+    # from flat ground, each slide its own table, over a plate-anchored lattice (cheap dense
+    # steps): per step, and the description, hence the key, is the per-step slide's
+    across = _task_slide("finger7-v1", "finger7/bumps-4x4", 0.9)
     assert across.table_plan() is None and "path" not in across.describe()
+    # from flat ground over ridges across the whole pad: the set's slides share the tables
+    # (force levels), so they pay for the stretch on the texture even over cheap steps
+    ridges = _task_slide("finger7-v1", "finger7/ridges-4", 0.9)
+    lo, hi = travel(ridges.window, ridges.drawn())
+    plan = ridges.table_plan()
+    assert plan is not None and not (plan.covers(lo) and plan.covers(hi))
+    assert ridges.describe()["path"] == "phase-table"
+    # a flat plate the pad is not wholly on at first: a uniform stretch, its table one solve
+    flat = _task_slide("textures20-icub60-v1", "textures20/flat", None)
+    assert not flat.spectral and flat.table_plan().period_m is None
+    # the same slides with a fixed force and no offset jitter share nothing: per step
+    fixed = replace(ridges.protocol, force_jitter=0.0)
+    assert replace(ridges, protocol=fixed).table_plan() is None
     assert replace(on, options=STEP).table_plan() is None
     assert "path" not in replace(on, options=STEP).describe()
 

@@ -102,6 +102,26 @@ def table_plan(
     return plan
 
 
+def tables_shared(plan: PhasePlan, nominal: Protocol) -> bool:
+    """Whether the slides of a set drawn from ``nominal`` share their tables at force levels
+    (:func:`~sim_tactile.sim.step.phase_table.force_levels`): their force varies from slide
+    to slide, and the table does not depend on their offset (it does not, or the offset does
+    not vary); else each slide's table is solved at its own force, as on a uniform stretch,
+    whose table is one solve."""
+    if plan.period_m is None:
+        return False
+    offset_free = plan.y_m == 0.0 or nominal.offset_jitter_m == 0.0
+    return nominal.force_jitter > 0.0 and offset_free
+
+
+def table_pays(plan: PhasePlan, nominal: Protocol) -> bool:
+    """Whether a table pays for a slide whose window lies on the repeating texture for part
+    of its travel only, whatever its skin's step costs: the table is one solve (a uniform
+    stretch), or the set's slides share it (:func:`tables_shared`: a few tables a plate, each
+    some tens of solves, against hundreds of steps of every slide)."""
+    return plan.period_m is None or tables_shared(plan, nominal)
+
+
 def travel(window: SlideWindow, proto: Protocol) -> tuple[float, float]:
     """The pad centre's x range [m] over ``window`` at ``proto``'s speed (an upper bound of
     its travel: the ramp at each stroke's start only shortens it)."""
@@ -268,4 +288,13 @@ def _repeats(surf, lo, hi, period, rx, y, step) -> bool:
     return True
 
 
-__all__ = ["MIN_PERIODS", "PhasePlan", "depths_by_column", "phase_plan", "table_plan", "travel"]
+__all__ = [
+    "MIN_PERIODS",
+    "PhasePlan",
+    "depths_by_column",
+    "phase_plan",
+    "table_pays",
+    "table_plan",
+    "tables_shared",
+    "travel",
+]

@@ -25,7 +25,7 @@ from ...plates.define.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
 from .fidelity import Fidelity, choose_fidelity, solved_spectrally
 from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, keyed
-from .phase import PhasePlan, depths_by_column, table_plan, travel
+from .phase import PhasePlan, depths_by_column, table_pays, table_plan, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
 from .solver import dense_is_dear, dense_step_is_dear
@@ -135,9 +135,11 @@ class Slide:
         hand (else it is ``per-step``, the knobs as given): the table where the whole window
         lies on the repeating
         texture (the slide then needs no press and no step solved on its own), or where it
-        lies there for part of it and each step's solve is dear (a spectral skin: a table
-        costs tens of solves, the stretch it replaces hundreds; a cheap dense or
-        plate-anchored step is as quick solved as read). Elsewhere the slide is solved step
+        lies there for part of it and the table pays (:func:`~.phase.table_pays`: a uniform
+        stretch's table is one solve, and tables the set's slides share cost a few a plate)
+        or each step's solve is dear (a spectral skin: a table costs tens of solves, the
+        stretch it replaces hundreds; a cheap dense or plate-anchored step of a slide's own
+        table is as quick solved as read). Elsewhere the slide is solved step
         by step; under ``auto`` with a spectral skin, to
         :data:`~.options.AUTO_SOLVE_TOL` and at every :data:`~.options.AUTO_SOLVE_EVERY`-th
         step where the force is held (their errors measured within 2% on the task scenes);
@@ -162,7 +164,7 @@ class Slide:
         if plan is not None and auto:
             lo, hi = travel(self.window, proto)
             whole = plan.covers(lo) and plan.covers(hi)
-            if not (whole or self.spectral):
+            if not (whole or self.spectral or table_pays(plan, self.protocol)):
                 plan = None
         if plan is not None:
             tol = AUTO_SOLVE_TOL if auto and self.spectral else opts.solve_tol

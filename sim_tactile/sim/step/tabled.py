@@ -24,7 +24,7 @@ from ...errors import PhysicsError
 from ...hashing import blas_kernel, code_version, content_hash
 from ..plan.fidelity import Fidelity, solved_spectrally
 from ..plan.options import keyed
-from ..plan.phase import PhasePlan, travel
+from ..plan.phase import PhasePlan, tables_shared, travel
 from ..plan.protocol import Protocol, SlideWindow
 from ..plan.slide import Slide
 from .batched_held import batched_held
@@ -229,27 +229,19 @@ def slide_on_table(
     return OnTable(table, runner, warnings, record[:7], record[7], steps, made)
 
 
-def shared(slide: Slide, plan: PhasePlan) -> bool:
-    """Whether the slides of ``slide``'s set share tables at force levels (their force
-    varies from slide to slide, and the table does not depend on their offset: it does not,
-    or the offset does not vary); else each slide's table is solved at its own force, as on
-    a uniform stretch, whose table is one solve."""
-    if plan.period_m is None:
-        return False
-    nominal = slide.protocol
-    offset_free = plan.y_m == 0.0 or nominal.offset_jitter_m == 0.0
-    return nominal.force_jitter > 0.0 and offset_free
-
-
 def table_for(
     slide: Slide, proto: Protocol, fid: Fidelity, plan: PhasePlan, cache
 ) -> tuple[PhaseTable | Blend, int]:
     """``(table, made)``: the slide's phase table at its force, and how many tables were
     solved for it (the rest came from this process or ``cache``). Where the slides of a set
-    share tables (:func:`shared`), the line between the tables at the two force levels on
+    share tables (:func:`~sim_tactile.sim.plan.phase.tables_shared`), the line between the tables at the two force levels on
     either side of the slide's force (:func:`~.phase_table.force_levels`), else the table at
     its own force."""
-    levels = force_levels(proto.force_n) if shared(slide, plan) else [(proto.force_n, 1.0)]
+    levels = (
+        force_levels(proto.force_n)
+        if tables_shared(plan, slide.protocol)
+        else [(proto.force_n, 1.0)]
+    )
     tables, made = [], 0
     for force, _ in levels:
         key = table_key(slide, fid, plan, force)
