@@ -43,7 +43,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from .errors import CacheError, CacheWarning, os_error_message
-from .hashing import code_version, content_hash
+from .hashing import code_version, content_hash, one_blas_thread
 
 #: The suffix of an entry's checksum file.
 SUM_SUFFIX = ".sum"
@@ -276,7 +276,11 @@ def setup_memo(what: str, parts: dict, compute, modules: tuple[str, ...]) -> tup
     under the content key of ``what``, ``parts`` (JSON data; arrays as :func:`~sim_tactile.hashing.array_digest`)
     and the source of ``modules`` (and what they import) with numpy's and scipy's versions:
     the key holds everything the value depends on, so it is never stale. The value is the
-    computed one, its arrays read-only (tested: slides equal bit for bit either way)."""
+    computed one, its arrays read-only (tested: slides equal bit for bit either way). It is
+    computed on one BLAS thread, as a slide computes (:func:`~sim_tactile.hashing.one_blas_thread`):
+    BLAS's threads sum in another order, and a value made outside a slide (a script's, a
+    test's) differed in its last bits from the slide's own under the same key (the layered
+    compliance table of finger7-v2's skin, 2e-27 m/Pa)."""
     key = content_hash(
         {
             "what": what,
@@ -287,7 +291,8 @@ def setup_memo(what: str, parts: dict, compute, modules: tuple[str, ...]) -> tup
     kept = SETUP.get(key)
     if kept is not None:
         return kept
-    return SETUP.put(key, tuple(compute()))
+    with one_blas_thread():
+        return SETUP.put(key, tuple(compute()))
 
 
 # ------------------------------------------------------------------------- in-process memos

@@ -151,3 +151,27 @@ def test_the_package_keeps_no_memo_outside_the_registry():
         if p.name not in below and pattern.search(p.read_text())
     ]
     assert found == []
+
+
+def test_a_value_kept_outside_a_slide_is_the_slides_own_bit_for_bit():
+    """A slide computes on one BLAS thread; a script or a test that makes the same set-up
+    array first, on BLAS's own threads, must not leave another value under the same key
+    (the layered compliance table of finger7-v2's skin differed in its last bits; on one
+    core the two agree either way)."""
+    from sim_tactile.hashing import blas_controller, one_blas_thread
+    from sim_tactile.scene.nodes import skin_grid
+    from sim_tactile.sensors import resolve_sensor
+    from sim_tactile.sim.skin.models import SpectralSkin
+    from sim_tactile.tasks import get_task
+
+    job = get_task("finger7-v2").get_data.jobs(seed=0)[0]
+    finger = job.finger or resolve_sensor(job.sensor).finger
+    assert finger.stack is not None  # a layered skin: its table sums through BLAS
+    grid = skin_grid(finger, 0.25e-3)
+    with blas_controller().limit(limits=2, user_api="blas"):
+        outside = SpectralSkin.of(grid, finger).solver.table
+    forget_process_memos()
+    with one_blas_thread():
+        inside = SpectralSkin.of(grid, finger).solver.table
+    assert outside is not inside  # computed twice
+    assert np.array_equal(outside, inside)

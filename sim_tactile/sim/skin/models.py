@@ -41,7 +41,7 @@ import numpy as np
 
 from ...cache import SETUP, npz_bytes, setup_memo
 from ...errors import CacheWarning, ConfigError
-from ...hashing import array_digest, blas_kernel, code_version, content_hash
+from ...hashing import array_digest, blas_kernel, code_version, content_hash, one_blas_thread
 from ...scene.elastic import compliance_matrix, compliance_table
 from ...scene.layered import Stack, layered_compliance_matrix, layered_compliance_table
 from ...scene.nodes import SkinGrid
@@ -307,9 +307,13 @@ def _keyed(key, C, K, what, symmetric) -> CoupledSkin:
 
 
 def _dense(grid, finger, slide_dir, inverse) -> CoupledSkin:
-    if finger.stack is not None:
-        return CoupledSkin.layered(grid, finger, inverse=inverse, slide_dir=slide_dir)
-    return CoupledSkin.half_space(grid, finger, inverse=inverse, slide_dir=slide_dir)
+    """The dense skin, computed on one BLAS thread as a slide computes it, wherever it is
+    asked for (BLAS's threads sum in another order: arrays kept under one key must not
+    depend on who made them first; see :func:`~sim_tactile.cache.setup_memo`)."""
+    with one_blas_thread():
+        if finger.stack is not None:
+            return CoupledSkin.layered(grid, finger, inverse=inverse, slide_dir=slide_dir)
+        return CoupledSkin.half_space(grid, finger, inverse=inverse, slide_dir=slide_dir)
 
 
 #: The contact solvers of a coupled skin.
