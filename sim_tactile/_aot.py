@@ -31,7 +31,6 @@ source. The extension is machine code: the kernel folder is trusted as code is.
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import importlib.machinery
 import importlib.util
@@ -58,11 +57,11 @@ def enabled() -> bool:
     return os.environ.get(ENV, "1") != "0"
 
 
-@functools.cache
 def cpu_key() -> str | None:
     """A name for this machine's CPU, as the compiled code depends on it (the model and its
     instruction-set flags, the architecture and this Python's ABI); None where it cannot be
-    read (no ``/proc/cpuinfo``): no extension is then used or built. Read once a process."""
+    read (no ``/proc/cpuinfo``): no extension is then used or built. (A process reads it
+    once: :func:`sim_tactile._jit._state` keeps it and passes it on.)"""
     try:
         text = Path("/proc/cpuinfo").read_text(errors="replace")
     except OSError:
@@ -81,11 +80,10 @@ def cpu_key() -> str | None:
     return h.hexdigest()[:12]
 
 
-def folder(stamp_folder: Path) -> Path | None:
+def folder(stamp_folder: Path, cpu: str | None) -> Path | None:
     """Where the extension of a module's code version (its kernel folder ``stamp_folder``)
-    lies on this CPU; None where the CPU cannot be named."""
-    key = cpu_key()
-    return None if key is None else Path(stamp_folder) / f"aot-{key}"
+    lies on the CPU ``cpu`` (:func:`cpu_key`); None where the CPU cannot be named."""
+    return None if cpu is None else Path(stamp_folder) / f"aot-{cpu}"
 
 
 # -- the check of a call's arguments, as numba's typeof would type them ------------------------
@@ -204,10 +202,10 @@ def _warn(message: str) -> None:
     warnings.warn(message, CacheWarning, stacklevel=4)
 
 
-def load(where: Path | None) -> dict[str, list] | None:
+def load(where: Path | None, cpu: str | None) -> dict[str, list] | None:
     """The entry points of the extension in ``where`` (:func:`folder`), by kernel: for each,
     ``(matcher, function)`` pairs; None where there is none, or it is not this code
-    version's, this Python's or whole. (Whether the extensions are enabled at all is the
+    version's, this Python's, the CPU ``cpu``'s (:func:`cpu_key`) or whole. (Whether the extensions are enabled at all is the
     caller's question: :func:`sim_tactile._jit.built_ahead` asks it.)"""
     if where is None:
         return None
@@ -221,7 +219,7 @@ def load(where: Path | None) -> dict[str, list] | None:
         return None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         return None
-    if doc.get("python") != sys.implementation.cache_tag or doc.get("cpu") != cpu_key():
+    if doc.get("python") != sys.implementation.cache_tag or doc.get("cpu") != cpu:
         return None
     so = where / str(doc.get("file", ""))
     try:

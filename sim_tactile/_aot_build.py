@@ -46,7 +46,8 @@ def build_ahead(modules=None, log: Callable[[str], None] = lambda s: None) -> li
     why not). Replaces an extension that is there."""
     from .errors import MissingDependencyError
 
-    if _aot.cpu_key() is None:
+    cpu = _aot.cpu_key()
+    if cpu is None:
         raise MissingDependencyError(
             "kernels are built ahead of time only where the CPU can be named (/proc/cpuinfo, "
             "Linux): numba serves them here, as before"
@@ -67,7 +68,9 @@ def build_ahead(modules=None, log: Callable[[str], None] = lambda s: None) -> li
             if d.is_dir() and d.name.split(".")[0] == PACKAGE
         )
     root.mkdir(parents=True, exist_ok=True)
-    _marker().write_text("kernels built ahead of time for this CPU (sim-tactile kernels build)\n")
+    _marker(cpu).write_text(
+        "kernels built ahead of time for this CPU (sim-tactile kernels build)\n"
+    )
     _LOADED.clear()  # this process looks again
     done = []
     for module in modules:
@@ -94,7 +97,7 @@ def build_ahead(modules=None, log: Callable[[str], None] = lambda s: None) -> li
             done.append({"module": module, "built": 0, "why": "no signature it can serve"})
             continue
         try:
-            _compile_extension(CC, numba, module, where, exports, kernels)
+            _compile_extension(CC, numba, module, where, exports, kernels, cpu)
         except Exception as exc:  # a C compiler missing or failing: numba serves the module
             why = (
                 f"pycc failed ({type(exc).__name__}: {(str(exc).strip().splitlines() or [''])[0]})"
@@ -107,9 +110,9 @@ def build_ahead(modules=None, log: Callable[[str], None] = lambda s: None) -> li
     return done
 
 
-def _compile_extension(CC, numba, module: str, where: Path, exports, kernels) -> None:
-    """pycc's extension of ``exports`` (name, signature, function) and its index, staged in
-    the module's kernel folder ``where`` and moved into place whole."""
+def _compile_extension(CC, numba, module: str, where: Path, exports, kernels, cpu: str) -> None:
+    """pycc's extension of ``exports`` (name, signature, function) and its index for the
+    CPU ``cpu``, staged in the module's kernel folder ``where`` and moved into place whole."""
     import hashlib
     import json
     import shutil
@@ -135,7 +138,7 @@ def _compile_extension(CC, numba, module: str, where: Path, exports, kernels) ->
             "module": module,
             "stamp": where.name,
             "python": sys.implementation.cache_tag,
-            "cpu": _aot.cpu_key(),
+            "cpu": cpu,
             "numba": numba.__version__,
             "file": so.name,
             "sha256": hashlib.sha256(so.read_bytes()).hexdigest(),
@@ -145,7 +148,7 @@ def _compile_extension(CC, numba, module: str, where: Path, exports, kernels) ->
         for f in staged.iterdir():  # pycc's intermediate files
             if f.name not in (so.name, _aot.INDEX):
                 shutil.rmtree(f) if f.is_dir() else f.unlink()
-        final = _aot.folder(where)
+        final = _aot.folder(where, cpu)
         if final.exists():  # the one it replaces, out of the way first
             final.rename(staged.with_name(staged.name + "-old"))
         staged.rename(final)

@@ -293,19 +293,23 @@ def stamp_folder(module: str) -> Path:
 _LOADED: dict[tuple[str, bool], dict] = {}
 
 
-def _marker() -> Path | None:
-    """The file that says kernels were built ahead of time for this CPU in the kernel
-    folder (:func:`sim_tactile._aot_build.build_ahead` writes it)."""
-    key = _aot.cpu_key()
-    return None if key is None else kernel_root() / f"aot-{key}"
+def _marker(cpu: str | None) -> Path | None:
+    """The file that says kernels were built ahead of time for the CPU ``cpu``
+    (:func:`sim_tactile._aot.cpu_key`) in the kernel folder
+    (:func:`sim_tactile._aot_build.build_ahead` writes it)."""
+    return None if cpu is None else kernel_root() / f"aot-{cpu}"
 
 
 def _state() -> dict:
+    """This process's state for the kernel folder and setting: whether kernels were built
+    ahead of time there, the CPU's key (read once) and the modules' entry points."""
     key = (str(kernel_root()), _aot.enabled())
     state = _LOADED.get(key)
     if state is None:
-        m = _marker() if key[1] else None
-        state = _LOADED[key] = {"built": m is not None and m.exists(), "modules": {}}
+        cpu = _aot.cpu_key() if key[1] else None
+        m = _marker(cpu)
+        built = m is not None and m.exists()
+        state = _LOADED[key] = {"built": built, "cpu": cpu, "modules": {}}
     return state
 
 
@@ -323,7 +327,8 @@ def ahead_of_time(module: str) -> dict | None:
     if module not in modules:
         found = None
         if module.split(".")[0] == PACKAGE and built_ahead():
-            found = _aot.load(_aot.folder(stamp_folder(module)))
+            cpu = _state()["cpu"]
+            found = _aot.load(_aot.folder(stamp_folder(module), cpu), cpu)
         modules[module] = found
     return modules[module]
 
