@@ -90,8 +90,9 @@ def depths(name: str, xs_m, press_m: float = 0.3e-3) -> np.ndarray:
 
 def numpy_chain(skin, pens, totals, tol):
     """Each pose by the numpy solve, warm-started from the last (as a slide's steps are):
-    the pressures, shifts, iterations and the warm starts it had."""
-    sp = Spectral(skin.solver.table, tol=tol)
+    the pressures, shifts, iterations and the warm starts it had; its products in double
+    precision, as the batched solve's in float64 (at a loose tolerance a slide's are single)."""
+    sp = Spectral(skin.solver.table, tol=tol, single=False)
     p, dz, its, warm = [], [], [], []
     for pen, total in zip(pens, totals, strict=True):
         warm.append(sp.p.copy())

@@ -321,7 +321,43 @@ def test_the_direct_transforms_are_scipy_ffts_bit_for_bit(shape):
     spectral._load_fft()
     assert spectral._DIRECT  # this scipy has the binding: the fast path is the one tested
     rng = np.random.default_rng(shape[0] * 100 + shape[1])
-    s = spectral.Spectral(np.abs(rng.standard_normal(shape)))
-    for _ in range(3):
-        p = rng.standard_normal(s.n)
-        assert np.array_equal(s.apply(p), s.apply_public(p))
+    table = np.abs(rng.standard_normal(shape))
+    for tol in (TOL, spectral.FLOAT32_MIN_TOL):  # double, and single products
+        s = spectral.Spectral(table, tol=tol)
+        for _ in range(3):
+            p = rng.standard_normal(s.n)
+            assert np.array_equal(s.apply(p), s.apply_public(p))
+
+
+#: How far a product in single precision may lie from the double one, relative to the
+#: largest deflection: float32's precision (6e-8) times the FFT's rounding growth.
+SINGLE_PRODUCT = 2e-6
+
+
+@pytest.mark.parametrize("nx,ny,px,py", LATTICES)
+def test_a_loose_solve_takes_single_products_within_its_tolerance_of_the_double_solve(
+    nx, ny, px, py
+):
+    """At a tolerance of at least FLOAT32_MIN_TOL the products are single (returned as
+    double), the reference's stay double; the held solves of a sliding pad agree with the
+    double-product solve at the same tolerance to that tolerance, in about as many
+    iterations."""
+    xy = _lattice(nx, ny, px, py)
+    table = compliance_table(nx, ny, px, E, py)
+    tol = 1e-4
+    single, double = Spectral(table, tol=tol), Spectral(table, tol=tol, single=False)
+    assert single.single and not double.single and not Spectral(table).single
+    p = np.random.default_rng(3).random(nx * ny)
+    u1, u2 = single.apply(p), double.apply(p)
+    assert u1.dtype == np.float64
+    assert 0 < np.abs(u1 - u2).max() < SINGLE_PRODUCT * np.abs(u2).max()
+    rng = np.random.default_rng(4)
+    total = 0.5 / (px * py)
+    for k in range(6):
+        pen = _bumps(xy, k * 0.3e-3, rng)
+        pa, dza = single.solve_force(pen, total)
+        pb, dzb = double.solve_force(pen, total)
+        assert np.abs(pa - pb).max() < 10 * tol * pb.max()
+        assert dza == pytest.approx(dzb, rel=10 * tol)
+        assert pa.sum() == pytest.approx(total, rel=1e-12)
+        assert abs(single.iterations - double.iterations) <= max(3, double.iterations // 4)

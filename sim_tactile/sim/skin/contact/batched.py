@@ -37,8 +37,8 @@ again (those rows alone, padded to a power of two of them: cuFFT keeps a plan pe
 size), and learns which poses are done every :data:`CHECK_EVERY` iterations (a pose that
 converges in between keeps its answer: it is taken when it converges; one whose start
 failed in between waits for its next start till then); the batch shrinks to the poses
-still running when they are half of it or fewer, in powers of two. In ``float32`` the rounding floor is :data:`ROUNDING_FLOAT32` and the
-tolerance must be at least :data:`FLOAT32_MIN_TOL`.
+still running when they are half of it or fewer, in powers of two. In ``float32`` the rounding floor is :data:`~.spectral.ROUNDING_FLOAT32` and the
+tolerance must be at least :data:`~.spectral.FLOAT32_MIN_TOL`.
 
 torch is imported when a solver is made, not when this module is imported.
 """
@@ -54,9 +54,11 @@ from .spectral import (
     BLOCKS_KEPT,
     CYCLE_CHANGE,
     CYCLE_ITER,
+    FLOAT32_MIN_TOL,
     JOIN_SHARE,
     REFRESH_EVERY,
     ROUNDING,
+    ROUNDING_FLOAT32,
     WARM_ITER,
     Spectral,
     _mean_gap,
@@ -66,17 +68,6 @@ from .spectral import (
 #: failed a start, whether the batch can shrink): each look waits for the GPU to finish its
 #: queue. On the CPU the host looks after every iteration (it costs nothing there).
 CHECK_EVERY = 8
-#: The tightest tolerance in ``float32``: there a change of the pressures below this share of
-#: their sum is near the rounding of the deflections (24 bits; measured on the iCub's poses
-#: of ``perf/bench_batched_solve.py``: at 1e-5 the answers are 2.5e-5 off the reference, as
-#: the float64 solve's at 1e-5 are 2.1e-5 off).
-FLOAT32_MIN_TOL = 1e-5
-#: :data:`~.spectral.ROUNDING` in ``float32``: the gaps on the contact set are equal when
-#: their spread is below this share of the largest deflection (four times the precision).
-#: Measured on the same poses: the float64 share scaled by the precision (5.4e-5) stopped the
-#: solve there, 1.2e-3 off the reference at a tolerance of 1e-4 (float64: 3.4e-4); from 2e-6
-#: down the float32 solve reaches its tolerance, and from 5e-7 down it agrees with itself.
-ROUNDING_FLOAT32 = 5e-7
 DTYPES = ("float64", "float32")
 
 

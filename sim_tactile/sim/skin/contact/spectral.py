@@ -112,6 +112,22 @@ BLOCKS_KEPT = 8
 #: converging held step of finger7/bumps-3x3 took a step 1e12 times its predecessors' on
 #: such a gradient and stopped far from the answer).
 ROUNDING = 1e-13
+#: The tightest tolerance at which a solve takes its FFT products in single precision
+#: (``float32`` transforms, some 1.45 times quicker than ``float64``'s on the iCub's
+#: lattices; everything else stays in double precision): a change of the pressures below
+#: this share of their sum is near the rounding of the products (24 bits). ``auto``'s
+#: loosened solves (``solve_tol = 1e-4``) take it; the reference (``1e-10``) never does.
+#: Measured on the batched solve's iCub poses (``perf/bench_batched_solve.py``; its
+#: arithmetic all single): at 1e-5 the answers are 2.5e-5 off the reference, as the
+#: double solve's at 1e-5 are 2.1e-5 off.
+FLOAT32_MIN_TOL = 1e-5
+#: :data:`ROUNDING` where the products are single: the gaps on the contact set are equal
+#: when their spread is below this share of the largest deflection (four times the
+#: precision). Measured on the same poses: the double share scaled by the precision
+#: (5.4e-5) stopped the solve 1.2e-3 off the reference at a tolerance of 1e-4 (double:
+#: 3.4e-4); from 2e-6 down the single solve reaches its tolerance, and from 5e-7 down it
+#: agrees with itself.
+ROUNDING_FLOAT32 = 5e-7
 
 
 def _mean_gap(u: np.ndarray, pen: np.ndarray, on: np.ndarray) -> float:
@@ -129,7 +145,13 @@ class Spectral:
     #: the iteration's vector work in compiled calls (False: numpy, the reference)
     compiled = True
 
-    def __init__(self, table: np.ndarray, tol: float = TOL, max_iter: int = MAX_ITER):
+    def __init__(
+        self,
+        table: np.ndarray,
+        tol: float = TOL,
+        max_iter: int = MAX_ITER,
+        single: bool | None = None,
+    ):
         _load_fft()
         table = np.asarray(table, dtype=np.float64)
         ny, nx = table.shape
@@ -146,9 +168,15 @@ class Spectral:
         ext[Ly - ny + 1 :, Lx - nx + 1 :] = table[:0:-1, :0:-1]
         self.shape = ext.shape
         self.khat = fft.rfft2(ext)
+        #: whether the FFT products are taken in single precision (``single``; None: where
+        #: the tolerance allows it, :data:`FLOAT32_MIN_TOL`)
+        self.single = tol >= FLOAT32_MIN_TOL if single is None else bool(single)
+        self.rounding = ROUNDING_FLOAT32 if self.single else ROUNDING
+        real, cplx = (np.float32, np.complex64) if self.single else (np.float64, np.complex128)
+        self._khat = self.khat.astype(cplx)  # the kernel's spectrum as the products take it
         # the product's buffers: the loads padded along x, the spectrum padded along y
-        self._padded = np.zeros((ny, Lx))
-        self._spectrum = np.zeros(self.khat.shape, dtype=np.complex128)
+        self._padded = np.zeros((ny, Lx), dtype=real)
+        self._spectrum = np.zeros(self.khat.shape, dtype=cplx)
         self.direct = _DIRECT
         self.table = table
         self.diag = float(table[0, 0])
@@ -165,7 +193,9 @@ class Spectral:
         The four transforms call scipy.fft's pocketfft binding directly (``direct``),
         the same transforms bit for bit (tested, and checked when this module loads) without
         the dispatch that cost as much as a small block's arithmetic (30 against 18 us on a
-        curved finger's 25 x 30 block); else :meth:`apply_public`, scipy.fft's functions."""
+        curved finger's 25 x 30 block); else :meth:`apply_public`, scipy.fft's functions.
+        A solver of a loose tolerance (:attr:`single`) transforms in single precision and
+        returns double."""
         if not self.direct:
             return self.apply_public(p)
         ny, nx = self.ny, self.nx
@@ -177,19 +207,20 @@ class Spectral:
         b[:ny] = a
         b[ny:] = 0.0
         _pocketfft.c2c(b, (0,), True, 0, b, 1)
-        b *= self.khat
+        b *= self._khat
         _pocketfft.c2c(b, (0,), False, 2, b, 1)
-        return _pocketfft.c2r(b[:ny], (1,), Lx, False, 2, None, 1)[:, :nx].ravel()
+        u = _pocketfft.c2r(b[:ny], (1,), Lx, False, 2, None, 1)[:, :nx]
+        return u.astype(np.float64).ravel() if self.single else u.ravel()
 
     def apply_public(self, p: np.ndarray) -> np.ndarray:
         """:meth:`apply` through scipy.fft's public functions (the reference)."""
         ny, nx = self.ny, self.nx
         Ly, Lx = self.shape
-        a = fft.rfft(p.reshape(ny, nx), n=Lx, axis=1)
+        a = fft.rfft(p.reshape(ny, nx).astype(self._padded.dtype), n=Lx, axis=1)
         a = fft.fft(a, n=Ly, axis=0)
-        a *= self.khat
+        a *= self._khat
         a = fft.ifft(a, axis=0, overwrite_x=True)[:ny]
-        return fft.irfft(a, n=Lx, axis=1)[:, :nx].ravel()
+        return fft.irfft(a, n=Lx, axis=1)[:, :nx].astype(np.float64).ravel()
 
     # -- the contact problem
     def solve(self, pen_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -242,7 +273,9 @@ class Spectral:
         shape = (y1 - y0, x1 - x0)
         sub = self._blocks.pop(shape, None)
         if sub is None:
-            sub = Spectral(self.table[: shape[0], : shape[1]], self.tol, self.max_iter)
+            sub = Spectral(
+                self.table[: shape[0], : shape[1]], self.tol, self.max_iter, self.single
+            )
             sub.compiled = self.compiled
         self._blocks[shape] = sub  # most recently used last
         while len(self._blocks) > BLOCKS_KEPT:
@@ -335,7 +368,7 @@ class Spectral:
                 held,
                 total_f,
                 G,
-                ROUNDING,
+                self.rounding,
                 DIRECT_MAX,
                 self.table,
                 self.nx,
@@ -404,7 +437,7 @@ class Spectral:
             r_raw = self.apply(t)
             r = r_raw - r_raw[on].mean() if total is not None else r_raw
             rt = float(r[on] @ t[on])
-            floor = (ROUNDING * float(np.abs(u).max())) ** 2 * float(on.sum())
+            floor = (self.rounding * float(np.abs(u).max())) ** 2 * float(on.sum())
             if not rt > 0 or G <= floor:  # no direction left on the set (or the gaps on it
                 # agree to the deflections' rounding, where a step would follow the noise):
                 # solved, unless a node off it overlaps the plate (a set whose gaps are all
@@ -482,15 +515,19 @@ class Spectral:
 
 
 def _direct_works() -> bool:
-    """Whether the direct transforms give the public ones' product bit for bit here."""
+    """Whether the direct transforms give the public ones' product bit for bit here, in
+    double and in single precision."""
     if _pocketfft is None:
         return False
     rng = np.random.default_rng(0)
     table = np.abs(rng.standard_normal((5, 7)))
-    s = Spectral(table)
-    p = rng.standard_normal(s.n)
+    p = rng.standard_normal(table.size)
     try:
-        s.direct = True
-        return bool(np.array_equal(s.apply(p), s.apply_public(p)))
+        for tol in (TOL, FLOAT32_MIN_TOL):
+            s = Spectral(table, tol=tol)
+            s.direct = True
+            if not np.array_equal(s.apply(p), s.apply_public(p)):
+                return False
+        return True
     except Exception:  # noqa: BLE001  (another binding's signature: the public path)
         return False
