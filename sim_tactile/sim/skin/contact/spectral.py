@@ -273,9 +273,7 @@ class Spectral:
         shape = (y1 - y0, x1 - x0)
         sub = self._blocks.pop(shape, None)
         if sub is None:
-            sub = Spectral(
-                self.table[: shape[0], : shape[1]], self.tol, self.max_iter, self.single
-            )
+            sub = Spectral(self.table[: shape[0], : shape[1]], self.tol, self.max_iter, self.single)
             sub.compiled = self.compiled
         self._blocks[shape] = sub  # most recently used last
         while len(self._blocks) > BLOCKS_KEPT:
