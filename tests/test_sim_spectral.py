@@ -249,6 +249,23 @@ def test_a_cycling_iteration_converges_when_few_nodes_join_at_a_time(share, monk
     assert dz == pytest.approx(float(g[on].mean()), rel=1e-6)  # the pad's shift
 
 
+def test_the_cycling_case_converges_with_single_products_as_with_double():
+    """The recorded step above at auto's tolerance: the single-precision products take the
+    same path through the cycle (its last start) as the double ones, to the tolerance."""
+    with np.load(Path(__file__).parent / "data" / "spectral_joins.npz") as z:
+        pen, total, warm = z["pen"], float(z["total"]), z["warm"]
+    table = compliance_table(93, 67, 0.3854496446637726e-3, E)
+    got = {}
+    for single in (True, False):
+        sp = Spectral(table, tol=1e-4, single=single)
+        sp.p = warm.copy()
+        got[single] = (*sp.solve_force(pen, total), sp.iterations)
+    (ps, dzs, its), (pd, dzd, itd) = got[True], got[False]
+    assert np.abs(ps - pd).sum() < 1e-4 * np.abs(pd).sum()
+    assert dzs == pytest.approx(dzd, rel=1e-4)
+    assert abs(its - itd) <= max(3, itd // 4)
+
+
 def test_a_pad_touching_a_patch_of_its_lattice_is_solved_on_that_block_alike(monkeypatch):
     """A curved pad: only a patch of its lattice is within reach of the plate, so the solve
     runs on the block of rows and columns around that patch (its own, smaller FFTs). While
