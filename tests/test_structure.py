@@ -25,6 +25,10 @@ LONG_MODULES: dict[str, str] = {
     "generate.py": "one resumable write of a data set: the target resolved, the store opened or "
     "resumed (its index checked and repaired), the backend drained into it, the run recorded; "
     "every step reads and updates the one run's state (_Run)",
+    "sim/skin/contact/spectral.py": "one solver: the spectral contact solve (Polonsky and "
+    "Keer's iteration) with its product in double and single precision, its starts, joins and "
+    "cycle guard, the block solve of a pad touching a patch, and the numpy reference of its "
+    "iteration, which the batched solve and the tests compare against",
     "tasks/runner.py": "one task's run, end to end: the task resolved and its data loaded, each "
     "row evaluated under the protocol, the report, the figures, the result files and the "
     "spiking network's export written from the one run's rows",
