@@ -205,8 +205,9 @@ def _warn(message: str) -> None:
 def load(where: Path | None, cpu: str | None) -> dict[str, list] | None:
     """The entry points of the extension in ``where`` (:func:`folder`), by kernel: for each,
     ``(matcher, function)`` pairs; None where there is none, or it is not this code
-    version's, this Python's, the CPU ``cpu``'s (:func:`cpu_key`) or whole. (Whether the extensions are enabled at all is the
-    caller's question: :func:`sim_tactile._jit.built_ahead` asks it.)"""
+    version's, this Python's, the CPU ``cpu``'s (:func:`cpu_key`) or whole. (Whether the
+    extensions are enabled at all is the caller's question: :func:`sim_tactile._jit._state`
+    asks it.)"""
     if where is None:
         return None
     index = where / INDEX

@@ -323,12 +323,12 @@ def built_ahead() -> bool:
 def ahead_of_time(module: str) -> dict | None:
     """The entry points of ``module``'s ahead-of-time extension by kernel
     (:func:`sim_tactile._aot.load`), loaded once a process; None where there is none."""
-    modules = _state()["modules"]
+    state = _state()
+    modules = state["modules"]
     if module not in modules:
         found = None
-        if module.split(".")[0] == PACKAGE and built_ahead():
-            cpu = _state()["cpu"]
-            found = _aot.load(_aot.folder(stamp_folder(module), cpu), cpu)
+        if module.split(".")[0] == PACKAGE and state["built"]:
+            found = _aot.load(_aot.folder(stamp_folder(module), state["cpu"]), state["cpu"])
         modules[module] = found
     return modules[module]
 

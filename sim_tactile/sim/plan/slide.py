@@ -170,11 +170,11 @@ class Slide:
             tol = AUTO_SOLVE_TOL if auto and self.spectral else opts.solve_tol
             return plan, replace(opts, path="phase-table", solve_tol=tol)
         held = proto.force_control == "quasi-static"
-        if auto and held and self._dense_is_dear(proto):
+        if auto and held and self._dense_is_dear():
             return None, replace(
                 opts, path="per-step", skin_solver="spectral", solve_tol=AUTO_SOLVE_TOL
             )
-        if auto and held and self._dense_step_is_dear(proto):
+        if auto and held and self._dense_step_is_dear():
             return None, replace(opts, path="per-step", solve_every=AUTO_SOLVE_EVERY)
         if not (auto and self.spectral):
             return None, replace(opts, path="per-step")
@@ -183,19 +183,23 @@ class Slide:
         )
         return None, replace(opts, path="per-step", solve_every=every, solve_tol=AUTO_SOLVE_TOL)
 
-    def _dense_is_dear(self, proto: Protocol) -> bool:
+    @cached_property
+    def _by_column(self) -> bool:
+        """Whether the pad's depths do not depend on their y at the drawn offset
+        (:func:`~.phase.depths_by_column`), as both solver choices below ask."""
+        return depths_by_column(self.plate, self.pad.patch_m, self.drawn().offset_y_m)
+
+    def _dense_is_dear(self) -> bool:
         """Whether ``auto`` takes the spectral solve for a skin it would solve densely
         (:func:`~.solver.dense_is_dear`: a flat pad's full problem of many nodes)."""
         if self.spectral or not self.resolved.coupled:
             return False
-        by_column = depths_by_column(self.plate, self.pad.patch_m, proto.offset_y_m)
-        return dense_is_dear(self.resolved, self.pad, by_column)
+        return dense_is_dear(self.resolved, self.pad, self._by_column)
 
-    def _dense_step_is_dear(self, proto: Protocol) -> bool:
+    def _dense_step_is_dear(self) -> bool:
         """Whether ``auto`` solves the slide's dense skin at every
         :data:`~.options.AUTO_SOLVE_EVERY`-th step (:func:`~.solver.dense_step_is_dear`)."""
-        by_column = depths_by_column(self.plate, self.pad.patch_m, proto.offset_y_m)
-        return dense_step_is_dear(self.resolved, self.pad, by_column, self.spectral)
+        return dense_step_is_dear(self.resolved, self.pad, self._by_column, self.spectral)
 
     @property
     def held_press(self) -> bool:

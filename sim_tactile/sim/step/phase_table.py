@@ -166,21 +166,21 @@ def tabulate(
         solved[phi] = (out, force, top, float(z_scene_m + z))
 
     def solve_all(phis, near=None) -> None:
-        """Solve ``phis``: one after another from the last one's height, or at once
-        (``many``), each from the height of its neighbours ``near`` (pairs of solved phases;
-        None: from the scene's start above the plate): a pad started far below its height
-        misreads depths (a node deep in a narrow feature is read to its nearest face)."""
+        """Solve ``phis``, one after another or at once (``many``), each from the mean height
+        of its solved neighbours ``near`` (None: the last one's height, the first the scene's
+        start above the plate): a pad started far below its height misreads depths (a node
+        deep in a narrow feature is read to its nearest face)."""
+        z0 = near and [0.5 * (solved[a][3] + solved[b % period][3]) - z_scene_m for a, b in near]
         if many is None:
             for k, phi in enumerate(phis):
-                if near is not None:  # from its neighbours' height, not the last phase's
-                    a, b = near[k]
-                    q[jz] = 0.5 * (solved[a][3] + solved[b % period][3]) - z_scene_m
+                if z0:
+                    q[jz] = z0[k]
                 solve(float(phi))
             return
         qs = np.repeat(q[None, :], len(phis), axis=0)
         qs[:, jx] = plan.x_ref + np.asarray(phis, dtype=float) - x_scene_m
-        if near is not None:
-            qs[:, jz] = [0.5 * (solved[a][3] + solved[b % period][3]) - z_scene_m for a, b in near]
+        if z0:
+            qs[:, jz] = z0
         outs = np.zeros((len(phis), n_taxels))
         forces, tops = np.zeros(len(phis)), np.zeros(len(phis))
         rows = np.arange(len(phis))

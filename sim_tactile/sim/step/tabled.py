@@ -234,9 +234,9 @@ def table_for(
 ) -> tuple[PhaseTable | Blend, int]:
     """``(table, made)``: the slide's phase table at its force, and how many tables were
     solved for it (the rest came from this process or ``cache``). Where the slides of a set
-    share tables (:func:`~sim_tactile.sim.plan.phase.tables_shared`), the line between the tables at the two force levels on
-    either side of the slide's force (:func:`~.phase_table.force_levels`), else the table at
-    its own force."""
+    share tables (:func:`~sim_tactile.sim.plan.phase.tables_shared`), the line between the
+    tables at the two force levels on either side of the slide's force
+    (:func:`~.phase_table.force_levels`), else the table at its own force."""
     levels = (
         force_levels(proto.force_n)
         if tables_shared(plan, slide.protocol)

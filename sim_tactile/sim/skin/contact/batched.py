@@ -37,8 +37,9 @@ again (those rows alone, padded to a power of two of them: cuFFT keeps a plan pe
 size), and learns which poses are done every :data:`CHECK_EVERY` iterations (a pose that
 converges in between keeps its answer: it is taken when it converges; one whose start
 failed in between waits for its next start till then); the batch shrinks to the poses
-still running when they are half of it or fewer, in powers of two. In ``float32`` the rounding floor is :data:`~.spectral.ROUNDING_FLOAT32` and the
-tolerance must be at least :data:`~.spectral.FLOAT32_MIN_TOL`.
+still running when they are half of it or fewer, in powers of two. In ``float32`` the
+rounding floor is :data:`~.spectral.ROUNDING_FLOAT32` and the tolerance must be at least
+:data:`~.spectral.FLOAT32_MIN_TOL`.
 
 torch is imported when a solver is made, not when this module is imported.
 """

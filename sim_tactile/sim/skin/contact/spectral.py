@@ -173,7 +173,8 @@ class Spectral:
         self.single = tol >= FLOAT32_MIN_TOL if single is None else bool(single)
         self.rounding = ROUNDING_FLOAT32 if self.single else ROUNDING
         real, cplx = (np.float32, np.complex64) if self.single else (np.float64, np.complex128)
-        self._khat = self.khat.astype(cplx)  # the kernel's spectrum as the products take it
+        # the kernel's spectrum as the products take it (``khat`` itself in double)
+        self._khat = self.khat.astype(cplx, copy=False)
         # the product's buffers: the loads padded along x, the spectrum padded along y
         self._padded = np.zeros((ny, Lx), dtype=real)
         self._spectrum = np.zeros(self.khat.shape, dtype=cplx)
@@ -210,17 +211,17 @@ class Spectral:
         b *= self._khat
         _pocketfft.c2c(b, (0,), False, 2, b, 1)
         u = _pocketfft.c2r(b[:ny], (1,), Lx, False, 2, None, 1)[:, :nx]
-        return u.astype(np.float64).ravel() if self.single else u.ravel()
+        return u.astype(np.float64, copy=False).ravel()
 
     def apply_public(self, p: np.ndarray) -> np.ndarray:
         """:meth:`apply` through scipy.fft's public functions (the reference)."""
         ny, nx = self.ny, self.nx
         Ly, Lx = self.shape
-        a = fft.rfft(p.reshape(ny, nx).astype(self._padded.dtype), n=Lx, axis=1)
+        a = fft.rfft(p.reshape(ny, nx).astype(self._padded.dtype, copy=False), n=Lx, axis=1)
         a = fft.fft(a, n=Ly, axis=0)
         a *= self._khat
         a = fft.ifft(a, axis=0, overwrite_x=True)[:ny]
-        return fft.irfft(a, n=Lx, axis=1)[:, :nx].astype(np.float64).ravel()
+        return fft.irfft(a, n=Lx, axis=1)[:, :nx].astype(np.float64, copy=False).ravel()
 
     # -- the contact problem
     def solve(self, pen_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
