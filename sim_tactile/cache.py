@@ -43,7 +43,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from .errors import CacheError, CacheWarning, os_error_message
-from .hashing import code_version, content_hash, one_blas_thread
+from .hashing import blas_kernel, code_version, content_hash, one_blas_thread
 
 #: The suffix of an entry's checksum file.
 SUM_SUFFIX = ".sum"
@@ -271,7 +271,9 @@ SETUP_MEMO_BYTES = 512 * 2**20
 SETUP = ArrayMemo(SETUP_MEMO_BYTES)
 
 
-def setup_memo(what: str, parts: dict, compute, modules: tuple[str, ...]) -> tuple:
+def setup_memo(
+    what: str, parts: dict, compute, modules: tuple[str, ...], cache: ArtefactCache | None = None
+) -> tuple:
     """``compute()`` (a tuple of arrays and plain values), kept in this process (:data:`SETUP`)
     under the content key of ``what``, ``parts`` (JSON data; arrays as :func:`~sim_tactile.hashing.array_digest`)
     and the source of ``modules`` (and what they import) with numpy's and scipy's versions:
@@ -280,19 +282,78 @@ def setup_memo(what: str, parts: dict, compute, modules: tuple[str, ...]) -> tup
     computed on one BLAS thread, as a slide computes (:func:`~sim_tactile.hashing.one_blas_thread`):
     BLAS's threads sum in another order, and a value made outside a slide (a script's, a
     test's) differed in its last bits from the slide's own under the same key (the layered
-    compliance table of finger7-v2's skin, 2e-27 m/Pa)."""
-    key = content_hash(
-        {
-            "what": what,
-            "parts": parts,
-            "code": code_version(*modules, libraries=("numpy", "scipy")),
-        }
-    )
+    compliance table of finger7-v2's skin, 2e-27 m/Pa).
+
+    With ``cache`` (an :class:`ArtefactCache`), a value of arrays alone is also kept on disk
+    (:data:`SETUP_EXT`, its key then holding the BLAS kernel too, as another CPU's kernel
+    makes arrays bit-different): the next process reads it instead of computing it again
+    (the iCub's taxel weights: 0.2-0.25 s a grid for each worker of each data set). The
+    arrays read are the computed ones, bit for bit."""
+    description = {
+        "what": what,
+        "parts": parts,
+        "code": code_version(*modules, libraries=("numpy", "scipy")),
+    }
+    if cache is not None:
+        description["blas"] = blas_kernel()
+    key = content_hash(description)
     kept = SETUP.get(key)
     if kept is not None:
         return kept
+    if cache is not None:
+        read = _read_setup(cache, key)
+        if read is not None:
+            return SETUP.put(key, read)
     with one_blas_thread():
-        return SETUP.put(key, tuple(compute()))
+        value = tuple(compute())
+    if cache is not None:
+        _write_setup(cache, key, value)
+    return SETUP.put(key, value)
+
+
+#: The file kind of a set-up value kept on disk (:func:`setup_memo` with a cache).
+SETUP_EXT = "setup.npz"
+
+
+def _read_setup(cache: ArtefactCache, key: str) -> tuple | None:
+    """The arrays stored under ``key``, in order, or None."""
+    z = read_arrays(cache, key, SETUP_EXT, "set-up arrays", ("a0",))
+    return None if z is None else tuple(z[f"a{i}"] for i in range(len(z)))
+
+
+def read_arrays(
+    cache: ArtefactCache, key: str, ext: str, what: str, names: tuple[str, ...] = ()
+) -> dict | None:
+    """The arrays of the ``.npz`` entry ``key``, ``ext`` (name -> array, read without pickle),
+    or None where it is not there, or cannot be read as such or lacks one of ``names``:
+    then it is discarded with a warning that it is not ``what`` and is made again."""
+    import numpy as np
+
+    hit = cache.get(key, ext)
+    if hit is None:
+        return None
+    try:
+        with np.load(hit, allow_pickle=False) as z:
+            got = {name.removesuffix(".npy"): z[name] for name in z.files}
+        if missing := set(names) - got.keys():
+            raise KeyError(sorted(missing))
+        return got
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+        warnings.warn(
+            f"cache entry {hit} cannot be read as {what} ({type(exc).__name__}); it is made again",
+            CacheWarning,
+            stacklevel=3,
+        )
+        cache.discard(key, ext)
+        return None
+
+
+def _write_setup(cache: ArtefactCache, key: str, value: tuple) -> None:
+    import numpy as np
+
+    if not all(isinstance(a, np.ndarray) for a in value):
+        raise TypeError("a set-up value kept on disk is a tuple of arrays")
+    cache.put(key, SETUP_EXT, npz_bytes({f"a{i}": a for i, a in enumerate(value)}))
 
 
 # ------------------------------------------------------------------------- in-process memos

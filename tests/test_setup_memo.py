@@ -38,6 +38,37 @@ def test_the_key_holds_every_part_and_the_value_is_kept_read_only(fresh_memo):
     assert len(fresh_memo) == 3
 
 
+def test_a_value_kept_on_disk_is_read_by_the_next_process_and_never_trusted_blindly(
+    fresh_memo, tmp_path
+):
+    from sim_tactile.cache import SETUP_EXT, ArtefactCache
+    from sim_tactile.errors import CacheWarning
+
+    own = ArtefactCache(tmp_path)
+    calls = []
+
+    def compute():
+        calls.append(1)
+        return (np.linspace(0.0, 1.0, 7), np.eye(2, dtype=np.float32))
+
+    mods = ("sim_tactile.cache",)
+    a = setup_memo("x", {"v": 1}, compute, mods, own)
+    forget_process_memos()  # a fresh process: read, not computed
+    b = setup_memo("x", {"v": 1}, compute, mods, own)
+    assert calls == [1] and all(x.tobytes() == y.tobytes() for x, y in zip(a, b, strict=True))
+    assert b[1].dtype == np.float32 and not b[0].flags.writeable
+    (entry,) = tmp_path.rglob(f"*.{SETUP_EXT}.d")
+    key = entry.name.split(".", 1)[0]
+    own.discard(key, SETUP_EXT)
+    own.put(key, SETUP_EXT, b"no npz")  # its checksum holds, its bytes are no arrays
+    forget_process_memos()
+    with pytest.warns(CacheWarning, match="cannot be read as set-up arrays"):
+        c = setup_memo("x", {"v": 1}, compute, mods, own)
+    assert calls == [1, 1] and c[0].tobytes() == a[0].tobytes()
+    with pytest.raises(TypeError, match="tuple of arrays"):
+        setup_memo("y", {}, lambda: (np.zeros(2), "label"), mods, own)
+
+
 def test_array_digest_tells_dtype_shape_and_bytes_apart():
     a = np.arange(6, dtype=np.float64)
     assert array_digest(a) == array_digest(a.copy())
@@ -58,21 +89,54 @@ def test_array_digest_tells_dtype_shape_and_bytes_apart():
     ],
 )
 def test_slides_are_equal_bit_for_bit_with_their_set_up_computed_or_kept(
-    plate, sensor, kw, fresh_memo
+    plate, sensor, kw, fresh_memo, tmp_path
 ):
+    """Computed, kept in the process, read from the disk cache (the taxel weights and the
+    compiled models as another process reads them), computed again with an empty cache."""
+    from sim_tactile.cache import SETUP_EXT, ArtefactCache
+
     proto = Protocol(duration_s=0.25)
-    first = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
+    own = ArtefactCache(tmp_path / "own")
+
+    def run(c):
+        return simulate(plate, sensor, protocol=proto, ideal=True, cache=c, **kw).recording
+
+    first = run(own)
     assert len(fresh_memo) >= 2  # the weights and the skin were kept
     assert len(model_module.SCENES) == 1  # and the compiled models
-    again = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
-    forgotten = forget_process_memos()  # and computed anew
+    kinds = {p.name.split(".", 1)[1] for p in own.root.rglob("*.d")}
+    assert {SETUP_EXT, *model_module.MODEL_EXTS} <= {k.removesuffix(".d") for k in kinds}
+    again = run(own)
+    forgotten = forget_process_memos()  # then read from the disk
     assert len(fresh_memo) == 0 and len(model_module.SCENES) == 0
     assert {"set-up arrays", "compiled scene models"} <= set(forgotten)
-    anew = simulate(plate, sensor, protocol=proto, ideal=True, **kw).recording
+    read = run(own)
+    forget_process_memos()  # and computed anew
+    anew = run(ArtefactCache(tmp_path / "empty"))
     assert first.data.max() > 0
-    for r in (again, anew):
+    for r in (again, read, anew):
         assert r.data.tobytes() == first.data.tobytes()
         assert r.meta["normal_force_n"] == first.meta["normal_force_n"]
+
+
+def test_stored_models_that_mujoco_cannot_read_are_compiled_again(fresh_memo, tmp_path):
+    """An entry whose checksum holds but whose bytes are no MuJoCo model (another MuJoCo's,
+    say): a warning names it, and the slide is the one its compiled models make."""
+    from sim_tactile.cache import ArtefactCache
+    from sim_tactile.errors import CacheWarning
+
+    own = ArtefactCache(tmp_path / "own")
+    kw = dict(protocol=Protocol(duration_s=0.25), ideal=True, pitch_m=0.5e-3, cache=own)
+    first = simulate("finger7/ridges-4", "grid3x3", **kw).recording
+    (entry,) = own.root.rglob("*.col.mjb.d")
+    key = entry.name.split(".", 1)[0]
+    own.discard(key, "col.mjb")
+    own.put(key, "col.mjb", b"not a model")
+    forget_process_memos()
+    with pytest.warns(CacheWarning, match="cannot be read as MuJoCo models"):
+        again = simulate("finger7/ridges-4", "grid3x3", **kw).recording
+    assert again.data.tobytes() == first.data.tobytes()
+    assert own.get(key, "col.mjb").read_bytes() != b"not a model"  # stored again, whole
 
 
 def test_a_softer_skin_is_never_served_the_kept_weights(fresh_memo):

@@ -19,6 +19,8 @@ and static bodies do not collide.)
 from __future__ import annotations
 
 import copy
+import platform
+import warnings
 from collections import OrderedDict
 from dataclasses import dataclass
 
@@ -26,6 +28,7 @@ import mujoco
 import numpy as np
 
 from ..cache import register_memo, setup_memo
+from ..errors import CacheWarning
 from ..hashing import array_digest
 from ..plates import Plate
 from ..plates import build as build_plate
@@ -68,13 +71,19 @@ class Scene:
 
 
 def taxel_weights(
-    grid: SkinGrid, layout: Layout, finger: Finger, slide_dir: tuple[float, float] = (1.0, 0.0)
+    grid: SkinGrid,
+    layout: Layout,
+    finger: Finger,
+    slide_dir: tuple[float, float] = (1.0, 0.0),
+    cache=None,
 ) -> np.ndarray:
     """(M, N): the share of each node's load that each taxel reads, in the finger's skin
     (a half-space, or its stack of layers), with the stress of the skin's sliding tractions
     when the finger has them (the pad sliding along ``slide_dir``, a unit vector; slides go
     along +x). Kept in this process by content (:func:`~sim_tactile.cache.setup_memo`): every
-    slide of a sensor on a grid reads the same weights."""
+    slide of a sensor on a grid reads the same weights; and in ``cache`` (an
+    :class:`~sim_tactile.cache.ArtefactCache`), if given, for the next process: the iCub's
+    weights take 0.2-0.25 s a grid to compute, each worker of each data set paid them."""
     parts = {
         "xy": array_digest(grid.xy),
         "pitch": [grid.pitch_m, grid.pitch_y_m],
@@ -83,7 +92,7 @@ def taxel_weights(
         "slide_dir": [float(v) for v in slide_dir],
     }
     compute = lambda: (_taxel_weights(grid, layout, finger, slide_dir),)  # noqa: E731
-    return setup_memo("taxel weights", parts, compute, (__name__,))[0]
+    return setup_memo("taxel weights", parts, compute, (__name__,), cache)[0]
 
 
 def _taxel_weights(grid, layout, finger, slide_dir) -> np.ndarray:
@@ -117,7 +126,11 @@ def _models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:
     """``(m_col, m_dyn, node_of_geom, jx, jz)`` of the scene with the bone at the origin
     and MuJoCo's default time step, kept in :data:`SCENES` under the content key of
     everything they depend on: the plate's MJCF artefact (its parameters and the code that
-    writes it), the pad, the node grid, the damping, the margin and this module's source."""
+    writes it), the pad, the node grid, the damping, the margin and this module's source;
+    and, with ``cache``, in it as MuJoCo's binary models (:data:`MODEL_EXTS`), which a later
+    process reads in milliseconds (compiling the iCub's scene took 0.08-0.14 s a plate for
+    each worker of each data set). A model read back is the compiled one: its arrays equal
+    bit for bit (tested)."""
     from ..hashing import code_version, content_hash
     from ..plates.make.build import artefact_key
 
@@ -129,15 +142,66 @@ def _models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:
             "z_damping": z_damping,
             "margin": node_margin_m,
             "code": code_version(__name__, libraries=("mujoco",)),
+            "machine": platform.machine(),
         }
     )
     kept = SCENES.pop(key, None)
+    if kept is None and cache is not None:
+        kept = _read_models(cache, key, grid)
     if kept is None:
         kept = _compile_models(plate, finger, grid, z_damping, node_margin_m, cache)
+        if cache is not None:
+            _write_models(cache, key, kept)
     SCENES[key] = kept
     while len(SCENES) > SCENES_KEPT:
         SCENES.popitem(last=False)
     return kept
+
+
+#: The cache's file kinds of a scene's two compiled models (:func:`_models`): MuJoCo's
+#: binary format (``mj_saveModel``), which only the same MuJoCo reads (its version is in the
+#: key).
+MODEL_EXTS = ("col.mjb", "dyn.mjb")
+
+
+def _write_models(cache, key: str, kept: tuple) -> None:
+    for ext, m in zip(MODEL_EXTS, kept[:2], strict=True):
+        buf = np.zeros(mujoco.mj_sizeModel(m), dtype=np.uint8)
+        mujoco.mj_saveModel(m, None, buf)
+        cache.put(key, ext, buf.tobytes())
+
+
+def _read_models(cache, key: str, grid: SkinGrid) -> tuple | None:
+    """``(m_col, m_dyn, node_of_geom, jx, jz)`` from the binary models stored under ``key``,
+    or None where either is not there or cannot be read (then discarded, with a warning)."""
+    paths = [cache.get(key, ext) for ext in MODEL_EXTS]
+    if any(p is None for p in paths):
+        return None
+    try:
+        m_col, m_dyn = (mujoco.MjModel.from_binary_path(str(p)) for p in paths)
+    except (ValueError, OSError) as exc:
+        warnings.warn(
+            f"cache entry {paths[0].parent.parent} cannot be read as MuJoCo models "
+            f"({type(exc).__name__}); they are compiled again",
+            CacheWarning,
+            stacklevel=3,
+        )
+        for ext in MODEL_EXTS:
+            cache.discard(key, ext)
+        return None
+    return (m_col, m_dyn, *_model_indices(m_col, m_dyn, grid))
+
+
+def _model_indices(m_col, m_dyn, grid: SkinGrid) -> tuple:
+    """``(node_of_geom, jx, jz)``: the node of each of ``m_col``'s geoms (-1 where none) and
+    the dof indices of the slide and the press in ``m_dyn``."""
+    node_of_geom = np.full(m_col.ngeom, -1, dtype=np.int64)
+    g0 = mujoco.mj_name2id(m_col, mujoco.mjtObj.mjOBJ_GEOM, "node0")
+    node_of_geom[g0 : g0 + grid.n] = np.arange(grid.n)
+    node_of_geom.flags.writeable = False
+    jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]
+    jz = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "press_z")]
+    return node_of_geom, int(jx), int(jz)
 
 
 def add_velocity_servo(spec: mujoco.MjSpec, name: str, joint: str, kv: float) -> None:
@@ -200,13 +264,7 @@ def _compile_models(plate, finger, grid, z_damping, node_margin_m, cache) -> tup
             margin=node_margin_m,
         )
     m_col = spec.compile()
-    node_of_geom = np.full(m_col.ngeom, -1, dtype=np.int64)
-    g0 = mujoco.mj_name2id(m_col, mujoco.mjtObj.mjOBJ_GEOM, "node0")
-    node_of_geom[g0 : g0 + grid.n] = np.arange(grid.n)
-    node_of_geom.flags.writeable = False
-    jx = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "slide_x")]
-    jz = m_dyn.jnt_dofadr[mujoco.mj_name2id(m_dyn, mujoco.mjtObj.mjOBJ_JOINT, "press_z")]
-    return m_col, m_dyn, node_of_geom, int(jx), int(jz)
+    return (m_col, m_dyn, *_model_indices(m_col, m_dyn, grid))
 
 
 def build_scene(
@@ -241,5 +299,5 @@ def build_scene(
         m.opt.timestep = dt_s
         # the start, and the offset across the slide (as the slide's own)
         m.body_pos[m.body("bone").id] = (x0_m, y0_m, z0_m)
-    W = taxel_weights(grid, layout, finger, slide_dir)
+    W = taxel_weights(grid, layout, finger, slide_dir, cache)
     return Scene(plate, finger, grid, layout, m_col, m_dyn, node_of_geom, W, int(jx), int(jz))

@@ -34,13 +34,10 @@ block updates then take their general formulas (``symmetric=False``).
 
 from __future__ import annotations
 
-import warnings
-import zipfile
-
 import numpy as np
 
-from ...cache import SETUP, npz_bytes, setup_memo
-from ...errors import CacheWarning, ConfigError
+from ...cache import SETUP, npz_bytes, read_arrays, setup_memo
+from ...errors import ConfigError
 from ...hashing import array_digest, blas_kernel, code_version, content_hash, one_blas_thread
 from ...scene.elastic import compliance_matrix, compliance_table
 from ...scene.layered import Stack, layered_compliance_matrix, layered_compliance_table
@@ -257,22 +254,13 @@ def _cached_dense(grid, finger, slide_dir, inverse, cache) -> CoupledSkin:
     kept = SETUP.get(key)
     if kept is not None:
         return _keyed(key, *kept)
-    hit = cache.get(key, "skin.npz")
-    if hit is not None:
-        try:
-            with np.load(hit, allow_pickle=False) as z:
-                C, K = z["C"], (z["K"] if inverse else None)
-                what, symmetric = str(z["what"]), bool(z["symmetric"])
-            SETUP.put(key, (C, K, what, symmetric))
-            return _keyed(key, C, K, what, symmetric)
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-            warnings.warn(
-                f"cache entry {hit} cannot be read as a skin ({type(exc).__name__}); it is "
-                "computed again",
-                CacheWarning,
-                stacklevel=2,
-            )
-            cache.discard(key, "skin.npz")
+    names = ("C", "what", "symmetric", *(("K",) if inverse else ()))
+    z = read_arrays(cache, key, "skin.npz", "a skin", names)
+    if z is not None:
+        C, K = z["C"], (z["K"] if inverse else None)
+        what, symmetric = str(z["what"]), bool(z["symmetric"])
+        SETUP.put(key, (C, K, what, symmetric))
+        return _keyed(key, C, K, what, symmetric)
     skin = _dense(grid, finger, slide_dir, inverse)
     _store(cache, key, skin.C, skin.K, skin.what, skin.symmetric)
     SETUP.put(key, (skin.C, skin.K, skin.what, skin.symmetric))
