@@ -1,7 +1,10 @@
-"""The scene the collider and held-step tests build by hand: the default finger on the grid3x3
-layout over a plate, through the session's artefact cache (one definition of it)."""
+"""The scenes and slides tests build by hand: the default finger on the grid3x3 layout over a
+plate, through the session's artefact cache; a task's first slide of a plate (one
+definition of each)."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 from sim_tactile.plates import Plate, get_plate
 from sim_tactile.scene.model import Scene, build_scene
@@ -33,4 +36,27 @@ def scene_of(
         z_damping=1.0,
         node_margin_m=margin_m,
         cache=cache,
+    )
+
+
+def task_slide(task: str, plate: str, duration_s: float | None, **proto):
+    """The first slide of ``plate`` in ``task`` (its seed, sensor, fidelity and protocol),
+    recording the ideal loads, its window shortened to ``duration_s`` where given."""
+    from sim_tactile.sim import Slide
+    from sim_tactile.tasks import get_task
+
+    jobs = get_task(task).get_data.jobs(seed=0, quick=False)
+    job = next(j for j in jobs if j.plate.name == plate)
+    if duration_s is not None:
+        proto = {"duration_s": duration_s, **proto}
+    return Slide(
+        job.plate,
+        job.sensor_def,
+        replace(job.protocol, **proto),
+        job.seed,
+        job.fidelity,
+        True,
+        job.finger,
+        job.pitch_m,
+        rig=job.rig,
     )

@@ -15,6 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from _scenes import task_slide
 
 from sim_tactile.sim import Slide, StepOptions, run
 from sim_tactile.sim.plan.options import AUTO_SOLVE_TOL
@@ -81,26 +82,6 @@ CASES = [
 ]
 
 
-def _task_slide(task: str, plate: str, duration_s: float | None, **proto) -> Slide:
-    """The first slide of ``plate`` in ``task`` (its seed, sensor, fidelity and protocol),
-    recording the ideal loads, its window shortened to ``duration_s`` where given."""
-    jobs = get_task(task).get_data.jobs(seed=0, quick=False)
-    job = next(j for j in jobs if j.plate.name == plate)
-    if duration_s is not None:
-        proto = {"duration_s": duration_s, **proto}
-    return Slide(
-        job.plate,
-        job.sensor_def,
-        replace(job.protocol, **proto),
-        job.seed,
-        job.fidelity,
-        True,
-        job.finger,
-        job.pitch_m,
-        rig=job.rig,
-    )
-
-
 def test_the_cases_cover_every_simulated_task():
     from sim_tactile.slides import SlideSet
 
@@ -113,7 +94,7 @@ def test_the_cases_cover_every_simulated_task():
 def test_the_default_is_within_its_target_of_the_per_step_solve(
     task, plate, duration, changes, path, cache
 ):
-    slide = _task_slide(task, plate, duration, **changes)
+    slide = task_slide(task, plate, duration, **changes)
     assert slide.how.path == path
     auto = run(slide, cache).recording
     step = run(replace(slide, options=STEP), cache).recording
@@ -141,7 +122,7 @@ def test_a_flat_pads_full_dense_problem_is_solved_spectrally_and_keyed_so():
     spectrally, to its loosened tolerance, at every step; its key says so. Problems that
     reduce by column (gratings), a curved pad (the BioTac) and the per-step reference stay
     dense."""
-    icub = _task_slide("textures20-icub60-v1", "textures20/hemispheres-6.0mm", None)
+    icub = task_slide("textures20-icub60-v1", "textures20/hemispheres-6.0mm", None)
     assert not icub.spectral  # the dense solve by the node count
     how = icub.how
     assert (how.path, how.skin_solver, how.solve_every) == ("per-step", "spectral", 1)
@@ -149,9 +130,9 @@ def test_a_flat_pads_full_dense_problem_is_solved_spectrally_and_keyed_so():
     assert icub.describe()["skin_solver"] == "spectral"
     step = replace(icub, options=STEP)
     assert step.how.skin_solver == "auto" and step.describe() != icub.describe()
-    grating = _task_slide("textures20-icub60-v1", "textures20/grating-3.0mm", None)
+    grating = task_slide("textures20-icub60-v1", "textures20/grating-3.0mm", None)
     assert grating.how.skin_solver == "auto" and not grating.spectral
-    biotac = _task_slide("textures20-biotac19-v1", "textures20/hemispheres-6.0mm", None)
+    biotac = task_slide("textures20-biotac19-v1", "textures20/hemispheres-6.0mm", None)
     assert biotac.how.skin_solver == "auto" and not biotac.spectral
 
 
@@ -173,7 +154,7 @@ def test_the_planners_reading_of_the_column_reduction_is_the_held_steps(task, pl
     from sim_tactile.sim.plan.phase import depths_by_column
     from sim_tactile.sim.step.build import scene_for
 
-    slide = _task_slide(task, plate, None)
+    slide = task_slide(task, plate, None)
     proto = slide.drawn()
     scene, _ = scene_for(slide, proto, slide.resolved, slide.window.x_start_m, cache)
     collider = make_collider(scene, True)

@@ -18,6 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from _scenes import task_slide
 
 from sim_tactile.cache import ArtefactCache, forget_process_memos
 from sim_tactile.errors import CacheWarning, ConfigError
@@ -25,7 +26,6 @@ from sim_tactile.plates import get_plate
 from sim_tactile.sim import Protocol, Slide, StepOptions, run
 from sim_tactile.sim.plan.phase import phase_plan, travel
 from sim_tactile.sim.step.phase_table import LEVELS_PER_OCTAVE, TABLE_EXT, force_levels
-from sim_tactile.tasks import get_task
 
 #: The table path is the default where its error against the per-step solve is at most
 #: this (relative L2 of the taxel loads over a slide; the issue's and the manual's target).
@@ -36,26 +36,6 @@ FLAT_RTOL = 1e-6
 
 TABLE = StepOptions(path="phase-table")
 STEP = StepOptions(path="per-step")
-
-
-def _task_slide(task: str, plate: str, duration_s: float, **proto) -> Slide:
-    """The first quick slide of ``plate`` in ``task`` (its seed, sensor and protocol),
-    recording the ideal loads for ``duration_s``."""
-    ss = get_task(task).get_data
-    jobs = ss.jobs(seed=0, quick=False)
-    job = next(j for j in jobs if j.plate.name == plate)
-    protocol = replace(job.protocol, duration_s=duration_s, **proto)
-    return Slide(
-        job.plate,
-        job.sensor_def,
-        protocol,
-        job.seed,
-        job.fidelity,
-        True,
-        job.finger,
-        job.pitch_m,
-        rig=job.rig,
-    )
 
 
 def _both(slide: Slide, cache):
@@ -104,7 +84,7 @@ CASES = [
 def test_the_table_is_within_its_target_of_the_per_step_solve(
     task, plate, duration, changes, cache
 ):
-    slide = _task_slide(task, plate, duration, **changes)
+    slide = task_slide(task, plate, duration, **changes)
     table, step = _both(slide, cache)
     assert "phase table" in table.meta["skin_problem"]
     assert np.abs(step.data).max() > 0  # the pad touched the texture
@@ -115,7 +95,7 @@ def test_the_table_is_within_its_target_of_the_per_step_solve(
 
 
 def test_a_flat_plate_is_one_phase_and_the_per_step_slide(cache):
-    slide = _task_slide("textures20-biotac19-v2", "textures20-long/flat", 0.3)
+    slide = task_slide("textures20-biotac19-v2", "textures20-long/flat", 0.3)
     table, step = _both(slide, cache)
     assert "1 phase" in table.meta["skin_problem"]
     assert np.allclose(table.data, step.data, rtol=FLAT_RTOL, atol=1e-9)
@@ -123,21 +103,21 @@ def test_a_flat_plate_is_one_phase_and_the_per_step_slide(cache):
 
 
 def test_auto_takes_the_table_where_the_window_lies_on_the_texture_and_says_so():
-    on = _task_slide("finger7-v1", "finger7/bumps-6x6", 0.25, start="texture")
+    on = task_slide("finger7-v1", "finger7/bumps-6x6", 0.25, start="texture")
     assert on.table_plan() is not None and on.describe()["path"] == "phase-table"
     # from flat ground, each slide its own table, over a plate-anchored lattice (cheap dense
     # steps): per step, and the description, hence the key, is the per-step slide's
-    across = _task_slide("finger7-v1", "finger7/bumps-4x4", 0.9)
+    across = task_slide("finger7-v1", "finger7/bumps-4x4", 0.9)
     assert across.table_plan() is None and "path" not in across.describe()
     # from flat ground over ridges across the whole pad: the set's slides share the tables
     # (force levels), so they pay for the stretch on the texture even over cheap steps
-    ridges = _task_slide("finger7-v1", "finger7/ridges-4", 0.9)
+    ridges = task_slide("finger7-v1", "finger7/ridges-4", 0.9)
     lo, hi = travel(ridges.window, ridges.drawn())
     plan = ridges.table_plan()
     assert plan is not None and not (plan.covers(lo) and plan.covers(hi))
     assert ridges.describe()["path"] == "phase-table"
     # a flat plate the pad is not wholly on at first: a uniform stretch, its table one solve
-    flat = _task_slide("textures20-icub60-v1", "textures20/flat", None)
+    flat = task_slide("textures20-icub60-v1", "textures20/flat", None)
     assert not flat.spectral and flat.table_plan().period_m is None
     # the same slides with a fixed force and no offset jitter share nothing: per step
     fixed = replace(ridges.protocol, force_jitter=0.0)
@@ -165,7 +145,7 @@ def test_a_table_is_the_same_whichever_slide_asks_first_and_wherever_it_comes_fr
     levels (ridges across the whole pad: the offset does not matter); the tables are solved
     in a scene of their own, so the second slide reads the first one's tables, and a fresh
     process solving them again, or reading them from disk, gives the same bits."""
-    base = _task_slide("finger7-v1", "finger7/ridges-8", 0.2, start="texture")
+    base = task_slide("finger7-v1", "finger7/ridges-8", 0.2, start="texture")
     a = replace(base, seed=11, options=TABLE)
     b = replace(base, seed=12, options=TABLE)
     assert a.drawn().speed_m_s != b.drawn().speed_m_s
@@ -188,7 +168,7 @@ def test_a_table_is_the_same_whichever_slide_asks_first_and_wherever_it_comes_fr
 
 def test_a_damaged_table_in_the_cache_is_solved_again_with_a_warning(tmp_path):
     slide = replace(
-        _task_slide("finger7-v1", "finger7/ridges-8", 0.2, start="texture"), options=TABLE
+        task_slide("finger7-v1", "finger7/ridges-8", 0.2, start="texture"), options=TABLE
     )
     cache = ArtefactCache(tmp_path)
     forget_process_memos()
@@ -244,7 +224,7 @@ def test_auto_presses_once_to_the_equilibrium_the_per_step_press_reaches(cache):
     approaches, ramps and settles over some 150-300 held steps; the slide is the same: the
     dense skin's equilibrium is unique, and here the recordings are equal bit for bit. The
     description says so (another key)."""
-    slide = _task_slide("finger7-v1", "finger7/ridges-4", 0.4)
+    slide = task_slide("finger7-v1", "finger7/ridges-4", 0.4)
     assert slide.held_press and slide.describe()["press"] == "held"
     step = replace(slide, options=STEP)
     assert not step.held_press and "press" not in step.describe()

@@ -298,3 +298,49 @@ __all__ = [
     "tables_shared",
     "travel",
 ]
+
+
+#: Slack [nm units of :data:`REPEAT_TOL_M`] within which a feature's mirror image matches a
+#: feature of the plate (the positions' rounding to the nanometre on either side).
+MIRROR_SLACK = 2
+
+
+def mirror_centre(plate: Plate, plan: PhasePlan) -> float | None:
+    """A pad centre position ``c`` [m] about which the plate's repeating texture is mirror
+    symmetric along the slide (its height at ``c + u`` is its height at ``c - u`` for every
+    ``u``, across the plate's whole width), or None where there is none or it cannot be told
+    (a uniform stretch, a profile or a map). A pad symmetric along the slide then carries at
+    ``2 c - x`` the mirror image of its answer at ``x``, and a table solves half a period
+    (:func:`~sim_tactile.sim.step.phase_table.tabulate`).
+
+    Every feature is symmetric about its own centre along the slide (boxes, drafted prisms,
+    cylinders, caps), so the texture is symmetric about ``c`` when the mirror image of each
+    feature of one period is a feature of the plate, to the nanometre, modulo the period.
+    The candidates are the features' centres and the midpoints between neighbouring ones."""
+    period = plan.period_m
+    fs = surface_of(plate).features
+    if period is None or not fs:
+        return None
+    tol = REPEAT_TOL_M
+    n_p = round(period / tol)
+    start = plan.x_ref - tol  # one period of columns (a column at its start is in)
+    one = [f for f in fs if start <= f.x < start + period]
+    if not one:
+        return None
+
+    def rest(f) -> tuple:
+        return (f.kind, *(round(v / tol) for v in (f.y, f.hx, f.hy, f.height_m, f.top_hx)))
+
+    xs = sorted({f.x for f in one})
+    cands = xs + [0.5 * (a + b) for a, b in zip(xs, [*xs[1:], xs[0] + period], strict=True)]
+    for c in cands:
+        have: dict[tuple, list[int]] = {}
+        for f in one:
+            have.setdefault(rest(f), []).append(round((f.x - c) / tol) % n_p)
+        if all(
+            any(min((k + m) % n_p, (-(k + m)) % n_p) <= MIRROR_SLACK for m in have[rest(f)])
+            for f in one
+            for k in [round((f.x - c) / tol) % n_p]
+        ):
+            return float(c)
+    return None

@@ -24,11 +24,12 @@ from ...errors import PhysicsError
 from ...hashing import blas_kernel, code_version, content_hash
 from ..plan.fidelity import Fidelity, solved_spectrally
 from ..plan.options import keyed
-from ..plan.phase import PhasePlan, tables_shared, travel
+from ..plan.phase import PhasePlan, mirror_centre, tables_shared, travel
 from ..plan.protocol import Protocol, SlideWindow
 from ..plan.slide import Slide
 from .batched_held import batched_held
 from .build import runner_for, scene_for
+from .mirror import mirrored_loads
 from .phase_table import Blend, PhaseTable, force_levels, kept_table, tabulate
 from .runner import V_STICK, Runner
 from .sampling import SampleAverager
@@ -291,6 +292,11 @@ def solve_table(
     at = replace(proto, offset_y_m=plan.y_m, force_n=force_n)
     scene = runner_for(slide, at, fid, plan.x_ref, cache)
     many = batched_held(scene.hold, slide.how.device)
+    mirror = None
+    centre = mirror_centre(slide.plate, plan)
+    write = None if centre is None else mirrored_loads(scene.hold, scene.collider, scene.skin)
+    if write is not None:
+        mirror = (centre - plan.x_ref, write)
     return tabulate(
         scene.hold,
         scene.d_dyn.qpos,
@@ -304,4 +310,5 @@ def solve_table(
         fid.pitch_m,
         check=lambda z, f, top: scene.check_held(z, force_n, f, top),
         many=many,
+        mirror=mirror,
     )
