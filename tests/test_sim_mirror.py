@@ -18,7 +18,7 @@ from sim_tactile.plates.define.surface import surface_of
 from sim_tactile.sim.plan import phase as phase_module
 from sim_tactile.sim.plan.phase import PhasePlan, mirror_centre, phase_plan
 from sim_tactile.sim.step.build import runner_for
-from sim_tactile.sim.step.mirror import mirrored_loads, node_images
+from sim_tactile.sim.step.mirror import mirror_symmetric, mirrored_loads, node_images
 
 #: A held step's image against the step solved at the image position (relative L2 of the
 #: taxel loads): measured 4e-15 on the dense step (round-off) and 2e-7 on the spectral one
@@ -93,6 +93,19 @@ def test_each_node_has_its_image_across_the_pad_centre_line_or_none_is_given():
     wide = radius.copy()
     wide[0] *= 2
     assert node_images(local, wide, margin) is None
+
+
+def test_a_compliance_that_leans_along_the_slide_is_no_mirror():
+    """A half-space-like compliance (a function of the nodes' distance) is its own mirror
+    image; one with a lean along the slide, as sliding friction gives a skin, is not."""
+    xs, ys = np.meshgrid(np.arange(-6, 7) * 0.5e-3, np.arange(-2, 3) * 0.5e-3)
+    local = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)])
+    img = node_images(local, np.full(xs.size, 1e-4), np.full(xs.size, 5e-4))
+    d = np.hypot(*(local[:, None, :2] - local[None, :, :2]).transpose(2, 0, 1))
+    C = 1.0 / (d + 2e-4)
+    assert mirror_symmetric(C, img)
+    lean = C * (1.0 + 0.1 * np.tanh((local[:, None, 0] - local[None, :, 0]) / 1e-3))
+    assert not mirror_symmetric(lean, img)
 
 
 def _table_scene(task: str, plate: str):
