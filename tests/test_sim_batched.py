@@ -322,7 +322,8 @@ def test_a_phase_tables_phases_solved_at_once_are_the_ones_solved_one_by_one(cac
     """The batched held step (sim/step/batched_held.py) on the CPU against the plain loop: a
     phase table of a spectral skin solved a grid at a time, and one phase after another,
     agree at every phase both solved, to the solve's tolerance; asked for a dense skin or the
-    CPU, there is nothing to batch."""
+    CPU, there is nothing to batch. Both over the whole period: the loop's mirrored half
+    period (a device's batch solves the whole) is another grid, tested in test_sim_mirror."""
     pytest.importorskip("torch")
     from dataclasses import replace as _replace
 
@@ -340,6 +341,7 @@ def test_a_phase_tables_phases_solved_at_once_are_the_ones_solved_one_by_one(cac
         options=opts,
     )
     proto, fid, plan = slide.drawn(), slide.resolved, slide.table_plan()
+    monkeypatch.setattr(tabled, "mirror_centre", lambda plate, plan: None)
     one = tabled.solve_table(slide, proto, fid, plan, proto.force_n, cache)
     assert bh.batched_held(object(), "cuda") is None  # not the plain loop: not batched
     monkeypatch.setattr(tabled, "batched_held", lambda hold, device: bh.BatchedHeld(hold, "cpu"))

@@ -197,17 +197,7 @@ def tabulate(
         qs[:, jx] = plan.x_ref + np.asarray(phis, dtype=float) - x_scene_m
         if z0:
             qs[:, jz] = z0
-        outs = np.zeros((len(phis), n_taxels))
-        forces, tops = np.zeros(len(phis)), np.zeros(len(phis))
-        rows = np.arange(len(phis))
-        for _ in range(SETTLE_STEPS):  # each until the height it ends at is the one it read
-            z = qs[rows, jz].copy()
-            sub, out = qs[rows], np.zeros((len(rows), n_taxels))
-            f, t = many.step_many(sub, jz, total_pa, out)
-            qs[rows], outs[rows], forces[rows], tops[rows] = sub, out, f, t
-            rows = rows[np.abs(sub[:, jz] - z) > PHASE_SETTLE_M]
-            if not rows.size:
-                break
+        outs, forces, tops = _settle_many(many, qs, jz, total_pa, n_taxels)
         for k, phi in enumerate(phis):
             keep(float(phi), outs[k], float(forces[k]), float(tops[k]), float(qs[k, jz]))
         q[jz] = qs[-1, jz]
@@ -224,10 +214,41 @@ def tabulate(
         us = _half_grid(period, pitch_m)
         solve_all(us)
         todo = list(zip(us[:-1], us[1:], strict=True))[::-1]  # back from where it ended
+    most = MAX_PHASES if image is None else MAX_PHASES // 2
     smallest = pitch_m * MIN_PHASE_FRACTION
+    worst = _refine(solve_all, solved, todo, period, smallest, tol, most, image is not None)
+    if image is None:
+        return _table(plan, solved, worst)
+    return _table(plan, _unfold(solved, shift, period), worst, solves=len(solved))
+
+
+def _settle_many(many, qs: np.ndarray, jz: int, total_pa: float, n_taxels: int):
+    """The held steps of the poses ``qs`` (B, nq) at once, each taken again until its height
+    moves by less than :data:`PHASE_SETTLE_M` (written into ``qs``); their taxel loads
+    (B, N), normal forces (B,) and deepest nodes (B,)."""
+    b = len(qs)
+    outs, forces, tops = np.zeros((b, n_taxels)), np.zeros(b), np.zeros(b)
+    rows = np.arange(b)
+    for _ in range(SETTLE_STEPS):  # each until the height it ends at is the one it read
+        z = qs[rows, jz].copy()
+        sub, out = qs[rows], np.zeros((len(rows), n_taxels))
+        f, t = many.step_many(sub, jz, total_pa, out)
+        qs[rows], outs[rows], forces[rows], tops[rows] = sub, out, f, t
+        rows = rows[np.abs(sub[:, jz] - z) > PHASE_SETTLE_M]
+        if not rows.size:
+            break
+    return outs, forces, tops
+
+
+def _refine(solve_all, solved: dict, todo: list, period, smallest, tol, most, turn) -> float:
+    """Halve the intervals ``todo`` (pairs of solved phases), pass after pass, while an
+    interval's midpoint differs from the line between its ends by more than ``tol`` of the
+    loads' RMS, down to ``smallest`` and up to ``most`` phases; returns the largest
+    difference left. A full period's passes wrap around to where they began; half a period's
+    (``turn``) turn back at its end: a dense step whose pad jumps half a period rebuilt its
+    contact set (0.9 s on the iCub's cylinders, against 2 ms a step)."""
     scale = _rms(solved)
     worst = 0.0
-    most = MAX_PHASES if image is None else MAX_PHASES // 2
     while todo:
         nxt = []
         solve_all([0.5 * (a + b) for a, b in todo], todo)
@@ -239,13 +260,8 @@ def tabulate(
                 nxt += [(a, mid), (mid, b)]
             else:
                 worst = max(worst, err)
-        # a full period's passes wrap around to where they began; half a period's turn back
-        # at its end (a dense step whose pad jumps half a period rebuilt its contact set:
-        # 0.9 s on the iCub's cylinders, against 2 ms a step)
-        todo = nxt if image is None else sorted(nxt, reverse=todo[0] < todo[-1])
-    if image is None:
-        return _table(plan, solved, worst)
-    return _table(plan, _unfold(solved, shift, period), worst, solves=len(solved))
+        todo = sorted(nxt, reverse=todo[0] < todo[-1]) if turn else nxt
+    return worst
 
 
 def _half_grid(period: float, pitch_m: float) -> list[float]:
