@@ -18,7 +18,12 @@ made every run compile the package's hundred modules from source, 0.13 s).
 ``--fixed`` measures a set's fixed cost instead (the command's start-up and a worker's
 set-up, warm caches: its phase tables are kept too): each configuration, and the same with
 twice its slides a plate, alternately; the fixed cost is ``2 T(N) - T(2N)`` of their median
-CPU seconds, and a slide's own cost ``(T(2N) - T(N)) / N``.
+CPU seconds, and a slide's own cost ``(T(2N) - T(N)) / N``, with the real-time factor per
+core that it gives at scale (a slide's simulated seconds over its own cost). With
+``--cold-tables`` every run makes its own phase tables (the warm-up's are removed, as for the
+plain runs): the fixed cost then holds the tables the set's slides share (made once a plate
+and force level, whatever the set's size), and a slide's own cost holds its own table where
+it has one (a slide whose table depends on its offset): the cost a large set pays a slide.
 
 ``--against PATH`` runs each configuration alternately with this checkout and the one at
 PATH (another commit, ``git worktree add``), ``--rounds`` times each, A B A B, after one
@@ -150,6 +155,14 @@ def doubled(config: Path, into: Path) -> Path:
     return out
 
 
+def _slides_in(config: Path) -> int:
+    """The slides of a configuration: its plates times its slides a plate."""
+    import tomllib
+
+    data = tomllib.loads(config.read_text())
+    return len(data["plates"]) * int(data["slides_per_plate"])
+
+
 def seed(checkout: Path, config: Path, keep_tables: bool = False) -> Path:
     """A warm-up run's cache with its results removed (its slides; its phase tables too
     unless ``keep_tables``): the artefacts a counted run reuses."""
@@ -175,6 +188,9 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--fixed", action="store_true", help="measure the fixed cost (see above)")
+    ap.add_argument(
+        "--cold-tables", action="store_true", help="--fixed: each run makes its phase tables"
+    )
     args = ap.parse_args()
     sides = [("A", ROOT)] + ([("B", args.against.resolve())] if args.against else [])
     if args.fixed:
@@ -227,7 +243,8 @@ def fixed_costs(args, sides) -> int:
         tmp = Path(tempfile.mkdtemp(prefix="bench-dataset-x2-"))
         both = {"N": config, "2N": doubled(config, tmp)}
         # one warm cache a side, from the double: its tables and artefacts serve both sets
-        seeds = {name: seed(path, both["2N"], keep_tables=True) for name, path in sides}
+        keep = not args.cold_tables
+        seeds = {name: seed(path, both["2N"], keep_tables=keep) for name, path in sides}
         runs = {(name, k): [] for name, _ in sides for k in both}
         for _ in range(args.rounds):
             for name, path in sides:
@@ -241,11 +258,16 @@ def fixed_costs(args, sides) -> int:
             t1 = statistics.median(r["cpu_s"] for r in runs[name, "N"])
             t2 = statistics.median(r["cpu_s"] for r in runs[name, "2N"])
             n = runs[name, "N"][0]["sim_s"]
+            slides = _slides_in(config)
+            own = (t2 - t1) / slides
             row[name] = {
                 "commit": commit(path),
                 "cpu_s": round(t1, 3),
                 "cpu_2n_s": round(t2, 3),
                 "fixed_s": round(2 * t1 - t2, 3),
+                "slides": slides,
+                "slide_cpu_ms": round(1e3 * own, 2),
+                "rtf_per_core_at_scale": round(n / slides / own, 1) if own > 0 else None,
                 "runs_cpu_s": [round(r["cpu_s"], 2) for r in runs[name, "N"]],
                 "runs_cpu_2n_s": [round(r["cpu_s"], 2) for r in runs[name, "2N"]],
                 "sim_s": n,
@@ -255,9 +277,10 @@ def fixed_costs(args, sides) -> int:
             print(
                 f"{config.name}: "
                 + "; ".join(
-                    f"{k} {row[k]['commit']} fixed cost {row[k]['fixed_s']:.2f} s (CPU "
-                    f"{row[k]['runs_cpu_s']} for the set, {row[k]['runs_cpu_2n_s']} for its "
-                    "double)"
+                    f"{k} {row[k]['commit']} fixed cost {row[k]['fixed_s']:.2f} s, a slide's "
+                    f"own {row[k]['slide_cpu_ms']:.1f} ms (RTF/core at scale "
+                    f"{row[k]['rtf_per_core_at_scale']}; CPU {row[k]['runs_cpu_s']} for the "
+                    f"set, {row[k]['runs_cpu_2n_s']} for its double)"
                     for k, _ in sides
                 ),
                 flush=True,
