@@ -11,7 +11,9 @@ densely solved ones too; ``--plates`` names some), once per step (the reference:
 per-step``) and once per setting (``solve_every = n``, and ``solve_tol = 1e-4`` on a
 spectral skin, as ``auto`` takes them), and prints, per plate and slide, the relative
 L2 of the taxel loads over the slide against the reference and the largest one-taxel
-difference over the largest load, in percent.
+difference over the largest load, in percent. The setting ``table`` is ``path =
+phase-table`` instead (with auto's tolerance on a spectral skin): a rough profile's table
+along its whole stretch.
 """
 
 from __future__ import annotations
@@ -29,7 +31,9 @@ from _task_slides import add_arguments, task_slides
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_arguments(ap, slides="0")
-    ap.add_argument("--settings", default="2,4", help="comma-separated solve_every values")
+    ap.add_argument(
+        "--settings", default="2,4", help="comma-separated solve_every values, or table"
+    )
     ap.add_argument("--dense", action="store_true", help="the densely solved plates too")
     args = ap.parse_args()
 
@@ -37,7 +41,7 @@ def main() -> int:
     from sim_tactile.sim import StepOptions, run
     from sim_tactile.sim.plan.options import AUTO_SOLVE_TOL
 
-    settings = [int(n) for n in args.settings.split(",")]
+    settings = args.settings.split(",")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         cache = ArtefactCache(tmp)
@@ -51,7 +55,8 @@ def main() -> int:
             row = {"plate": plate, "slide": k, "skin": skin}
             for n in settings:
                 tol = {"solve_tol": AUTO_SOLVE_TOL} if skin == "spectral" else {}
-                opts = StepOptions(solve_every=n, **tol)
+                how = {"path": "phase-table"} if n == "table" else {"solve_every": int(n)}
+                opts = StepOptions(**how, **tol)
                 a = run(replace(slide, options=opts), cache).recording.data.astype(float)
                 row[f"every {n}"] = {
                     "rel_l2_pct": round(100 * float(np.linalg.norm(a - b) / np.linalg.norm(b)), 2),

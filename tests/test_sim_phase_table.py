@@ -24,8 +24,15 @@ from sim_tactile.cache import ArtefactCache, forget_process_memos
 from sim_tactile.errors import CacheWarning, ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.sim import Protocol, Slide, StepOptions, run
-from sim_tactile.sim.plan.phase import phase_plan, travel
-from sim_tactile.sim.step.phase_table import LEVELS_PER_OCTAVE, TABLE_EXT, force_levels
+from sim_tactile.sim.plan.phase import PhasePlan, phase_plan, span_plan, travel
+from sim_tactile.sim.step.phase_table import PhaseTable
+from sim_tactile.sim.step.shared_tables import (
+    LEVELS_PER_OCTAVE,
+    TABLE_EXT,
+    _from_arrays,
+    _to_arrays,
+    force_levels,
+)
 
 #: The table path is the default where its error against the per-step solve is at most
 #: this (relative L2 of the taxel loads over a slide; the issue's and the manual's target).
@@ -126,10 +133,52 @@ def test_auto_takes_the_table_where_the_window_lies_on_the_texture_and_says_so()
     assert "path" not in replace(on, options=STEP).describe()
 
 
+def test_a_rough_profile_asked_for_by_name_is_read_off_a_table_along_it(cache):
+    """A profile with no period that does not vary across the slide: one table of positions
+    along the whole stretch, shared by the slides of a force level whatever their offset;
+    within the target of the per-step solve (measured on the iCub's rough strips: 0.05-0.11%
+    relative L2, perf/bench_every_plate.py --settings table). ``auto`` does not take it (it
+    pays over many slides a plate)."""
+    protocol = Protocol(duration_s=0.2, start="texture", force_jitter=0.1)
+    slide = Slide(get_plate("roughness8/ra-50"), "grid3x3", protocol)
+    assert slide.table_plan() is None and "path" not in slide.describe()
+    plan = replace(slide, options=TABLE).table_plan()
+    assert plan.span and plan.period_m is None and plan.y_m == 0.0
+    table, step = _both(slide, cache)
+    assert "position table" in table.meta["skin_problem"]
+    assert "shared force levels" in table.meta["skin_problem"]
+    assert np.abs(step.data).max() > 0
+    assert _rel_l2(table.data, step.data) <= REL_L2_TARGET
+    assert np.array_equal(table.meta["x_pad_m"], step.meta["x_pad_m"])
+    # another offset reads the same tables: none is solved for it
+    other = replace(slide, protocol=replace(protocol, offset_y_m=2e-3), options=TABLE)
+    assert "(its tables reused)" in run(other, cache).recording.meta["skin_problem"]
+
+
+def test_a_position_table_reads_the_line_between_positions_and_holds_its_ends():
+    """Positions along a stretch do not wrap round (a period's phases do); past an end the
+    end's row is read; the plan's kind survives the cache's arrays."""
+    plan = PhasePlan(None, -5e-3, 5e-3, -5e-3, 0.0, span=True)
+    phases = np.array([0.0, 1e-3, 3e-3, 10e-3])
+    loads = np.array([[0.0, 1.0], [1.0, 1.0], [3.0, 0.0], [10.0, 2.0]])
+    ones = np.ones(4)
+    table = PhaseTable(plan, phases, loads, ones, ones, ones, 4, 0.0)
+    got, *_ = table.at(np.array([-5e-3, -3e-3, 4.5e-3, 5e-3, 9e-3, -9e-3]))
+    want = np.array([[0.0, 1.0], [2.0, 0.5], [9.5, 1.857142857142857], [10.0, 2.0]])
+    np.testing.assert_allclose(got[:4], want, rtol=1e-12)
+    np.testing.assert_array_equal(got[4], loads[-1])  # past the far end: its row
+    np.testing.assert_array_equal(got[5], loads[0])
+    back = _from_arrays(_to_arrays(table))
+    assert back.plan == plan and "position table" in back.describe()
+    assert span_plan(get_plate("finger7/ridges-4"), (0.016, 0.016), 0.0, "quasi-static") is None
+
+
 @pytest.mark.parametrize(
     ("plate", "proto", "why"),
     [
-        ("roughness8/ra-12.5", {}, "no period along the slide"),
+        # a profile is tabulated along it where it does not vary across the pad's reach;
+        # here the reach runs off the profile's side
+        ("roughness8/ra-12.5", {"offset_y_m": 0.01}, "no period along the slide"),
         ("finger7/ridges-4", {"force_control": "position"}, "not quasi-statically"),
         ("finger7/ridges-2", {}, "under 2 periods"),
     ],

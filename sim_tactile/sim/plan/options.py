@@ -153,7 +153,8 @@ KNOBS: tuple[Knob, ...] = (
         "path",
         "how a held slide's taxel loads are computed: auto (the phase table where the plate "
         "repeats along the slide and its measured error allows, else per step), per-step "
-        "(the reference) or phase-table",
+        "(the reference) or phase-table (also a rough profile's table along its whole "
+        "stretch, which auto does not take: it pays over many slides a plate)",
         "choice",
         choices=PATHS,
         public=True,

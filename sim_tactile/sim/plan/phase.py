@@ -56,6 +56,9 @@ class PhasePlan:
     y_m: the offset across the slide [m] the table is solved at: 0.0 where the surface under
         the pad does not depend on the offset (ridges across the whole pad, a flat plate),
         else the slide's own.
+    span: with no period, the loads are tabulated over the whole interior, a function of
+        the pad's position there and not of a phase (a rough profile that does not vary
+        across the slide: :func:`span_plan`); False with no period: a uniform stretch.
     """
 
     period_m: float | None
@@ -63,6 +66,7 @@ class PhasePlan:
     x_hi: float
     x_ref: float
     y_m: float
+    span: bool = False
 
     def covers(self, x: float) -> bool:
         """Whether the pad centred at ``x`` lies in the interior."""
@@ -70,6 +74,8 @@ class PhasePlan:
 
     def describe(self) -> str:
         where = f"pad centre in [{self.x_lo * 1e3:.4g}, {self.x_hi * 1e3:.4g}] mm"
+        if self.span:
+            return f"a profile with no period, tabulated along it ({where})"
         if self.period_m is None:
             return f"a uniform stretch ({where})"
         return f"period {self.period_m * 1e3:.4g} mm ({where})"
@@ -86,6 +92,10 @@ def table_plan(
     if path == "per-step" or (path == "auto" and solve_every > 1):
         return None
     plan, why = phase_plan(plate, patch_m, proto.offset_y_m, proto.force_control)
+    if plan is None and path == "phase-table":  # asked for by name: a profile's whole stretch
+        found = span_plan(plate, patch_m, proto.offset_y_m, proto.force_control)
+        if found is not None:
+            plan, why = found
     if plan is not None:
         lo, hi = travel(window, proto)
         inside = max(0.0, min(hi, plan.x_hi) - max(lo, plan.x_lo))
@@ -104,11 +114,11 @@ def table_plan(
 
 def tables_shared(plan: PhasePlan, nominal: Protocol) -> bool:
     """Whether the slides of a set drawn from ``nominal`` share their tables at force levels
-    (:func:`~sim_tactile.sim.step.phase_table.force_levels`): their force varies from slide
+    (:func:`~sim_tactile.sim.step.shared_tables.force_levels`): their force varies from slide
     to slide, and the table does not depend on their offset (it does not, or the offset does
     not vary); else each slide's table is solved at its own force, as on a uniform stretch,
     whose table is one solve."""
-    if plan.period_m is None:
+    if plan.period_m is None and not plan.span:
         return False
     offset_free = plan.y_m == 0.0 or nominal.offset_jitter_m == 0.0
     return nominal.force_jitter > 0.0 and offset_free
@@ -119,7 +129,7 @@ def table_pays(plan: PhasePlan, nominal: Protocol) -> bool:
     of its travel only, whatever its skin's step costs: the table is one solve (a uniform
     stretch), or the set's slides share it (:func:`tables_shared`: a few tables a plate, each
     some tens of solves, against hundreds of steps of every slide)."""
-    return plan.period_m is None or tables_shared(plan, nominal)
+    return (plan.period_m is None and not plan.span) or tables_shared(plan, nominal)
 
 
 def travel(window: SlideWindow, proto: Protocol) -> tuple[float, float]:
@@ -149,6 +159,30 @@ def phase_plan(
     period, lo, hi = found
     free = period is None or abs(offset_y_m) + ry <= _y_free_half_width(plate, rx)
     return PhasePlan(period, lo, hi, lo, 0.0 if free else float(offset_y_m)), ""
+
+
+def span_plan(
+    plate: Plate, patch_m: tuple[float, float], offset_y_m: float, force_control: str
+) -> tuple[PhasePlan, str] | None:
+    """``(plan, "")`` of a profile with no period (a rough plate that does not vary across
+    the slide over the pad's reach at ``offset_y_m``): its loads are a function of the pad's
+    position along it alone, the same for every slide at the same force, whatever its offset,
+    so one table over the whole stretch serves them all (a table of many more positions than
+    a period's phases, which pays over many slides a plate: it is taken where the path
+    ``phase-table`` is asked for by name). None where the plate is not such a profile."""
+    if force_control != "quasi-static":
+        return None
+    surf = surface_of(plate)
+    if surf.features or surf.arrays is None or surf.period_m is not None:
+        return None
+    ry = float(patch_m[1]) / 2 + REACH_MARGIN_M
+    if not surf.y_invariant(np.array([offset_y_m - ry, offset_y_m + ry])):
+        return None
+    rx = float(patch_m[0]) / 2 + REACH_MARGIN_M
+    lo, hi = -plate.area_length_m / 2 + rx, plate.area_length_m / 2 - rx
+    if hi <= lo:
+        return None
+    return PhasePlan(None, lo, hi, lo, 0.0, span=True), ""
 
 
 @memoized("plates' repetitions", maxsize=256)
@@ -293,6 +327,7 @@ __all__ = [
     "PhasePlan",
     "depths_by_column",
     "phase_plan",
+    "span_plan",
     "table_pays",
     "table_plan",
     "tables_shared",

@@ -19,18 +19,12 @@ whichever slide asks first.
 
 from __future__ import annotations
 
-import fcntl
 import math
-import os
-import warnings
-import zipfile
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 
-from ...cache import SETUP, npz_bytes
-from ...errors import CacheWarning, PhysicsError
+from ...errors import PhysicsError
 from ..plan.phase import PhasePlan
 from .held import HeldStep
 
@@ -48,6 +42,9 @@ PHASE_TOL = 0.005
 MIN_PHASE_FRACTION = 1 / 8
 #: Most phases one table may hold.
 MAX_PHASES = 1024
+#: Most positions a table over a stretch with no period may hold (a profile's: the iCub's
+#: 120 mm strips start with some 300, one a node pitch).
+MAX_SPAN_PHASES = 4096
 #: A phase's held step is taken again from the height it found until the height moves by
 #: less than this [m]: the held step collides once more only where the pad moved beyond the
 #: collider's margin, so from a height far from its answer (a table's first phase, sunk from
@@ -96,14 +93,20 @@ class PhaseTable:
         x = np.asarray(x, dtype=float)
         period = self.plan.period_m
         k = len(self.phases)
-        if period is None or k == 1:
+        if k == 1 or (period is None and not self.plan.span):
             idx = np.zeros(x.shape, dtype=np.intp)
             return self.loads[idx], self.force[idx], self.top[idx], self.z[idx]
-        phi = np.mod(x - self.plan.x_ref, period)
-        grid = np.append(self.phases, period)
-        i = np.clip(np.searchsorted(grid, phi, side="right") - 1, 0, k - 1)
+        if self.plan.span:  # positions along the stretch, its ends included: no wrap
+            grid = self.phases
+            phi = np.clip(x - self.plan.x_ref, grid[0], grid[-1])
+            i = np.clip(np.searchsorted(grid, phi, side="right") - 1, 0, k - 2)
+            j = i + 1
+        else:
+            phi = np.mod(x - self.plan.x_ref, period)
+            grid = np.append(self.phases, period)
+            i = np.clip(np.searchsorted(grid, phi, side="right") - 1, 0, k - 1)
+            j = (i + 1) % k
         w = (phi - grid[i]) / (grid[i + 1] - grid[i])
-        j = (i + 1) % k
 
         def lerp(a: np.ndarray) -> np.ndarray:
             wa = w if a.ndim == 1 else w[:, None]
@@ -112,6 +115,11 @@ class PhaseTable:
         return lerp(self.loads), lerp(self.force), lerp(self.top), lerp(self.z)
 
     def describe(self) -> str:
+        if self.plan.span:
+            return (
+                f"position table: {self.plan.describe()}, {len(self.phases)} positions, "
+                f"interpolation error below {max(self.error, 1e-6):.2g} of the loads"
+            )
         if self.plan.period_m is None:
             return f"phase table: {self.plan.describe()}, 1 phase"
         solved = ""
@@ -202,6 +210,9 @@ def tabulate(
             keep(float(phi), outs[k], float(forces[k]), float(tops[k]), float(qs[k, jz]))
         q[jz] = qs[-1, jz]
 
+    if plan.span:  # the whole stretch, its ends included, refined without a wrap
+        period = math.inf  # (the refinement's neighbours: b % inf is b)
+        return _span_table(solve_all, solved, plan, pitch_m, tol)
     if period is None:
         solve(0.0)
         return _table(plan, solved, 0.0)
@@ -220,6 +231,20 @@ def tabulate(
     if image is None:
         return _table(plan, solved, worst)
     return _table(plan, _unfold(solved, shift, period), worst, solves=len(solved))
+
+
+def _span_table(solve_all, solved: dict, plan: PhasePlan, pitch_m: float, tol) -> PhaseTable:
+    """The table of a stretch with no period (``plan.span``): an even grid of about one
+    position a node pitch from its start to its end, both included, refined as a period's
+    phases are but never wrapping round, up to :data:`MAX_SPAN_PHASES` positions."""
+    length = plan.x_hi - plan.x_lo
+    n0 = max(2, int(np.ceil(length / pitch_m)))
+    us = [float(u) for u in np.arange(n0 + 1) * (length / n0)]
+    solve_all(us)
+    todo = list(zip(us[:-1], us[1:], strict=True))
+    smallest = pitch_m * MIN_PHASE_FRACTION
+    worst = _refine(solve_all, solved, todo, math.inf, smallest, tol, MAX_SPAN_PHASES, False)
+    return _table(plan, solved, worst)
 
 
 def _settle_many(many, qs: np.ndarray, jz: int, total_pa: float, n_taxels: int):
@@ -321,162 +346,3 @@ def _table(plan: PhasePlan, solved: dict, error: float, solves: int | None = Non
         len(solved) if solves is None else solves,
         float(error),
     )
-
-
-# ------------------------------------------------------------------ tables a data set shares
-#: Force levels per doubling of the force at which shared tables are solved (19% apart): a
-#: slide whose force lies between two levels reads the line between their tables
-#: (:func:`force_levels`). The loads are nearly linear in the force at a phase: on the iCub's
-#: grating-3.0mm, three slides read between levels 4.4%, 9% and 19% apart differ from their
-#: table at their own force by at most 0.001%, 0.004% and 0.007% (relative L2), against
-#: 0.5-0.6% between that table and the per-step slide.
-LEVELS_PER_OCTAVE = 4
-#: The table cache's file kind.
-TABLE_EXT = "phase.npz"
-
-
-def force_levels(force_n: float) -> list[tuple[float, float]]:
-    """``[(level force [N], weight), ...]``: the one or two shared levels
-    ``2 ** (k / LEVELS_PER_OCTAVE)`` N on either side of ``force_n``, weighted by the line
-    between them (one level, weight 1, where the force is one)."""
-    t = math.log2(force_n) * LEVELS_PER_OCTAVE
-    k = math.floor(t)
-    lo = 2.0 ** (k / LEVELS_PER_OCTAVE)
-    if lo == force_n:
-        return [(lo, 1.0)]
-    hi = 2.0 ** ((k + 1) / LEVELS_PER_OCTAVE)
-    w = (force_n - lo) / (hi - lo)
-    return [(lo, 1.0 - w), (hi, w)]
-
-
-@dataclass(frozen=True)
-class Blend:
-    """Tables of one plan at other forces, read as the line between them in the force:
-    ``at(x)`` is ``sum(weight * table.at(x))`` (the interface of :class:`PhaseTable` that the
-    tabled slide reads)."""
-
-    tables: tuple[PhaseTable, ...]
-    weights: tuple[float, ...]
-    levels: tuple[float, ...]
-
-    @property
-    def plan(self) -> PhasePlan:
-        return self.tables[0].plan
-
-    @property
-    def n_taxels(self) -> int:
-        return self.tables[0].loads.shape[1]
-
-    @property
-    def top(self) -> np.ndarray:
-        return np.concatenate([t.top for t in self.tables])
-
-    @property
-    def solves(self) -> int:
-        return sum(t.solves for t in self.tables)
-
-    def at(self, x: np.ndarray):
-        parts = [t.at(x) for t in self.tables]
-        return tuple(
-            sum(w * p[k] for w, p in zip(self.weights, parts, strict=True)) for k in range(4)
-        )
-
-    def describe(self) -> str:
-        forces = " and ".join(f"{f:.4g} N" for f in self.levels)
-        phases = " and ".join(str(len(t.phases)) for t in self.tables)
-        return (
-            f"phase tables at {forces} (shared force levels): {self.plan.describe()}, "
-            f"{phases} phases, interpolation error below "
-            f"{max(max(t.error for t in self.tables), 1e-6):.2g} of the loads"
-        )
-
-
-def kept_table(key: str, build, cache) -> tuple[PhaseTable, bool]:
-    """``(table, made)``: the table under ``key`` from this process's memo or ``cache`` (an
-    :class:`~sim_tactile.cache.ArtefactCache`, checked as every entry is), else
-    ``build()`` kept in both. ``key`` holds everything the table depends on, and a table
-    is the same bit for bit whoever builds it, so a slide does not depend on where its
-    table came from. Workers that share ``cache`` build a table once: the first holds a
-    lock on it (:func:`_building`) while it builds, and the others wait and read it."""
-    kept = SETUP.get(key)
-    if kept is not None:
-        return _from_arrays(kept), False
-    if cache is None:
-        table = build()
-        SETUP.put(key, _to_arrays(table))
-        return table, True
-    found = _read(key, cache)
-    if found is not None:
-        return found, False
-    with _building(cache, key):
-        found = _read(key, cache)  # made by another worker while this one waited
-        if found is not None:
-            return found, False
-        table = build()
-        arrays = _to_arrays(table)
-        cache.put(key, TABLE_EXT, npz_bytes(dict(zip(_FIELDS, arrays, strict=True))))
-    SETUP.put(key, arrays)
-    return table, True
-
-
-def _read(key: str, cache) -> PhaseTable | None:
-    """The table under ``key`` in ``cache`` (kept in this process too), or None: absent, or
-    damaged and discarded with a warning naming the file."""
-    hit = cache.get(key, TABLE_EXT)
-    if hit is None:
-        return None
-    try:
-        with np.load(hit, allow_pickle=False) as z:
-            arrays = tuple(z[f] for f in _FIELDS)
-        if arrays[1].ndim != 2 or any(len(a) != len(arrays[0]) for a in arrays[1:5]):
-            raise ValueError("its arrays disagree in length")
-        return _from_arrays(SETUP.put(key, arrays))
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-        warnings.warn(
-            f"cache entry {hit} cannot be read as a phase table "
-            f"({type(exc).__name__}: {exc}); it is solved again",
-            CacheWarning,
-            stacklevel=2,
-        )
-        cache.discard(key, TABLE_EXT)
-        return None
-
-
-@contextmanager
-def _building(cache, key: str):
-    """Hold an exclusive ``flock`` on the lock file of table ``key`` beside its cache entry
-    while it is built (the kernel drops it when its holder dies, however it dies); where the
-    cache's folder takes no lock file, build without one (two workers may then build the
-    same table, which is the same bits)."""
-    folder = cache.entry(key, TABLE_EXT).parent
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fd = os.open(
-            folder / f".{key}.{TABLE_EXT}.lock",
-            os.O_RDONLY | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC,
-            0o664,
-        )
-    except OSError:
-        yield
-        return
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        yield
-    finally:
-        os.close(fd)
-
-
-_FIELDS = ("phases", "loads", "force", "top", "z", "plan", "stats")
-
-
-def _to_arrays(t: PhaseTable) -> tuple:
-    p = t.plan
-    period = np.nan if p.period_m is None else p.period_m
-    plan = np.array([period, p.x_lo, p.x_hi, p.x_ref, p.y_m])
-    return (t.phases, t.loads, t.force, t.top, t.z, plan, np.array([t.solves, t.error]))
-
-
-def _from_arrays(a: tuple) -> PhaseTable:
-    period, lo, hi, ref, y = (float(v) for v in a[5])
-    plan = PhasePlan(None if math.isnan(period) else period, lo, hi, ref, y)
-    return PhaseTable(plan, a[0], a[1], a[2], a[3], a[4], int(a[6][0]), float(a[6][1]))

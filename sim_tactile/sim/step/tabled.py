@@ -30,9 +30,10 @@ from ..plan.slide import Slide
 from .batched_held import batched_held
 from .build import runner_for, scene_for
 from .mirror import mirrored_loads
-from .phase_table import Blend, PhaseTable, force_levels, kept_table, tabulate
+from .phase_table import PhaseTable, tabulate
 from .runner import V_STICK, Runner
 from .sampling import SampleAverager
+from .shared_tables import Blend, force_levels, kept_table
 from .strokes import Strokes
 
 
@@ -237,7 +238,7 @@ def table_for(
     solved for it (the rest came from this process or ``cache``). Where the slides of a set
     share tables (:func:`~sim_tactile.sim.plan.phase.tables_shared`), the line between the
     tables at the two force levels on either side of the slide's force
-    (:func:`~.phase_table.force_levels`), else the table at its own force."""
+    (:func:`~.shared_tables.force_levels`), else the table at its own force."""
     levels = (
         force_levels(proto.force_n)
         if tables_shared(plan, slide.protocol)
@@ -275,7 +276,7 @@ def table_key(slide: Slide, fid: Fidelity, plan: PhasePlan, force_n: float) -> s
             "pad": slide.pad.to_json(),
             "grid": grid,
             "options": opts,
-            "plan": [plan.period_m, plan.x_lo, plan.x_hi, plan.x_ref, plan.y_m],
+            "plan": [plan.period_m, plan.x_lo, plan.x_hi, plan.x_ref, plan.y_m, plan.span],
             "force_n": float(force_n),
             "code": code_version(*TABLE_MODULES, libraries=TABLE_LIBRARIES),
             "blas": blas_kernel(),
