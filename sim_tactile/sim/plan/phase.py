@@ -68,6 +68,17 @@ class PhasePlan:
     y_m: float
     span: bool = False
 
+    @property
+    def uniform(self) -> bool:
+        """Whether the stretch is uniform along the slide (no period and no profile): one
+        phase."""
+        return self.period_m is None and not self.span
+
+    @property
+    def units(self) -> tuple[str, str]:
+        """What its table holds, one and many: positions along a profile, else phases."""
+        return ("position", "positions") if self.span else ("phase", "phases")
+
     def covers(self, x: float) -> bool:
         """Whether the pad centred at ``x`` lies in the interior."""
         return self.x_lo <= x <= self.x_hi
@@ -118,7 +129,7 @@ def tables_shared(plan: PhasePlan, nominal: Protocol) -> bool:
     to slide, and the table does not depend on their offset (it does not, or the offset does
     not vary); else each slide's table is solved at its own force, as on a uniform stretch,
     whose table is one solve."""
-    if plan.period_m is None and not plan.span:
+    if plan.uniform:
         return False
     offset_free = plan.y_m == 0.0 or nominal.offset_jitter_m == 0.0
     return nominal.force_jitter > 0.0 and offset_free
@@ -129,7 +140,7 @@ def table_pays(plan: PhasePlan, nominal: Protocol) -> bool:
     of its travel only, whatever its skin's step costs: the table is one solve (a uniform
     stretch), or the set's slides share it (:func:`tables_shared`: a few tables a plate, each
     some tens of solves, against hundreds of steps of every slide)."""
-    return (plan.period_m is None and not plan.span) or tables_shared(plan, nominal)
+    return plan.uniform or tables_shared(plan, nominal)
 
 
 def travel(window: SlideWindow, proto: Protocol) -> tuple[float, float]:

@@ -10,7 +10,9 @@ of about one phase per node pitch, then every interval whose midpoint's loads di
 the line between its ends by more than :data:`PHASE_TOL` of the loads' RMS is halved, down
 to :data:`MIN_PHASE_FRACTION` of a node pitch; the largest midpoint difference that remains
 is the table's own error estimate (:attr:`PhaseTable.error`). A uniform stretch (a flat
-plate) is one phase.
+plate) is one phase. A rough profile with no period (:func:`~sim_tactile.sim.plan.phase.span_plan`)
+is tabulated the same way over positions along its whole stretch, which never wrap round.
+The tables the slides of a set share, and their cache, are in :mod:`.shared_tables`.
 
 The table is solved in a scene of its own, from the plan's reference position (not from
 the slide's history), so the same plan, grid and force give the same table bit for bit,
@@ -100,7 +102,7 @@ class PhaseTable:
         x = np.asarray(x, dtype=float)
         period = self.plan.period_m
         k = len(self.phases)
-        if k == 1 or (period is None and not self.plan.span):
+        if k == 1 or self.plan.uniform:
             idx = np.zeros(x.shape, dtype=np.intp)
             return self.loads[idx], self.force[idx], self.top[idx], self.z[idx]
         if self.plan.span:  # positions along the stretch, its ends included: no wrap
@@ -122,18 +124,14 @@ class PhaseTable:
         return lerp(self.loads), lerp(self.force), lerp(self.top), lerp(self.z)
 
     def describe(self) -> str:
-        if self.plan.span:
-            return (
-                f"position table: {self.plan.describe()}, {len(self.phases)} positions, "
-                f"interpolation error below {max(self.error, 1e-6):.2g} of the loads"
-            )
-        if self.plan.period_m is None:
+        if self.plan.uniform:
             return f"phase table: {self.plan.describe()}, 1 phase"
+        kind, unit = self.plan.units
         solved = ""
         if self.solves < len(self.phases):
             solved = f" ({self.solves} solved, the rest their mirror images)"
         return (
-            f"phase table: {self.plan.describe()}, {len(self.phases)} phases{solved}, "
+            f"{kind} table: {self.plan.describe()}, {len(self.phases)} {unit}{solved}, "
             f"interpolation error below {max(self.error, 1e-6):.2g} of the loads"
         )
 

@@ -84,7 +84,7 @@ class Blend:
     def describe(self) -> str:
         forces = " and ".join(f"{f:.4g} N" for f in self.levels)
         phases = " and ".join(str(len(t.phases)) for t in self.tables)
-        kind, unit = ("position", "positions") if self.plan.span else ("phase", "phases")
+        kind, unit = self.plan.units
         return (
             f"{kind} tables at {forces} (shared force levels): {self.plan.describe()}, "
             f"{phases} {unit}, interpolation error below "
