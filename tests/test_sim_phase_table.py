@@ -24,6 +24,7 @@ from sim_tactile.cache import ArtefactCache, forget_process_memos
 from sim_tactile.errors import CacheWarning, ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.sim import Protocol, Slide, StepOptions, run
+from sim_tactile.sim.plan import phase
 from sim_tactile.sim.plan.phase import PhasePlan, phase_plan, span_plan, travel
 from sim_tactile.sim.step.phase_table import PhaseTable
 from sim_tactile.sim.step.shared_tables import (
@@ -137,8 +138,8 @@ def test_a_rough_profile_asked_for_by_name_is_read_off_a_table_along_it(cache):
     """A profile with no period that does not vary across the slide: one table of positions
     along the whole stretch, shared by the slides of a force level whatever their offset;
     within the target of the per-step solve (measured on the iCub's rough strips: 0.07-0.24%
-    relative L2, perf/bench_every_plate.py --settings table). ``auto`` does not take it (it
-    pays over many slides a plate)."""
+    relative L2, perf/bench_every_plate.py --settings table). ``auto`` does not take it for
+    a slide alone (it pays over many slides a plate)."""
     protocol = Protocol(duration_s=0.2, start="texture", force_jitter=0.1)
     slide = Slide(get_plate("roughness8/ra-50"), "grid3x3", protocol)
     assert slide.table_plan() is None and "path" not in slide.describe()
@@ -153,6 +154,56 @@ def test_a_rough_profile_asked_for_by_name_is_read_off_a_table_along_it(cache):
     # another offset reads the same tables: none is solved for it
     other = replace(slide, protocol=replace(protocol, offset_y_m=2e-3), options=TABLE)
     assert "(its tables reused)" in run(other, cache).recording.meta["skin_problem"]
+
+
+def test_a_profile_crossed_from_flat_ground_is_tabulated_along_the_whole_plate(cache):
+    """A slide that starts on flat ground and runs onto the profile: its table covers the
+    whole plate (the flat base either side of the profile is the same at every offset too),
+    so every step is read off it, within the target of the per-step solve, the pad's path
+    the per-step slide's; a slide that stays on the profile keeps the profile's interior."""
+    plate = get_plate("roughness8/ra-50")
+    protocol = Protocol(duration_s=0.3, force_jitter=0.1)
+    slide = replace(Slide(plate, "grid3x3", protocol), options=TABLE)
+    plan = slide.table_plan()
+    rx = slide.pad.patch_m[0] / 2 + phase.REACH_MARGIN_M
+    assert plan.span and math.isclose(plan.x_hi, plate.length_m / 2 - rx)
+    lo, hi = travel(slide.window, slide.drawn())
+    assert lo < -plate.area_length_m / 2 < hi and plan.covers(lo) and plan.covers(hi)
+    on = replace(slide, protocol=replace(protocol, start="texture"))
+    assert math.isclose(on.table_plan().x_hi, plate.area_length_m / 2 - rx)
+    table, step = _both(slide, cache)
+    steps = slide.window.n_samples * slide.resolved.steps_per_sample + 1
+    assert f"{steps} of {steps} steps read off it" in table.meta["skin_problem"]
+    assert np.abs(step.data).max() > 0
+    assert _rel_l2(table.data, step.data) <= REL_L2_TARGET
+    assert np.array_equal(table.meta["x_pad_m"], step.meta["x_pad_m"])
+
+
+def test_auto_takes_a_profiles_table_where_the_set_has_slides_enough_to_pay_for_it():
+    """``auto`` takes a rough profile's table where the slides of its plate in the set
+    (``plate_slides``) take more solves step by step than its tables' estimated positions at
+    every force level they read; a slide alone stays per step. The description records the
+    path, so the two are two cache entries."""
+    protocol = Protocol(force_jitter=0.25)
+    alone = Slide(get_plate("roughness8/ra-50"), "pvdf2", protocol)
+    assert alone.table_plan() is None and "path" not in alone.describe()
+    many = replace(alone, plate_slides=60)
+    plan = many.table_plan()
+    assert plan is not None and plan.span and many.describe()["path"] == "phase-table"
+    assert many.describe()["press"] == "held" and alone.describe() != many.describe()
+    # the threshold: the estimate's solves against the slides' own, both ways of it
+    few = [n for n in range(2, 61) if replace(alone, plate_slides=n).table_plan() is None]
+    assert few and max(few) < 60
+    n = max(few) + 1
+    fid = alone.resolved
+    steps = alone.window.n_samples * fid.steps_per_sample
+    args = (plan, alone.plate, alone.pad.patch_m, protocol, fid.pitch_m, steps)
+    assert phase.span_pays(*args, n) and not phase.span_pays(*args, n - 1)
+    # one level where the force does not vary, more the wider it varies
+    assert phase.levels_read(replace(protocol, force_jitter=0.0)) == 1
+    assert phase.levels_read(replace(protocol, force_jitter=0.1)) < phase.levels_read(protocol)
+    with pytest.raises(ConfigError, match=r"plate_slides = 0 is out of range; valid: \[1, inf\]"):
+        replace(alone, plate_slides=0)
 
 
 def test_a_position_table_reads_the_line_between_positions_and_holds_its_ends():

@@ -88,6 +88,18 @@ def test_slide_set_validation():
         SlideSet(TWO, "grid3x3", proto, 4, 5)
 
 
+def test_a_sets_slides_know_the_full_runs_slides_a_plate():
+    """Each slide of a set knows how many slides of its plate the full run makes (what
+    ``auto`` weighs a table shared by them against), in the quick run too, so that a quick
+    run's slides are the full run's first ones, bit for bit."""
+    ss = SlideSet(TWO, "grid3x3", Protocol(), 4, 2)
+    full, quick = ss.jobs(3), ss.jobs(3, quick=True)
+    assert {j.plate_slides for j in full + quick} == {4}
+    assert [j.describe() for j in quick] == [
+        j.describe() for j in full if j.label in {q.label for q in quick}
+    ]
+
+
 def test_slides_are_cached_and_reproducible(cache):
     """Two slides of two plates: a second call reads the cache and gives identical data; the
     window is the crossing time at the nominal speed, so every slide has one length."""

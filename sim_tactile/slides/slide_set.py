@@ -216,7 +216,9 @@ class SlideSet:
     def jobs(self, seed: int, quick: bool = False) -> list[SlideJob]:
         """The set's slides, plate after plate; slide ``k`` of plate ``i`` has the seed
         ``derive_seed(seed, i, k)`` (``i`` its index among all the plates, so a quick run's
-        slides are the full run's first ones)."""
+        slides are the full run's first ones: each knows the full run's slides a plate, on
+        which ``path = auto`` takes a table that pays over many:
+        ``plate_slides`` of :class:`~sim_tactile.sim.plan.slide.Slide`)."""
         proto = self.window_protocol()
         sensor = self.sensor_def()
         n = self.slides_for(quick)
@@ -238,6 +240,7 @@ class SlideSet:
                         rig=self.rig,
                         options=self.options,
                         label=f"{name} slide {k}",
+                        plate_slides=self.slides,
                     )
                 )
         return out

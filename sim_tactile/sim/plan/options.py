@@ -44,8 +44,8 @@ AUTO_SOLVE_TOL = 1e-4
 #: 0.95-1.10% (every 3rd: 1.92-2.21%), textures20-biotac19-v1's seven grids 0.11-1.06%.
 AUTO_SOLVE_EVERY = 2
 #: How a held slide's taxel loads are computed (``StepOptions.path``): ``auto`` (the phase
-#: table where the scene allows it and its measured error is within target, else the
-#: per-step solve), ``per-step`` (the skin solved at every step: the reference) or
+#: table where the scene allows it, its measured error is within target and it pays, else
+#: the per-step solve), ``per-step`` (the skin solved at every step: the reference) or
 #: ``phase-table`` (asked for: refused where the scene does not allow it).
 PATHS = ("auto", "per-step", "phase-table")
 #: Where the batched solves run (``StepOptions.device``): the CPU, or a GPU through torch.
@@ -152,9 +152,10 @@ KNOBS: tuple[Knob, ...] = (
     Knob(
         "path",
         "how a held slide's taxel loads are computed: auto (the phase table where the plate "
-        "repeats along the slide and its measured error allows, else per step), per-step "
-        "(the reference) or phase-table (also a rough profile's table along its whole "
-        "stretch, which auto does not take: it pays over many slides a plate)",
+        "repeats along the slide and its measured error allows, a rough profile's table "
+        "along it where the set has slides of the plate enough to pay for it, else per "
+        "step), per-step (the reference) or phase-table (the table wherever the scene "
+        "allows one)",
         "choice",
         choices=PATHS,
         public=True,

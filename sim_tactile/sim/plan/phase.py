@@ -43,6 +43,28 @@ CHECK_PITCH_M = 0.1e-3
 #: Periods the pad must travel in the interior for a table to pay (a table costs about one
 #: period of per-step solves).
 MIN_PERIODS = 2.0
+#: Smallest interval between two positions of a table over a stretch with no period, as a
+#: share of the node pitch: a rough profile is rough below the node pitch, so its intervals
+#: are halved down to this nearly everywhere, and this sets the table's cost. Measured on the
+#: iCub's rough strips (slide 0 of textures20-icub60-v2, against the per-step solve, relative
+#: L2): rough-ra25 0.11% at an eighth of the pitch (2441 positions), 0.24% at a quarter
+#: (about half the solves), 0.89% at a half; rough-ra100 0.055% and 0.067%.
+SPAN_MIN_FRACTION = 1 / 4
+#: What a position of a profile's table costs, in the per-step slide's solves, at most:
+#: measured 0.9-1.0 on the iCub's spectral skin (3.5 ms a position against 3.4-4.3 ms a
+#: step), 1.5 on the PVDF fingertip's dense skin (77 us, a position settled from its
+#: neighbour's height, against 51 us a step).
+SPAN_SOLVE_COST = 1.5
+#: Force levels per doubling of the force at which shared tables are solved (19% apart): a
+#: slide whose force lies between two levels reads the line between their tables
+#: (:func:`~sim_tactile.sim.step.shared_tables.force_levels`). The loads are nearly linear in the force at a phase: on the iCub's
+#: grating-3.0mm, three slides read between levels 4.4%, 9% and 19% apart differ from their
+#: table at their own force by at most 0.001%, 0.004% and 0.007% (relative L2), against
+#: 0.5-0.6% between that table and the per-step slide.
+LEVELS_PER_OCTAVE = 4
+#: The force levels a set's slides read are counted over its nominal force +- this many
+#: standard deviations of its jitter (95% of its slides).
+SPAN_FORCE_SDS = 2.0
 
 
 @dataclass(frozen=True)
@@ -93,7 +115,13 @@ class PhasePlan:
 
 
 def table_plan(
-    plate: Plate, patch_m, proto: Protocol, window: SlideWindow, path: str, solve_every: int
+    plate: Plate,
+    patch_m,
+    proto: Protocol,
+    window: SlideWindow,
+    path: str,
+    solve_every: int,
+    span: bool = False,
 ) -> PhasePlan | None:
     """The plan of a slide whose loads are read off a phase table: ``path`` ``auto`` where
     the plate repeats under the pad for at least :data:`MIN_PERIODS` of the slide's travel
@@ -103,12 +131,12 @@ def table_plan(
     if path == "per-step" or (path == "auto" and solve_every > 1):
         return None
     plan, why = phase_plan(plate, patch_m, proto.offset_y_m, proto.force_control)
-    if plan is None and path == "phase-table":  # asked for by name: a profile's whole stretch
-        found = span_plan(plate, patch_m, proto.offset_y_m, proto.force_control)
+    lo, hi = travel(window, proto)
+    if plan is None and (path == "phase-table" or span):  # a profile's whole stretch
+        found = span_plan(plate, patch_m, proto.offset_y_m, proto.force_control, (lo, hi))
         if found is not None:
             plan, why = found
     if plan is not None:
-        lo, hi = travel(window, proto)
         inside = max(0.0, min(hi, plan.x_hi) - max(lo, plan.x_lo))
         if inside <= 0.0 or inside < MIN_PERIODS * (plan.period_m or 0.0):
             plan, why = (
@@ -143,6 +171,45 @@ def table_pays(plan: PhasePlan, nominal: Protocol) -> bool:
     return plan.uniform or tables_shared(plan, nominal)
 
 
+def span_pays(
+    plan: PhasePlan,
+    plate: Plate,
+    patch_m,
+    nominal: Protocol,
+    pitch_m: float,
+    slide_solves: float,
+    n_slides: int,
+) -> bool:
+    """Whether a profile's table (``plan``, :func:`span_plan`) pays over the ``n_slides``
+    slides of its plate that a set makes, each of which would take ``slide_solves`` solves
+    step by step: the positions it is estimated to hold (every interval refined to
+    :data:`SPAN_MIN_FRACTION` of the node pitch ``pitch_m`` where the pad reaches the
+    profile, a position a pitch on the flat ground beyond), at :data:`SPAN_SOLVE_COST`
+    solves each, once for each force level its slides read (:func:`levels_read`), against
+    the solves of the slides it serves."""
+    rx = float(patch_m[0]) / 2 + REACH_MARGIN_M
+    reach = plate.area_length_m / 2 + rx
+    rough = max(0.0, min(plan.x_hi, reach) - max(plan.x_lo, -reach))
+    flat = max(0.0, plan.x_hi - plan.x_lo - rough)
+    positions = rough / (pitch_m * SPAN_MIN_FRACTION) + flat / pitch_m
+    levels = levels_read(nominal)
+    return n_slides * slide_solves >= SPAN_SOLVE_COST * levels * positions
+
+
+def levels_read(nominal: Protocol) -> int:
+    """How many shared force levels (:func:`~sim_tactile.sim.step.shared_tables.force_levels`,
+    :data:`LEVELS_PER_OCTAVE` an octave) the slides drawn from ``nominal`` read: those either side of its force
+    +- :data:`SPAN_FORCE_SDS` of its jitter (as the draw clips it, to 0.2-2 times the
+    nominal force); one where the force does not vary (every slide's table is the same)."""
+    j = nominal.force_jitter
+    if j == 0.0:
+        return 1
+    lo = nominal.force_n * max(0.2, 1 - SPAN_FORCE_SDS * j)
+    hi = nominal.force_n * min(2.0, 1 + SPAN_FORCE_SDS * j)
+    k = LEVELS_PER_OCTAVE
+    return math.ceil(k * math.log2(hi)) - math.floor(k * math.log2(lo)) + 1
+
+
 def travel(window: SlideWindow, proto: Protocol) -> tuple[float, float]:
     """The pad centre's x range [m] over ``window`` at ``proto``'s speed (an upper bound of
     its travel: the ramp at each stroke's start only shortens it)."""
@@ -173,14 +240,21 @@ def phase_plan(
 
 
 def span_plan(
-    plate: Plate, patch_m: tuple[float, float], offset_y_m: float, force_control: str
+    plate: Plate,
+    patch_m: tuple[float, float],
+    offset_y_m: float,
+    force_control: str,
+    travel_m: tuple[float, float] | None = None,
 ) -> tuple[PhasePlan, str] | None:
     """``(plan, "")`` of a profile with no period (a rough plate that does not vary across
     the slide over the pad's reach at ``offset_y_m``): its loads are a function of the pad's
     position along it alone, the same for every slide at the same force, whatever its offset,
-    so one table over the whole stretch serves them all (a table of many more positions than
-    a period's phases, which pays over many slides a plate: it is taken where the path
-    ``phase-table`` is asked for by name). None where the plate is not such a profile."""
+    so one table along it serves them all (a table of many more positions than a period's
+    phases, which pays over many slides a plate: :func:`span_pays`). The stretch is the
+    profile's interior (the pad wholly on it) where the slide's ``travel_m`` (its pad
+    centre's x range [m]: :func:`travel`) lies there, else the whole plate, the flat ground
+    either side of the profile included (the base is flat at every y: the loads are a
+    function of the position there too). None where the plate is not such a profile."""
     if force_control != "quasi-static":
         return None
     surf = surface_of(plate)
@@ -191,6 +265,8 @@ def span_plan(
         return None
     rx = float(patch_m[0]) / 2 + REACH_MARGIN_M
     lo, hi = -plate.area_length_m / 2 + rx, plate.area_length_m / 2 - rx
+    if travel_m is not None and not (lo <= travel_m[0] and travel_m[1] <= hi):
+        lo, hi = -plate.length_m / 2 + rx, plate.length_m / 2 - rx
     if hi <= lo:
         return None
     return PhasePlan(None, lo, hi, lo, 0.0, span=True), ""
@@ -338,6 +414,7 @@ __all__ = [
     "PhasePlan",
     "depths_by_column",
     "phase_plan",
+    "span_pays",
     "span_plan",
     "table_pays",
     "table_plan",

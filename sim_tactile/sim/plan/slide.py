@@ -20,12 +20,13 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
+from ... import _validate as v
 from ...plates.define.spec import Plate
 from ...plates.define.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
 from .fidelity import Fidelity, choose_fidelity, solved_spectrally
 from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, keyed
-from .phase import PhasePlan, depths_by_column, table_pays, table_plan, travel
+from .phase import PhasePlan, depths_by_column, span_pays, table_pays, table_plan, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
 from .solver import dense_is_dear, dense_step_is_dear
@@ -49,6 +50,10 @@ class Slide:
     rig: the probe rig that makes the slide (:mod:`~.rig`), else the finger scene.
     options: how it is computed (:class:`~.options.StepOptions`).
     label: what the slide is called in messages (its plate's name and place in a set).
+    plate_slides: how many slides of its plate its set makes (1: a slide alone): ``path =
+        auto`` takes a table that pays over many slides of a plate only (a rough profile's,
+        :func:`~.phase.span_pays`) where they are that many. Not a part of what the slide is:
+        its description records the path it takes.
     """
 
     plate: Plate
@@ -63,6 +68,10 @@ class Slide:
     rig: ProbeRig | None = None
     options: StepOptions = field(default_factory=StepOptions)
     label: str = field(default="", compare=False)
+    plate_slides: int = 1
+
+    def __post_init__(self) -> None:
+        v.integer("plate_slides", self.plate_slides, 1, None)
 
     # ------------------------------------------------------------------ resolved once
     @cached_property
@@ -157,14 +166,22 @@ class Slide:
         if self.rig is not None or (opts.path == "auto" and not default):
             return None, replace(opts, path="per-step")
         proto = self.drawn()
-        plan = table_plan(
-            self.plate, self.pad.patch_m, proto, self.window, opts.path, opts.solve_every
-        )
         auto = opts.path == "auto"
+        plan = table_plan(
+            self.plate,
+            self.pad.patch_m,
+            proto,
+            self.window,
+            opts.path,
+            opts.solve_every,
+            span=auto and self.plate_slides > 1,
+        )
         if plan is not None and auto:
             lo, hi = travel(self.window, proto)
             whole = plan.covers(lo) and plan.covers(hi)
-            if not (whole or self.spectral or table_pays(plan, self.protocol)):
+            if plan.span:
+                plan = plan if self._span_pays(plan) else None
+            elif not (whole or self.spectral or table_pays(plan, self.protocol)):
                 plan = None
         if plan is not None:
             tol = AUTO_SOLVE_TOL if auto and self.spectral else opts.solve_tol
@@ -182,6 +199,25 @@ class Slide:
             AUTO_SOLVE_EVERY if held and self.resolved.steps_per_sample >= AUTO_SOLVE_EVERY else 1
         )
         return None, replace(opts, path="per-step", solve_every=every, solve_tol=AUTO_SOLVE_TOL)
+
+    def _span_pays(self, plan: PhasePlan) -> bool:
+        """Whether ``auto`` takes a profile's table (:func:`~.phase.span_pays`) for the
+        :attr:`plate_slides` slides of the set, against the solves each would take step by
+        step (at every :data:`~.options.AUTO_SOLVE_EVERY`-th step where auto would solve it
+        so)."""
+        fid = self.resolved
+        steps = self.window.n_samples * fid.steps_per_sample
+        sampled = self.spectral and fid.steps_per_sample >= AUTO_SOLVE_EVERY
+        every = AUTO_SOLVE_EVERY if sampled or self._dense_step_is_dear() else 1
+        return span_pays(
+            plan,
+            self.plate,
+            self.pad.patch_m,
+            self.protocol,
+            fid.pitch_m,
+            steps / every,
+            self.plate_slides,
+        )
 
     @cached_property
     def _by_column(self) -> bool:

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import PhysicsError
-from ..plan.phase import PhasePlan
+from ..plan.phase import SPAN_MIN_FRACTION, PhasePlan
 from .held import HeldStep
 
 #: Largest midpoint difference, relative to the loads' RMS over the table (the RMS over
@@ -44,13 +44,6 @@ PHASE_TOL = 0.005
 MIN_PHASE_FRACTION = 1 / 8
 #: Most phases one table may hold.
 MAX_PHASES = 1024
-#: Smallest interval between two positions of a table over a stretch with no period, as a
-#: share of the node pitch: a rough profile is rough below the node pitch, so its intervals
-#: are halved down to this nearly everywhere, and this sets the table's cost. Measured on the
-#: iCub's rough strips (slide 0 of textures20-icub60-v2, against the per-step solve, relative
-#: L2): rough-ra25 0.11% at an eighth of the pitch (2441 positions), 0.24% at a quarter
-#: (about half the solves), 0.89% at a half; rough-ra100 0.055% and 0.067%.
-SPAN_MIN_FRACTION = 1 / 4
 #: Most positions a table over a stretch with no period may hold (a profile's: the iCub's
 #: 120 mm strips start with some 300, one a node pitch).
 MAX_SPAN_PHASES = 4096
@@ -241,7 +234,7 @@ def tabulate(
 def _span_table(solve_all, solved: dict, plan: PhasePlan, pitch_m: float, tol) -> PhaseTable:
     """The table of a stretch with no period (``plan.span``): an even grid of about one
     position a node pitch from its start to its end, both included, refined as a period's
-    phases are (down to :data:`SPAN_MIN_FRACTION` of the pitch) but never wrapping round, up
+    phases are (down to :data:`~sim_tactile.sim.plan.phase.SPAN_MIN_FRACTION` of the pitch) but never wrapping round, up
     to :data:`MAX_SPAN_PHASES` positions."""
     length = plan.x_hi - plan.x_lo
     n0 = max(2, int(np.ceil(length / pitch_m)))

@@ -21,16 +21,9 @@ import numpy as np
 
 from ...cache import SETUP, npz_bytes
 from ...errors import CacheWarning
-from ..plan.phase import PhasePlan
+from ..plan.phase import LEVELS_PER_OCTAVE, PhasePlan
 from .phase_table import PhaseTable
 
-#: Force levels per doubling of the force at which shared tables are solved (19% apart): a
-#: slide whose force lies between two levels reads the line between their tables
-#: (:func:`force_levels`). The loads are nearly linear in the force at a phase: on the iCub's
-#: grating-3.0mm, three slides read between levels 4.4%, 9% and 19% apart differ from their
-#: table at their own force by at most 0.001%, 0.004% and 0.007% (relative L2), against
-#: 0.5-0.6% between that table and the per-step slide.
-LEVELS_PER_OCTAVE = 4
 #: The table cache's file kind.
 TABLE_EXT = "phase.npz"
 
