@@ -198,7 +198,8 @@ def test_auto_takes_a_profiles_table_where_the_set_has_slides_enough_to_pay_for_
     fid = alone.resolved
     steps = alone.window.n_samples * fid.steps_per_sample
     args = (plan, alone.plate, alone.pad.patch_m, protocol, fid.pitch_m, steps)
-    assert phase.span_pays(*args, n) and not phase.span_pays(*args, n - 1)
+    assert phase.span_pays(*args, n, False) and not phase.span_pays(*args, n - 1, False)
+    assert phase.span_pays(*args, n - 1, True)  # a spectral skin's positions cost less
     # one level where the force does not vary, more the wider it varies
     assert phase.levels_read(replace(protocol, force_jitter=0.0)) == 1
     assert phase.levels_read(replace(protocol, force_jitter=0.1)) < phase.levels_read(protocol)

@@ -50,11 +50,12 @@ MIN_PERIODS = 2.0
 #: L2): rough-ra25 0.11% at an eighth of the pitch (2441 positions), 0.24% at a quarter
 #: (about half the solves), 0.89% at a half; rough-ra100 0.055% and 0.067%.
 SPAN_MIN_FRACTION = 1 / 4
-#: What a position of a profile's table costs, in the per-step slide's solves, at most:
-#: measured 0.9-1.0 on the iCub's spectral skin (3.5 ms a position against 3.4-4.3 ms a
-#: step), 1.5 on the PVDF fingertip's dense skin (77 us, a position settled from its
-#: neighbour's height, against 51 us a step).
-SPAN_SOLVE_COST = 1.5
+#: What a position of a profile's table costs, in the solves it saves a slide step by step,
+#: at most, on a spectral skin and on a dense one: measured 1.0 on the iCub's spectral skin
+#: (3.5 ms a position against 3.4 ms a slide saves a solve), 1.1 on the PVDF fingertip's
+#: dense one (77 us against 72 us) and 2.6 on the BioTac's (95 us, a position settled from
+#: its neighbour's height, against 36 us: its steps keep their contact set).
+SPAN_SOLVE_COST = {"spectral": 1.5, "dense": 3.0}
 #: Force levels per doubling of the force at which shared tables are solved (19% apart): a
 #: slide whose force lies between two levels reads the line between their tables
 #: (:func:`~sim_tactile.sim.step.shared_tables.force_levels`). The loads are nearly linear in the force at a phase: on the iCub's
@@ -179,21 +180,23 @@ def span_pays(
     pitch_m: float,
     slide_solves: float,
     n_slides: int,
+    spectral: bool,
 ) -> bool:
     """Whether a profile's table (``plan``, :func:`span_plan`) pays over the ``n_slides``
     slides of its plate that a set makes, each of which would take ``slide_solves`` solves
     step by step: the positions it is estimated to hold (every interval refined to
     :data:`SPAN_MIN_FRACTION` of the node pitch ``pitch_m`` where the pad reaches the
     profile, a position a pitch on the flat ground beyond), at :data:`SPAN_SOLVE_COST`
-    solves each, once for each force level its slides read (:func:`levels_read`), against
-    the solves of the slides it serves."""
+    solves each (on a ``spectral`` skin or a dense one), once for each force level its
+    slides read (:func:`levels_read`), against the solves of the slides it serves."""
     rx = float(patch_m[0]) / 2 + REACH_MARGIN_M
     reach = plate.area_length_m / 2 + rx
     rough = max(0.0, min(plan.x_hi, reach) - max(plan.x_lo, -reach))
     flat = max(0.0, plan.x_hi - plan.x_lo - rough)
     positions = rough / (pitch_m * SPAN_MIN_FRACTION) + flat / pitch_m
     levels = levels_read(nominal)
-    return n_slides * slide_solves >= SPAN_SOLVE_COST * levels * positions
+    cost = SPAN_SOLVE_COST["spectral" if spectral else "dense"]
+    return n_slides * slide_solves >= cost * levels * positions
 
 
 def levels_read(nominal: Protocol) -> int:

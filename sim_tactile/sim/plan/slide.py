@@ -217,6 +217,7 @@ class Slide:
             fid.pitch_m,
             steps / every,
             self.plate_slides,
+            self.spectral,
         )
 
     @cached_property
