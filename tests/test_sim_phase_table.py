@@ -179,6 +179,25 @@ def test_a_profile_crossed_from_flat_ground_is_tabulated_along_the_whole_plate(c
     assert np.array_equal(table.meta["x_pad_m"], step.meta["x_pad_m"])
 
 
+def test_ridges_across_the_pad_too_short_for_two_periods_are_tabulated_along_the_plate(cache):
+    """Ridges across the whole pad that it never covers for two periods (finger7's ridges-2):
+    no period's table serves, but the loads are a function of the position along the slide
+    whatever the offset, so the same table of positions serves them, within the target of
+    the per-step solve; bumps in rows, which vary across the slide, have none."""
+    protocol = Protocol(duration_s=0.3, force_jitter=0.1)
+    slide = Slide(get_plate("finger7/ridges-2"), "grid3x3", protocol, options=TABLE)
+    plan = slide.table_plan()
+    assert plan.span and plan.period_m is None and plan.y_m == 0.0
+    assert "position by position" in plan.describe()
+    table, step = _both(slide, cache)
+    assert "position table" in table.meta["skin_problem"]
+    assert np.abs(step.data).max() > 0
+    assert _rel_l2(table.data, step.data) <= REL_L2_TARGET
+    assert np.array_equal(table.meta["x_pad_m"], step.meta["x_pad_m"])
+    bumps = get_plate("finger7/bumps-4x4")
+    assert span_plan(bumps, slide.pad.patch_m, 0.0, "quasi-static") is None
+
+
 def test_auto_takes_a_profiles_table_where_the_set_has_slides_enough_to_pay_for_it():
     """``auto`` takes a rough profile's table where the slides of its plate in the set
     (``plate_slides``) take more solves step by step than its tables' estimated positions at
@@ -222,21 +241,25 @@ def test_a_position_table_reads_the_line_between_positions_and_holds_its_ends():
     np.testing.assert_array_equal(got[5], loads[0])
     back = _from_arrays(_to_arrays(table))
     assert back.plan == plan and "position table" in back.describe()
-    assert span_plan(get_plate("finger7/ridges-4"), (0.016, 0.016), 0.0, "quasi-static") is None
+    assert span_plan(get_plate("finger7/bumps-4x4"), (0.016, 0.016), 0.0, "quasi-static") is None
 
 
 @pytest.mark.parametrize(
-    ("plate", "proto", "why"),
+    ("plate", "sensor", "proto", "why"),
     [
         # a profile is tabulated along it where it does not vary across the pad's reach;
         # here the reach runs off the profile's side
-        ("roughness8/ra-12.5", {"offset_y_m": 0.01}, "no period along the slide"),
-        ("finger7/ridges-4", {"force_control": "position"}, "not quasi-statically"),
-        ("finger7/ridges-2", {}, "under 2 periods"),
+        ("roughness8/ra-12.5", "grid3x3", {"offset_y_m": 0.01}, "no period along the slide"),
+        ("finger7/ridges-4", "grid3x3", {"force_control": "position"}, "not quasi-statically"),
+        # boxes in rows vary across the slide: no table along it; the iCub's pad is never
+        # wholly on two periods of textures20-v1's 36 mm texture
+        ("textures20/boxes-4.5mm", "icub60", {}, "under 2 periods"),
     ],
 )
-def test_asking_for_the_table_where_the_scene_has_none_is_one_clear_error(plate, proto, why):
-    slide = Slide(get_plate(plate), "grid3x3", Protocol(**proto), options=TABLE)
+def test_asking_for_the_table_where_the_scene_has_none_is_one_clear_error(
+    plate, sensor, proto, why
+):
+    slide = Slide(get_plate(plate), sensor, Protocol(**proto), options=TABLE)
     with pytest.raises(ConfigError, match=f"path = 'phase-table' does not serve.*{why}"):
         slide.table_plan()
 

@@ -152,9 +152,10 @@ KNOBS: tuple[Knob, ...] = (
     Knob(
         "path",
         "how a held slide's taxel loads are computed: auto (the phase table where the plate "
-        "repeats along the slide and its measured error allows, a rough profile's table "
-        "along it where the set has slides of the plate enough to pay for it, else per "
-        "step), per-step (the reference) or phase-table (the table wherever the scene "
+        "repeats along the slide and its measured error allows, a table along the slide "
+        "where no period serves but the plate does not vary across the pad (a rough "
+        "profile, ridges) and the set has slides of the plate enough to pay for it, else "
+        "per step), per-step (the reference) or phase-table (the table wherever the scene "
         "allows one)",
         "choice",
         choices=PATHS,

@@ -144,6 +144,7 @@ def tabulate(
     check=None,
     many=None,
     mirror=None,
+    finest: float = SPAN_MIN_FRACTION,
 ) -> PhaseTable:
     """Solve ``hold`` over one period of ``plan`` (see the module docstring).
 
@@ -158,7 +159,9 @@ def tabulate(
     image of the one at ``s - u`` (:mod:`.mirror`), ``write(out)`` the taxel loads of the
     last step's image: then half a period, ``(s, s + P/2)``, is solved and refined, and the
     other half read off the images (on the CPU; a device's batch solves the whole period).
-    While they are solved, the phases are kept as ``u``, from ``s`` (0 without a mirror)."""
+    While they are solved, the phases are kept as ``u``, from ``s`` (0 without a mirror).
+    ``finest``: a table along the slide's smallest interval, as a share of the pitch
+    (:func:`~sim_tactile.sim.plan.phase.span_fraction`)."""
     q = np.array(qpos, dtype=float)
     solved: dict[float, tuple] = {}
     period = plan.period_m
@@ -210,7 +213,7 @@ def tabulate(
 
     if plan.span:  # the whole stretch, its ends included, refined without a wrap
         period = math.inf  # (the refinement's neighbours: b % inf is b)
-        return _span_table(solve_all, solved, plan, pitch_m, tol)
+        return _span_table(solve_all, solved, plan, pitch_m, pitch_m * finest, tol)
     if period is None:
         solve(0.0)
         return _table(plan, solved, 0.0)
@@ -231,17 +234,16 @@ def tabulate(
     return _table(plan, _unfold(solved, shift, period), worst, solves=len(solved))
 
 
-def _span_table(solve_all, solved: dict, plan: PhasePlan, pitch_m: float, tol) -> PhaseTable:
+def _span_table(solve_all, solved: dict, plan: PhasePlan, pitch_m: float, smallest, tol):
     """The table of a stretch with no period (``plan.span``): an even grid of about one
     position a node pitch from its start to its end, both included, refined as a period's
-    phases are (down to :data:`~sim_tactile.sim.plan.phase.SPAN_MIN_FRACTION` of the pitch) but never wrapping round, up
-    to :data:`MAX_SPAN_PHASES` positions."""
+    phases are (down to intervals of ``smallest`` [m]) but never wrapping round, up to
+    :data:`MAX_SPAN_PHASES` positions."""
     length = plan.x_hi - plan.x_lo
     n0 = max(2, int(np.ceil(length / pitch_m)))
     us = [float(u) for u in np.arange(n0 + 1) * (length / n0)]
     solve_all(us)
     todo = list(zip(us[:-1], us[1:], strict=True))
-    smallest = pitch_m * SPAN_MIN_FRACTION
     worst = _refine(solve_all, solved, todo, math.inf, smallest, tol, MAX_SPAN_PHASES, False)
     return _table(plan, solved, worst)
 

@@ -24,7 +24,7 @@ from ...errors import PhysicsError
 from ...hashing import blas_kernel, code_version, content_hash
 from ..plan.fidelity import Fidelity, solved_spectrally
 from ..plan.options import keyed
-from ..plan.phase import PhasePlan, mirror_centre, tables_shared, travel
+from ..plan.phase import PhasePlan, mirror_centre, span_fraction, tables_shared, travel
 from ..plan.protocol import Protocol, SlideWindow
 from ..plan.slide import Slide
 from .batched_held import batched_held
@@ -312,4 +312,5 @@ def solve_table(
         check=lambda z, f, top: scene.check_held(z, force_n, f, top),
         many=many,
         mirror=mirror,
+        finest=span_fraction(slide.plate),
     )
