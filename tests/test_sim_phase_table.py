@@ -26,6 +26,7 @@ from sim_tactile.plates import get_plate
 from sim_tactile.sim import Protocol, Slide, StepOptions, run
 from sim_tactile.sim.plan import phase
 from sim_tactile.sim.plan.phase import PhasePlan, phase_plan, span_plan, travel
+from sim_tactile.sim.plan.protocol import START_MARGIN_M
 from sim_tactile.sim.step.phase_table import PhaseTable
 from sim_tactile.sim.step.shared_tables import (
     LEVELS_PER_OCTAVE,
@@ -165,11 +166,14 @@ def test_a_profile_crossed_from_flat_ground_is_tabulated_along_the_whole_plate(c
     protocol = Protocol(duration_s=0.3, force_jitter=0.1)
     slide = replace(Slide(plate, "grid3x3", protocol), options=TABLE)
     plan = slide.table_plan()
-    rx = slide.pad.patch_m[0] / 2 + phase.REACH_MARGIN_M
-    assert plan.span and math.isclose(plan.x_hi, plate.length_m / 2 - rx)
+    # every pad centre a window reaches: the pad at the plate's end, or its start
+    pad = slide.pad.patch_m[0]
+    reach = max(plate.length_m / 2 - pad / 2, plate.area_length_m / 2 + pad / 2 + START_MARGIN_M)
+    assert plan.span and math.isclose(plan.x_hi, reach) and math.isclose(plan.x_lo, -reach)
     lo, hi = travel(slide.window, slide.drawn())
     assert lo < -plate.area_length_m / 2 < hi and plan.covers(lo) and plan.covers(hi)
     on = replace(slide, protocol=replace(protocol, start="texture"))
+    rx = pad / 2 + phase.REACH_MARGIN_M
     assert math.isclose(on.table_plan().x_hi, plate.area_length_m / 2 - rx)
     table, step = _both(slide, cache)
     steps = slide.window.n_samples * slide.resolved.steps_per_sample + 1
@@ -214,6 +218,10 @@ def test_auto_takes_a_profiles_table_where_the_set_has_slides_enough_to_pay_for_
     few = [n for n in range(2, 61) if replace(alone, plate_slides=n).table_plan() is None]
     assert few and max(few) < 60
     n = max(few) + 1
+    # counted on the set's nominal slide: slides of other draws decide alike
+    for seed in range(1, 6):
+        assert replace(many, seed=seed, plate_slides=n).table_plan() is not None
+        assert replace(many, seed=seed, plate_slides=n - 1).table_plan() is None
     fid = alone.resolved
     steps = alone.window.n_samples * fid.steps_per_sample
     args = (plan, alone.plate, alone.pad.patch_m, protocol, fid.pitch_m, steps)

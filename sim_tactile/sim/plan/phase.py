@@ -26,7 +26,7 @@ from ...cache import memoized
 from ...errors import ConfigError
 from ...plates.define.spec import Plate
 from ...plates.define.surface import surface_of
-from .protocol import Protocol, SlideWindow
+from .protocol import START_MARGIN_M, Protocol, SlideWindow
 
 #: Reach beyond the pad's patch [m] within which the plate must repeat for the table to
 #: serve: the skin nodes' collider margin (0.5 mm at most), their probes' radius (a quarter
@@ -55,12 +55,13 @@ SPAN_MIN_FRACTION = 1 / 4
 #: only the intervals about the walls reach it. On textures20-icub60-v1's drafted grating
 #: (slide 0): 0.93% rel L2 from the per-step solve, against 1.78% at a quarter.
 SPAN_RIDGES_FRACTION = 1 / 8
-#: What a position of a profile's table costs, in the solves it saves a slide step by step,
-#: at most, on a spectral skin and on a dense one: measured 1.0 on the iCub's spectral skin
-#: (3.5 ms a position against 3.4 ms a slide saves a solve), 1.1 on the PVDF fingertip's
-#: dense one (77 us against 72 us) and 2.6 on the BioTac's (95 us, a position settled from
-#: its neighbour's height, against 36 us: its steps keep their contact set).
-SPAN_SOLVE_COST = {"spectral": 1.5, "dense": 3.0}
+#: What a position of a table along the slide costs, in a per-step slide's cost a solve (its
+#: whole cost over its solves), on a spectral skin and on a dense one, with a margin over
+#: what was measured: 0.8-1.0 on the iCub's spectral skin (3.5 ms a position against 3.4-4.3
+#: ms), 1.5 on its dense skin over a grating (3.1 ms against 2.1 ms), 2.1 on the BioTac's
+#: (95 us, a position settled from its neighbour's height, against 45 us: its steps keep
+#: their contact set) and 0.7 on the PVDF fingertip's (77 us against 114 us).
+SPAN_SOLVE_COST = {"spectral": 1.5, "dense": 2.0}
 #: Force levels per doubling of the force at which shared tables are solved (19% apart): a
 #: slide whose force lies between two levels reads the line between their tables
 #: (:func:`~sim_tactile.sim.step.shared_tables.force_levels`). The loads are nearly linear in the force at a phase: on the iCub's
@@ -268,9 +269,10 @@ def span_plan(
     its offset, so one table along it serves them all (a table of many more positions than a
     period's phases, which pays over many slides a plate: :func:`span_pays`). The stretch is
     the textured area's interior (the pad wholly on it) where the slide's ``travel_m`` (its
-    pad centre's x range [m]: :func:`travel`) lies there, else the whole plate, the flat
-    ground either side of the texture included (the base is flat at every y: the loads are
-    a function of the position there too). None where the plate is not such a plate."""
+    pad centre's x range [m]: :func:`travel`) lies there, else every pad centre a slide
+    window reaches on the plate (:func:`_plate_reach`), the flat ground either side of the
+    texture included (the base is flat at every y: the loads are a function of the position
+    there too). None where the plate is not such a plate."""
     if force_control != "quasi-static":
         return None
     surf = surface_of(plate)
@@ -285,10 +287,20 @@ def span_plan(
     rx = float(patch_m[0]) / 2 + REACH_MARGIN_M
     lo, hi = -plate.area_length_m / 2 + rx, plate.area_length_m / 2 - rx
     if travel_m is not None and not (lo <= travel_m[0] and travel_m[1] <= hi):
-        lo, hi = -plate.length_m / 2 + rx, plate.length_m / 2 - rx
+        half = _plate_reach(plate, float(patch_m[0]))
+        lo, hi = -half, half
     if hi <= lo:
         return None
     return PhasePlan(None, lo, hi, lo, 0.0, span=True), ""
+
+
+def _plate_reach(plate: Plate, pad_length_m: float) -> float:
+    """The farthest a pad centre travels from the plate's centre on any slide window
+    (:meth:`~.protocol.SlideWindow.of`): its start on flat ground, or its stop with the pad
+    at the plate's end, whichever is farther. The pad overhangs the plate's end there; the
+    loads are a function of the position all the same (the end runs straight across)."""
+    start = plate.area_length_m / 2 + pad_length_m / 2 + START_MARGIN_M
+    return max(start, plate.length_m / 2 - pad_length_m / 2)
 
 
 @memoized("plates' repetitions", maxsize=256)

@@ -201,14 +201,21 @@ class Slide:
         return None, replace(opts, path="per-step", solve_every=every, solve_tol=AUTO_SOLVE_TOL)
 
     def _span_pays(self, plan: PhasePlan) -> bool:
-        """Whether ``auto`` takes a profile's table (:func:`~.phase.span_pays`) for the
+        """Whether ``auto`` takes a table along the slide (:func:`~.phase.span_pays`) for the
         :attr:`plate_slides` slides of the set, against the solves each would take step by
         step (at every :data:`~.options.AUTO_SOLVE_EVERY`-th step where auto would solve it
-        so)."""
-        fid = self.resolved
-        steps = self.window.n_samples * fid.steps_per_sample
-        sampled = self.spectral and fid.steps_per_sample >= AUTO_SOLVE_EVERY
-        every = AUTO_SOLVE_EVERY if sampled or self._dense_step_is_dear() else 1
+        so), counted on the set's nominal slide: every slide of a plate in a set decides
+        alike."""
+        nominal = replace(
+            self,
+            protocol=replace(
+                self.protocol, speed_jitter=0.0, force_jitter=0.0, offset_jitter_m=0.0
+            ),
+        )
+        fid = nominal.resolved
+        steps = nominal.window.n_samples * fid.steps_per_sample
+        sampled = nominal.spectral and fid.steps_per_sample >= AUTO_SOLVE_EVERY
+        every = AUTO_SOLVE_EVERY if sampled or nominal._dense_step_is_dear() else 1
         return span_pays(
             plan,
             self.plate,
@@ -217,7 +224,7 @@ class Slide:
             fid.pitch_m,
             steps / every,
             self.plate_slides,
-            self.spectral,
+            nominal.spectral,
         )
 
     @cached_property
