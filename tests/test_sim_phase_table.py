@@ -161,14 +161,16 @@ def test_a_profile_crossed_from_flat_ground_is_tabulated_along_the_whole_plate(c
     """A slide that starts on flat ground and runs onto the profile: its table covers the
     whole plate (the flat base either side of the profile is the same at every offset too),
     so every step is read off it, within the target of the per-step solve, the pad's path
-    the per-step slide's; a slide that stays on the profile keeps the profile's interior."""
+    the per-step slide's, to the plate's end, where the stroke stops on the step past its
+    limit; a slide that stays on the profile keeps the profile's interior."""
     plate = get_plate("roughness8/ra-50")
-    protocol = Protocol(duration_s=0.3, force_jitter=0.1)
+    protocol = Protocol(duration_s=1.5, force_jitter=0.1)
     slide = replace(Slide(plate, "grid3x3", protocol), options=TABLE)
     plan = slide.table_plan()
     # every pad centre a window reaches: the pad at the plate's end, or its start
     pad = slide.pad.patch_m[0]
     reach = max(plate.length_m / 2 - pad / 2, plate.area_length_m / 2 + pad / 2 + START_MARGIN_M)
+    reach += phase.REACH_MARGIN_M  # past the step that passes a stroke's limit
     assert plan.span and math.isclose(plan.x_hi, reach) and math.isclose(plan.x_lo, -reach)
     lo, hi = travel(slide.window, slide.drawn())
     assert lo < -plate.area_length_m / 2 < hi and plan.covers(lo) and plan.covers(hi)
@@ -181,6 +183,7 @@ def test_a_profile_crossed_from_flat_ground_is_tabulated_along_the_whole_plate(c
     assert np.abs(step.data).max() > 0
     assert _rel_l2(table.data, step.data) <= REL_L2_TARGET
     assert np.array_equal(table.meta["x_pad_m"], step.meta["x_pad_m"])
+    assert np.max(step.meta["x_pad_m"]) > slide.window.x_limit_m - 1e-3  # to the end
 
 
 def test_ridges_across_the_pad_too_short_for_two_periods_are_tabulated_along_the_plate(cache):

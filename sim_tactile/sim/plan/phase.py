@@ -297,10 +297,11 @@ def span_plan(
 def _plate_reach(plate: Plate, pad_length_m: float) -> float:
     """The farthest a pad centre travels from the plate's centre on any slide window
     (:meth:`~.protocol.SlideWindow.of`): its start on flat ground, or its stop with the pad
-    at the plate's end, whichever is farther. The pad overhangs the plate's end there; the
+    at the plate's end, whichever is farther, and :data:`REACH_MARGIN_M` beyond (a stroke
+    stops on the step that passes its limit). The pad overhangs the plate's end there; the
     loads are a function of the position all the same (the end runs straight across)."""
     start = plate.area_length_m / 2 + pad_length_m / 2 + START_MARGIN_M
-    return max(start, plate.length_m / 2 - pad_length_m / 2)
+    return max(start, plate.length_m / 2 - pad_length_m / 2) + REACH_MARGIN_M
 
 
 @memoized("plates' repetitions", maxsize=256)

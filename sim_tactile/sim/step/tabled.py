@@ -209,7 +209,8 @@ def slide_on_table(
     per-step slide does (called only where the window leaves the plan's interior)."""
     table, made = table_for(slide, proto, fid, plan, cache)
     lo, hi = travel(window, proto)
-    if plan.covers(lo) and plan.covers(hi):
+    over = 2 * proto.speed_m_s * fid.dt_s  # a stroke stops on the step past its limit
+    if plan.covers(lo - over) and plan.covers(hi + over):
         runner, warnings = None, list(fid.warnings)
         scene, _ = scene_for(slide, proto, fid, window.x_start_m, cache)
         dyn = Glide(scene.m_dyn, scene.jx, scene.jz)
