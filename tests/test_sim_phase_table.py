@@ -24,9 +24,10 @@ from sim_tactile.cache import ArtefactCache, forget_process_memos
 from sim_tactile.errors import CacheWarning, ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.sim import Protocol, Slide, StepOptions, run
-from sim_tactile.sim.plan import phase
-from sim_tactile.sim.plan.phase import PhasePlan, phase_plan, span_plan, travel
+from sim_tactile.sim.plan import phase, span
+from sim_tactile.sim.plan.phase import PhasePlan, phase_plan, travel
 from sim_tactile.sim.plan.protocol import START_MARGIN_M
+from sim_tactile.sim.plan.span import span_plan
 from sim_tactile.sim.step.phase_table import PhaseTable
 from sim_tactile.sim.step.shared_tables import (
     LEVELS_PER_OCTAVE,
@@ -228,11 +229,11 @@ def test_auto_takes_a_profiles_table_where_the_set_has_slides_enough_to_pay_for_
     fid = alone.resolved
     steps = alone.window.n_samples * fid.steps_per_sample
     args = (plan, alone.plate, alone.pad.patch_m, protocol, fid.pitch_m, steps)
-    assert phase.span_pays(*args, n, False) and not phase.span_pays(*args, n - 1, False)
-    assert phase.span_pays(*args, n - 1, True)  # a spectral skin's positions cost less
+    assert span.span_pays(*args, n, False) and not span.span_pays(*args, n - 1, False)
+    assert span.span_pays(*args, n - 1, True)  # a spectral skin's positions cost less
     # one level where the force does not vary, more the wider it varies
-    assert phase.levels_read(replace(protocol, force_jitter=0.0)) == 1
-    assert phase.levels_read(replace(protocol, force_jitter=0.1)) < phase.levels_read(protocol)
+    assert span.levels_read(replace(protocol, force_jitter=0.0)) == 1
+    assert span.levels_read(replace(protocol, force_jitter=0.1)) < span.levels_read(protocol)
     with pytest.raises(ConfigError, match=r"plate_slides = 0 is out of range; valid: \[1, inf\]"):
         replace(alone, plate_slides=0)
 

@@ -26,10 +26,11 @@ from ...plates.define.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
 from .fidelity import Fidelity, choose_fidelity, solved_spectrally
 from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, keyed
-from .phase import PhasePlan, depths_by_column, span_pays, table_pays, table_plan, travel
+from .phase import PhasePlan, depths_by_column, table_pays, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
 from .solver import dense_is_dear, dense_step_is_dear
+from .span import span_pays, table_plan
 
 
 @dataclass(frozen=True)
@@ -51,9 +52,9 @@ class Slide:
     options: how it is computed (:class:`~.options.StepOptions`).
     label: what the slide is called in messages (its plate's name and place in a set).
     plate_slides: how many slides of its plate its set makes (1: a slide alone): ``path =
-        auto`` takes a table that pays over many slides of a plate only (a rough profile's,
-        :func:`~.phase.span_pays`) where they are that many. Not a part of what the slide is:
-        its description records the path it takes.
+        auto`` takes a table that pays over many slides of a plate only (a table along the
+        slide, :func:`~.span.span_pays`) where they are that many. Not a part of what the
+        slide is: its description records the path it takes.
     """
 
     plate: Plate
@@ -140,7 +141,7 @@ class Slide:
         """``(plan, options)``: how the slide is computed, its ``options`` resolved.
 
         ``path`` ``phase-table`` takes the table wherever the scene allows it
-        (:func:`~.phase.table_plan`). ``auto`` chooses only where no other knob was set by
+        (:func:`~.span.table_plan`). ``auto`` chooses only where no other knob was set by
         hand (else it is ``per-step``, the knobs as given): the table where the whole window
         lies on the repeating
         texture (the slide then needs no press and no step solved on its own), or where it
@@ -201,7 +202,7 @@ class Slide:
         return None, replace(opts, path="per-step", solve_every=every, solve_tol=AUTO_SOLVE_TOL)
 
     def _span_pays(self, plan: PhasePlan) -> bool:
-        """Whether ``auto`` takes a table along the slide (:func:`~.phase.span_pays`) for the
+        """Whether ``auto`` takes a table along the slide (:func:`~.span.span_pays`) for the
         :attr:`plate_slides` slides of the set, against the solves each would take step by
         step (at every :data:`~.options.AUTO_SOLVE_EVERY`-th step where auto would solve it
         so), counted on the set's nominal slide: every slide of a plate in a set decides

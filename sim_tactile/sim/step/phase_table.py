@@ -10,7 +10,7 @@ of about one phase per node pitch, then every interval whose midpoint's loads di
 the line between its ends by more than :data:`PHASE_TOL` of the loads' RMS is halved, down
 to :data:`MIN_PHASE_FRACTION` of a node pitch; the largest midpoint difference that remains
 is the table's own error estimate (:attr:`PhaseTable.error`). A uniform stretch (a flat
-plate) is one phase. A rough profile with no period (:func:`~sim_tactile.sim.plan.phase.span_plan`)
+plate) is one phase. A rough profile with no period (:func:`~sim_tactile.sim.plan.span.span_plan`)
 is tabulated the same way over positions along its whole stretch, which never wrap round.
 The tables the slides of a set share, and their cache, are in :mod:`.shared_tables`.
 
@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import PhysicsError
-from ..plan.phase import SPAN_MIN_FRACTION, PhasePlan
+from ..plan.phase import PhasePlan
+from ..plan.span import SPAN_MIN_FRACTION
 from .held import HeldStep
 
 #: Largest midpoint difference, relative to the loads' RMS over the table (the RMS over
@@ -146,22 +147,19 @@ def tabulate(
     mirror=None,
     finest: float = SPAN_MIN_FRACTION,
 ) -> PhaseTable:
-    """Solve ``hold`` over one period of ``plan`` (see the module docstring).
-
-    ``qpos``: the table scene's joint positions at rest (its pad centred at ``x_scene_m``,
-    its lowest point ``z_scene_m`` above the base at ``qpos[jz] = 0``), copied, never
-    written; ``total_pa``: the force as the held step takes it (the node pressures' sum
-    [Pa]); ``pitch_m``: the node pitch along the slide, which sets the first grid and the
-    smallest interval (neither depends on the slide's speed or step, so slides at any speed
-    share a table). ``check(z, force, top)``: raises where a solved phase is not
-    trustworthy (:meth:`~.runner.Runner.check_held`, as the per-step slide checks its
-    steps). ``mirror``: ``(s, write)`` where the problem at phase ``s + u`` is the mirror
-    image of the one at ``s - u`` (:mod:`.mirror`), ``write(out)`` the taxel loads of the
-    last step's image: then half a period, ``(s, s + P/2)``, is solved and refined, and the
-    other half read off the images (on the CPU; a device's batch solves the whole period).
-    While they are solved, the phases are kept as ``u``, from ``s`` (0 without a mirror).
-    ``finest``: a table along the slide's smallest interval, as a share of the pitch
-    (:func:`~sim_tactile.sim.plan.phase.span_fraction`)."""
+    """Solve ``hold`` over one period of ``plan`` (see the module docstring). ``qpos``: the
+    table scene's joint positions at rest (its pad centred at ``x_scene_m``, its lowest point
+    ``z_scene_m`` above the base at ``qpos[jz] = 0``), copied, never written; ``total_pa``:
+    the force as the held step takes it (the node pressures' sum [Pa]); ``pitch_m``: the node
+    pitch along the slide, which sets the first grid and the smallest interval (neither
+    depends on the slide's speed or step, so slides at any speed share a table), and
+    ``finest`` that of a table along the slide (:func:`~sim_tactile.sim.plan.span.span_fraction`).
+    ``check(z, force, top)``: raises where a solved phase is not trustworthy
+    (:meth:`~.runner.Runner.check_held`). ``mirror``: ``(s, write)`` where the problem at
+    phase ``s + u`` is the mirror image of the one at ``s - u`` (:mod:`.mirror`),
+    ``write(out)`` the taxel loads of the last step's image: then half a period, ``(s, s +
+    P/2)``, is solved and refined, the other half read off the images (on the CPU; a
+    device's batch solves the whole period), its phases kept as ``u``, from ``s``."""
     q = np.array(qpos, dtype=float)
     solved: dict[float, tuple] = {}
     period = plan.period_m

@@ -24,9 +24,10 @@ from ...errors import PhysicsError
 from ...hashing import blas_kernel, code_version, content_hash
 from ..plan.fidelity import Fidelity, solved_spectrally
 from ..plan.options import keyed
-from ..plan.phase import PhasePlan, mirror_centre, span_fraction, tables_shared, travel
+from ..plan.phase import PhasePlan, mirror_centre, tables_shared, travel
 from ..plan.protocol import Protocol, SlideWindow
 from ..plan.slide import Slide
+from ..plan.span import span_fraction
 from .batched_held import batched_held
 from .build import runner_for, scene_for
 from .mirror import mirrored_loads
