@@ -25,17 +25,17 @@ from sim_tactile.errors import CacheWarning, ConfigError
 from sim_tactile.plates import get_plate
 from sim_tactile.sim import Protocol, Slide, StepOptions, run
 from sim_tactile.sim.plan import phase, span
-from sim_tactile.sim.plan.phase import PhasePlan, phase_plan, travel
+from sim_tactile.sim.plan.phase import (
+    LEVELS_PER_OCTAVE,
+    PhasePlan,
+    force_levels,
+    phase_plan,
+    travel,
+)
 from sim_tactile.sim.plan.protocol import START_MARGIN_M
 from sim_tactile.sim.plan.span import span_plan
 from sim_tactile.sim.step.phase_table import PhaseTable
-from sim_tactile.sim.step.shared_tables import (
-    LEVELS_PER_OCTAVE,
-    TABLE_EXT,
-    _from_arrays,
-    _to_arrays,
-    force_levels,
-)
+from sim_tactile.sim.step.shared_tables import TABLE_EXT, _from_arrays, _to_arrays
 
 #: The table path is the default where its error against the per-step solve is at most
 #: this (relative L2 of the taxel loads over a slide; the issue's and the manual's target).

@@ -44,7 +44,7 @@ CHECK_PITCH_M = 0.1e-3
 MIN_PERIODS = 2.0
 #: Force levels per doubling of the force at which shared tables are solved (19% apart): a
 #: slide whose force lies between two levels reads the line between their tables
-#: (:func:`~sim_tactile.sim.step.shared_tables.force_levels`). The loads are nearly linear in the force at a phase: on the iCub's
+#: (:func:`force_levels`). The loads are nearly linear in the force at a phase: on the iCub's
 #: grating-3.0mm, three slides read between levels 4.4%, 9% and 19% apart differ from their
 #: table at their own force by at most 0.001%, 0.004% and 0.007% (relative L2), against
 #: 0.5-0.6% between that table and the per-step slide.
@@ -98,9 +98,24 @@ class PhasePlan:
         return f"period {self.period_m * 1e3:.4g} mm ({where})"
 
 
+def force_levels(force_n: float) -> list[tuple[float, float]]:
+    """``[(level force [N], weight), ...]``: the one or two shared levels
+    ``2 ** (k / LEVELS_PER_OCTAVE)`` N on either side of ``force_n``, weighted by the line
+    between them (one level, weight 1, where the force is one): the tables the slides of a set share
+    (:mod:`~sim_tactile.sim.step.shared_tables`)."""
+    t = math.log2(force_n) * LEVELS_PER_OCTAVE
+    k = math.floor(t)
+    lo = 2.0 ** (k / LEVELS_PER_OCTAVE)
+    if lo == force_n:
+        return [(lo, 1.0)]
+    hi = 2.0 ** ((k + 1) / LEVELS_PER_OCTAVE)
+    w = (force_n - lo) / (hi - lo)
+    return [(lo, 1.0 - w), (hi, w)]
+
+
 def tables_shared(plan: PhasePlan, nominal: Protocol) -> bool:
     """Whether the slides of a set drawn from ``nominal`` share their tables at force levels
-    (:func:`~sim_tactile.sim.step.shared_tables.force_levels`): their force varies from slide
+    (:func:`force_levels`): their force varies from slide
     to slide, and the table does not depend on their offset (it does not, or the offset does
     not vary); else each slide's table is solved at its own force, as on a uniform stretch,
     whose table is one solve."""
@@ -296,6 +311,7 @@ __all__ = [
     "MIN_PERIODS",
     "PhasePlan",
     "depths_by_column",
+    "force_levels",
     "phase_plan",
     "table_pays",
     "tables_shared",

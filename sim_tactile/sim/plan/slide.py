@@ -179,10 +179,13 @@ class Slide:
         )
         if plan is not None and auto:
             lo, hi = travel(self.window, proto)
-            whole = plan.covers(lo) and plan.covers(hi)
             if plan.span:
                 plan = plan if self._span_pays(plan) else None
-            elif not (whole or self.spectral or table_pays(plan, self.protocol)):
+            elif not (
+                (plan.covers(lo) and plan.covers(hi))
+                or self.spectral
+                or table_pays(plan, self.protocol)
+            ):
                 plan = None
         if plan is not None:
             tol = AUTO_SOLVE_TOL if auto and self.spectral else opts.solve_tol
@@ -204,19 +207,18 @@ class Slide:
     def _span_pays(self, plan: PhasePlan) -> bool:
         """Whether ``auto`` takes a table along the slide (:func:`~.span.span_pays`) for the
         :attr:`plate_slides` slides of the set, against the solves each would take step by
-        step (at every :data:`~.options.AUTO_SOLVE_EVERY`-th step where auto would solve it
-        so), counted on the set's nominal slide: every slide of a plate in a set decides
-        alike."""
+        step (its own route alone says at which steps), counted on the set's nominal slide:
+        every slide of a plate in a set decides alike."""
         nominal = replace(
             self,
             protocol=replace(
                 self.protocol, speed_jitter=0.0, force_jitter=0.0, offset_jitter_m=0.0
             ),
+            plate_slides=1,
         )
         fid = nominal.resolved
         steps = nominal.window.n_samples * fid.steps_per_sample
-        sampled = nominal.spectral and fid.steps_per_sample >= AUTO_SOLVE_EVERY
-        every = AUTO_SOLVE_EVERY if sampled or nominal._dense_step_is_dear() else 1
+        every = nominal.how.solve_every
         return span_pays(
             plan,
             self.plate,

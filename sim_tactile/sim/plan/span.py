@@ -27,6 +27,7 @@ from .phase import (
     REACH_MARGIN_M,
     PhasePlan,
     _ridges_half_width,
+    force_levels,
     phase_plan,
     travel,
 )
@@ -177,17 +178,17 @@ def span_fraction(plate: Plate) -> float:
 
 
 def levels_read(nominal: Protocol) -> int:
-    """How many shared force levels (:func:`~sim_tactile.sim.step.shared_tables.force_levels`,
-    :data:`~.phase.LEVELS_PER_OCTAVE` an octave) the slides drawn from ``nominal`` read: those either side of its force
+    """How many shared force levels (:func:`~.phase.force_levels`,
+    :data:`~.phase.LEVELS_PER_OCTAVE` an octave) the slides drawn from ``nominal`` read: from
+    the lower level of its lowest force to the upper level of its highest, its force
     +- :data:`SPAN_FORCE_SDS` of its jitter (as the draw clips it, to 0.2-2 times the
     nominal force); one where the force does not vary (every slide's table is the same)."""
     j = nominal.force_jitter
     if j == 0.0:
         return 1
-    lo = nominal.force_n * max(0.2, 1 - SPAN_FORCE_SDS * j)
-    hi = nominal.force_n * min(2.0, 1 + SPAN_FORCE_SDS * j)
-    k = LEVELS_PER_OCTAVE
-    return math.ceil(k * math.log2(hi)) - math.floor(k * math.log2(lo)) + 1
+    lo = force_levels(nominal.force_n * max(0.2, 1 - SPAN_FORCE_SDS * j))[0][0]
+    hi = force_levels(nominal.force_n * min(2.0, 1 + SPAN_FORCE_SDS * j))[-1][0]
+    return round(LEVELS_PER_OCTAVE * math.log2(hi / lo)) + 1
 
 
 __all__ = [

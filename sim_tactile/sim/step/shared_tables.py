@@ -1,7 +1,7 @@
-"""Tables a data set shares: force levels, the line between their tables, and the cache.
+"""Tables a data set shares: the line between the tables of two force levels, and the cache.
 
 The slides of a set whose tables do not depend on their offset share them at force levels
-(:func:`force_levels`) and read the line between the two levels' tables (:class:`Blend`).
+(:func:`~sim_tactile.sim.plan.phase.force_levels`) and read the line between the two levels' tables (:class:`Blend`).
 A table is kept under its content key in this process and in the artefact cache
 (:func:`kept_table`), checked as every entry is; workers that share a cache solve a table
 once, the first holding a lock on it while it solves.
@@ -21,25 +21,11 @@ import numpy as np
 
 from ...cache import SETUP, npz_bytes
 from ...errors import CacheWarning
-from ..plan.phase import LEVELS_PER_OCTAVE, PhasePlan
+from ..plan.phase import PhasePlan
 from .phase_table import PhaseTable
 
 #: The table cache's file kind.
 TABLE_EXT = "phase.npz"
-
-
-def force_levels(force_n: float) -> list[tuple[float, float]]:
-    """``[(level force [N], weight), ...]``: the one or two shared levels
-    ``2 ** (k / LEVELS_PER_OCTAVE)`` N on either side of ``force_n``, weighted by the line
-    between them (one level, weight 1, where the force is one)."""
-    t = math.log2(force_n) * LEVELS_PER_OCTAVE
-    k = math.floor(t)
-    lo = 2.0 ** (k / LEVELS_PER_OCTAVE)
-    if lo == force_n:
-        return [(lo, 1.0)]
-    hi = 2.0 ** ((k + 1) / LEVELS_PER_OCTAVE)
-    w = (force_n - lo) / (hi - lo)
-    return [(lo, 1.0 - w), (hi, w)]
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from ...errors import PhysicsError
 from ...hashing import blas_kernel, code_version, content_hash
 from ..plan.fidelity import Fidelity, solved_spectrally
 from ..plan.options import keyed
-from ..plan.phase import PhasePlan, mirror_centre, tables_shared, travel
+from ..plan.phase import PhasePlan, force_levels, mirror_centre, tables_shared, travel
 from ..plan.protocol import Protocol, SlideWindow
 from ..plan.slide import Slide
 from ..plan.span import span_fraction
@@ -34,7 +34,7 @@ from .mirror import mirrored_loads
 from .phase_table import PhaseTable, tabulate
 from .runner import V_STICK, Runner
 from .sampling import SampleAverager
-from .shared_tables import Blend, force_levels, kept_table
+from .shared_tables import Blend, kept_table
 from .strokes import Strokes
 
 
@@ -240,7 +240,7 @@ def table_for(
     solved for it (the rest came from this process or ``cache``). Where the slides of a set
     share tables (:func:`~sim_tactile.sim.plan.phase.tables_shared`), the line between the
     tables at the two force levels on either side of the slide's force
-    (:func:`~.shared_tables.force_levels`), else the table at its own force."""
+    (:func:`~sim_tactile.sim.plan.phase.force_levels`), else the table at its own force."""
     levels = (
         force_levels(proto.force_n)
         if tables_shared(plan, slide.protocol)
