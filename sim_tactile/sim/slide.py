@@ -31,6 +31,7 @@ from .plan.protocol import (
 )
 from .plan.slide import Slide
 from .step.build import runner_for
+from .step.held_run import held_slide, sample_means
 from .step.phase_table import SETTLE_M, SETTLE_STEPS
 from .step.runner import Runner, drag_factor, drag_warning
 from .step.sampling import SampleAverager, SimResult, sensor_output, versions
@@ -197,7 +198,11 @@ def _run(slide: Slide, cache) -> SimResult:
         pressed = _press(slide, proto, fid, window, cache)
         runner, warnings = pressed.runner, pressed.warnings
         path = "per-step"
-        if every > 1 and runner.hold is not None and proto.force_control != "position":
+        held = runner.hold is not None and proto.force_control != "position"
+        compiled = held_slide(runner, window, proto, fid.steps_per_sample, every) if held else None
+        if compiled is not None:
+            slide_rec = _Slide(*compiled)
+        elif every > 1 and held:
             slide_rec = _slide_sampled(runner, window, proto, fid.steps_per_sample, every)
         else:
             every = 1
@@ -374,16 +379,10 @@ def _slide_sampled(
             forces[g + 1 : j] = (1.0 - w[:, 0]) * forces[g] + w[:, 0] * forces[j]
         runner.check_warnings()
         g = j
-    avg = SampleAverager(n, n_tax, n_sub)
-    for i in range(total - 1):  # the samples as _slide averages them
-        s, k = divmod(i, n_sub)
-        avg.add(s, k, loads[i], forces[i])
-        if k == n_sub - 1:
-            avg.end_sample()
-    avg.finish(loads[total - 1], forces[total - 1])
+    means, mean_forces = sample_means(loads, forces, n, n_sub)  # as _slide averages them
     last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
     x_pad = x_after[last] - 0.5 * v_after[last] / proto.rate_hz
-    return _Slide(avg.loads, avg.forces, x_pad, strokes.stopped_at_s, time.perf_counter() - t0)
+    return _Slide(means, mean_forces, x_pad, strokes.stopped_at_s, time.perf_counter() - t0)
 
 
 def _force_warnings(forces: np.ndarray, target_n: float, speed_m_s: float) -> list[str]:

@@ -241,6 +241,10 @@ class CompiledHeldStep:
             s.adopt(M2, S2, updates, rebuilds, rowsum2)
         if st == 0:
             return force, top
+        self.fail(st, total)
+
+    def fail(self, st: int, total: float):
+        """Raise the error of the kernel's status ``st`` (not 0) at ``total`` [Pa]."""
         if st == 1:
             raise _no_height(total * self.area, self.margin)
         if st == 3:

@@ -8,7 +8,7 @@ from the table (:meth:`~.phase_table.PhaseTable.at`) instead of a collision quer
 contact solve. A step outside it (the approach onto the texture and the exit, on a slide
 that starts on flat ground) is the per-step held step, started from the table's height for
 its pose. Each sample is the trapezoid mean of its steps, as the per-step slide averages
-them (:class:`~.sampling.SampleAverager`).
+them (:func:`~.held_run.sample_means`, as :class:`~.sampling.SampleAverager` does).
 """
 
 from __future__ import annotations
@@ -30,10 +30,10 @@ from ..plan.slide import Slide
 from ..plan.span import span_fraction
 from .batched_held import batched_held
 from .build import runner_for, scene_for
+from .held_run import sample_means
 from .mirror import mirrored_loads
 from .phase_table import PhaseTable, tabulate
 from .runner import V_STICK, Runner
-from .sampling import SampleAverager
 from .shared_tables import Blend, kept_table
 from .strokes import Strokes
 
@@ -137,19 +137,13 @@ def slide_tabled(
     if held is not None:
         drag_sum += held.drag_sum
         n_steps += held.n_slide_steps
-    avg = SampleAverager(n, n_tax, n_sub)
-    for i in range(total - 1):
-        s, k = divmod(i, n_sub)
-        avg.add(s, k, loads[i], forces[i])
-        if k == n_sub - 1:
-            avg.end_sample()
-    avg.finish(loads[total - 1], forces[total - 1])
+    means, mean_forces = sample_means(loads, forces, n, n_sub)
     last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
     x_pad = x_after[last] - 0.5 * cmd[last] / proto.rate_hz
     wall = time.perf_counter() - t0
     return (
-        avg.loads,
-        avg.forces,
+        means,
+        mean_forces,
         x_pad,
         strokes.stopped_at_s,
         wall,

@@ -1,0 +1,241 @@
+"""A held slide's steps in one compiled call (:func:`held_slide`), and the samples' trapezoid
+means of a slide's steps in another (:func:`sample_means`).
+
+Under quasi-static force control a slide's path is kinematic: the held step sets the pad's
+height, zeroes the bone's vertical speed and force, and MuJoCo moves it along the slide with
+the arm's speed servo. The slide joint's motion then does not depend on the heights the held
+steps find (the joints are orthogonal and nothing else acts on it), so the pad's positions
+along the whole window are those of the dynamics stepped alone, as a slide read wholly off
+its phase table steps them (:class:`~.tabled.Glide`). :func:`held_slide` steps them first, on
+a copy of the runner's MuJoCo state, then solves every held step of the window in one call of
+:func:`_held_steps`: the same :func:`~.held._held_kernel` at the same positions, each from
+the height the step before it found (MuJoCo leaves the press joint where the held step put
+it), with the contact set carried from step to step. It is the per-step slide's arithmetic
+in another order: the records are equal bit for bit (``tests/test_sim_held.py``).
+
+Where the press joint does move under the dynamics alone (a model whose bone feels gravity or
+a spring), the copy says so and the Python loop steps the slide.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from ..._jit import njit
+from ...errors import PhysicsError
+from ..skin.contact.kernels import NO_K
+from .held import CompiledHeldStep, _held_kernel
+from .runner import V_STICK, Runner
+from .strokes import Strokes
+
+#: Kernel status: a step's load or depth needs the runner's own checks (which raise).
+CHECK = 10
+
+
+def held_slide(runner: Runner, window, proto, n_sub: int, every: int):
+    """The slide phase of :func:`~sim_tactile.sim.slide._slide_sampled` (``every`` >= 1),
+    compiled: ``(loads (T, N), forces (T,), x_pad (T,), stopped_at_s, wall_s)`` with the
+    runner's drag sums updated, or None where the runner's held step is not the compiled one
+    or its press joint moves under the dynamics alone (the Python loop serves)."""
+    hold = runner.hold
+    if not isinstance(hold, CompiledHeldStep):
+        return None
+    t0 = time.perf_counter()
+    n = window.n_samples
+    total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
+    path = _glide(runner, window, proto, total, n_sub)
+    if path is None:
+        return None
+    x_before, vx, cmd, x_after, strokes = path
+    solved = _solved_steps(total, every)
+    n_tax = runner.s.layout.n
+    loads = np.empty((total, n_tax))
+    forces = np.empty(total)
+    tops = np.empty(total)
+    zs = np.empty(total)
+    qpos = runner._qpos.copy()
+    F = proto.force_n
+    total_pa = F / runner._area
+    s = hold.solver
+    M, S, in_set, C, rowsum = s.same_set_state()
+    K = s.K if s.K is not None else NO_K
+    bounds = (runner.max_pen_allowed, runner.z0, runner.max_depth)
+    st, j, M2, S2, updates, rebuilds, rowsum2 = _held_steps(
+        x_before[solved],
+        qpos,
+        (hold.bone0, hold.jx, runner._jz),
+        hold.probes.probe,
+        hold._reduced,
+        (hold.winkler_k, C, K, s.floor, s.symmetric),
+        (M, S, in_set, rowsum, s.updates, s.refresh),
+        hold._limits,
+        total_pa,
+        (hold.pen, hold.f, hold.W, hold.area),
+        bounds,
+        (loads, forces, tops, zs, solved),
+    )
+    if M2 is not M:
+        s.adopt(M2, S2, updates, rebuilds, rowsum2)
+    if st:
+        _raise_at(runner, hold, st, solved[j], forces, tops, zs, F, cmd, total_pa)
+    _drag(runner, forces[solved], vx[solved], cmd[solved])
+    runner._qpos[runner._jz] = zs[solved[-1]]
+    _between(loads, forces, solved)
+    out_loads, out_forces = sample_means(loads, forces, n, n_sub)
+    last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
+    x_pad = x_after[last] - 0.5 * cmd[last] / proto.rate_hz
+    return out_loads, out_forces, x_pad, strokes.stopped_at_s, time.perf_counter() - t0
+
+
+def _glide(runner: Runner, window, proto, total: int, n_sub: int):
+    """The slide joint's path over ``total`` steps, stepped on a copy of the runner's MuJoCo
+    state as :meth:`~.runner.Runner.coast` steps it: ``(x before each step (the joint),
+    its speed then, the step's command, the pad's x on the plate after it, the strokes)``, or
+    None where the press joint moved."""
+    d = copy.copy(runner.d_dyn)
+    m, jx, jz = runner._m_dyn, runner._jx, runner._jz
+    qpos, qvel, qfrc, ctrl = d.qpos, d.qvel, d.qfrc_applied, d.ctrl
+    z = float(qpos[jz])
+    strokes = Strokes(window, proto.speed_m_s, runner.dt)
+    x0 = window.x_start_m
+    x_before = np.empty(total)
+    vx = np.empty(total)
+    cmd = np.empty(total)
+    x_after = np.empty(total)
+    for i in range(total):
+        x = float(qpos[jx])
+        v = strokes.command(x0 + x)
+        x_before[i], vx[i], cmd[i] = x, float(qvel[jx]), v
+        qvel[jz] = 0.0
+        qfrc[jz] = 0.0
+        qfrc[jx] = 0.0
+        ctrl[0] = v
+        mujoco.mj_step(m, d)
+        x_after[i] = x0 + float(qpos[jx])
+        if i % n_sub == n_sub - 1 and d.warning.number.any():
+            bad = [mujoco.mjtWarning(k).name for k, w in enumerate(d.warning) if w.number]
+            raise PhysicsError(
+                f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"
+            )
+    if float(qpos[jz]) != z or float(qvel[jz]) != 0.0:
+        return None
+    return x_before, vx, cmd, x_after, strokes
+
+
+def _solved_steps(total: int, every: int) -> np.ndarray:
+    """The steps ``_slide_sampled`` solves: the first, then every ``every``-th, and the
+    last."""
+    out = list(range(0, total - 1, every))
+    out.append(total - 1)
+    return np.array(sorted(set(out)), dtype=np.int64)
+
+
+def _between(loads: np.ndarray, forces: np.ndarray, solved: np.ndarray) -> None:
+    """The steps between two solved ones on the line between them (in the step's index), as
+    ``_slide_sampled`` writes them."""
+    for g, j in zip(solved[:-1].tolist(), solved[1:].tolist(), strict=True):
+        m = j - g
+        if m > 1:
+            w = (np.arange(1, m) / m)[:, None]
+            loads[g + 1 : j] = (1.0 - w) * loads[g] + w * loads[j]
+            forces[g + 1 : j] = (1.0 - w[:, 0]) * forces[g] + w[:, 0] * forces[j]
+
+
+def _drag(runner: Runner, forces, vx, cmd) -> None:
+    """The friction drag of the solved steps, summed as the runner sums it
+    (:meth:`~.runner.Runner._after_skin`), step after step."""
+    mu = runner._friction
+    drag_sum, steps = runner.drag_sum, runner.n_slide_steps
+    for f, v, c in zip(forces.tolist(), vx.tolist(), cmd.tolist(), strict=True):
+        if c != 0.0:
+            drag_sum += abs(-mu * f * math.tanh(v / V_STICK))
+            steps += 1
+    runner.drag_sum, runner.n_slide_steps = drag_sum, steps
+
+
+def _raise_at(runner, hold, st, i, forces, tops, zs, F, cmd, total_pa) -> None:
+    """Raise the per-step slide's error at step ``i``."""
+    if st != CHECK:
+        hold.fail(st, total_pa)
+    runner._after_skin(float(forces[i]), float(tops[i]), F, 0.0)
+    runner._check_depth(F, float(forces[i]), float(zs[i]))
+    raise PhysicsError(f"the held step {i} failed its checks (status {st})")  # not reached
+
+
+@njit
+def _held_steps(xs, qpos, pose, probe, reduced, skin, state, limits, total, out, bounds, rec):
+    """The held steps at the slide joint's positions ``xs``, each from the height the one
+    before it found: :func:`~.held._held_kernel` in a loop, the contact set carried along.
+
+    ``pose``: ``(bone0, jx, jz)``; ``out``: ``(pen, f, W, area)``; ``bounds``:
+    ``(max_pen, z0, max_depth)``: the runner's checks of a step (a node deeper than the skin,
+    the pad below what the skin carries, a runaway); ``rec``: ``(loads, forces, tops, zs,
+    steps)``: the records, written at the steps' indices ``steps``. Returns ``(status, k, M,
+    S, updates, rebuilds, rowsum)``: status 0 done, else the kernel's status (or
+    :data:`CHECK`) at the ``k``-th position."""
+    bone0, jx, jz = pose
+    M, S, in_set, rowsum, updates, refresh = state
+    pen, f, W, area = out
+    max_pen, z0, max_depth = bounds
+    loads, forces, tops, zs, steps = rec
+    rebuilds = 0
+    for k in range(xs.shape[0]):
+        i = steps[k]
+        qpos[jx] = xs[k]
+        st, force, top, M, S, updates, rb, rowsum = _held_kernel(
+            (bone0, qpos, jx, jz),
+            probe,
+            reduced,
+            skin,
+            (M, S, in_set, rowsum, updates, refresh),
+            limits,
+            total,
+            (pen, f, W, area, loads[i]),
+        )
+        rebuilds += rb
+        z = qpos[jz]
+        forces[i], tops[i], zs[i] = force, top, z
+        if st != 0:
+            return st, k, M, S, updates, rebuilds, rowsum
+        if not np.isfinite(force) or top > max_pen:
+            return CHECK, k, M, S, updates, rebuilds, rowsum
+        if z0 + z < -max_depth or not (np.isfinite(z) and abs(z) < 0.05):
+            return CHECK, k, M, S, updates, rebuilds, rowsum
+    return 0, xs.shape[0], M, S, updates, rebuilds, rowsum
+
+
+def sample_means(loads: np.ndarray, forces: np.ndarray, n: int, n_sub: int):
+    """Each of ``n`` samples the trapezoid mean of its ``n_sub`` steps of ``loads`` (S, N)
+    and ``forces`` (S,) (``S = n n_sub + 1``: the last step closes the last sample), as
+    :class:`~.sampling.SampleAverager` forms it step by step: ``(loads (n, N), forces (n,))``,
+    equal to it bit for bit."""
+    out_l = np.empty((n, loads.shape[1]))
+    out_f = np.empty(n)
+    _trapezoid(np.ascontiguousarray(loads), np.ascontiguousarray(forces), n_sub, out_l, out_f)
+    return out_l, out_f
+
+
+@njit
+def _trapezoid(loads, forces, n_sub, out_l, out_f):
+    """:func:`sample_means`: the sums in the averager's order (each sample's steps in turn,
+    from zero), then ``(sum + (end - start) / 2) / n_sub``."""
+    n, m = out_l.shape
+    acc = np.empty(m)
+    for s in range(n):
+        a = s * n_sub
+        b = a + n_sub
+        for t in range(m):
+            acc[t] = 0.0
+        fsum = 0.0
+        for i in range(a, b):
+            for t in range(m):
+                acc[t] += loads[i, t]
+            fsum += forces[i]
+        for t in range(m):
+            out_l[s, t] = (acc[t] + 0.5 * (loads[b, t] - loads[a, t])) / n_sub
+        out_f[s] = (fsum + 0.5 * (forces[b] - forces[a])) / n_sub

@@ -1,0 +1,126 @@
+"""A held slide's steps in one compiled call (sim.step.held_run): the records of the Python
+loops over the runner (``_slide``, ``_slide_sampled``) bit for bit, its samples' means those of
+the step-by-step averager bit for bit, the Python loop where the press joint moves under the
+dynamics alone, and the per-step slide's errors."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+from sim_tactile.errors import PhysicsError
+from sim_tactile.plates import get_plate
+from sim_tactile.sim import Protocol, Slide, StepOptions, prepare
+from sim_tactile.sim.slide import _slide, _slide_sampled
+from sim_tactile.sim.step.held_run import held_slide, sample_means
+from sim_tactile.sim.step.sampling import SampleAverager
+
+PROTO = Protocol(speed_m_s=0.06, force_n=1.0, duration_s=0.25, rate_hz=100.0, offset_jitter_m=5e-4)
+PER_STEP = StepOptions(path="per-step")
+
+CASES = [
+    # L0's Winkler bed on a grid of bumps, the full problem
+    ("finger7/bumps-4x4", "grid3x3", "L0", 1, PROTO),
+    # a coupled skin in columns, mirror-halved, over ridges crossed from flat ground
+    ("finger7/ridges-4", "grid3x3", "L1", 1, PROTO),
+    # the multilayer's dense full problem at every 2nd step, sliding both ways
+    (
+        "multilayer3/hemispheres-6x6",
+        "multilayer3x3x2",
+        "auto",
+        2,
+        Protocol(
+            speed_m_s=0.065,
+            force_n=5.0,
+            duration_s=0.3,
+            start="texture",
+            passes=2,
+            return_stroke=True,
+        ),
+    ),
+    # every 3rd step: the last solve closes a stretch shorter than the rest
+    ("finger7/bumps-4x4", "grid3x3", "L1", 3, PROTO),
+]
+
+
+def _pair(plate, sensor, fid, proto, seed=3):
+    slide = Slide(get_plate(plate), sensor, proto, seed, fid, options=PER_STEP)
+    return prepare(slide), prepare(slide)
+
+
+@pytest.mark.parametrize("plate,sensor,fid,every,proto", CASES)
+def test_the_compiled_slide_is_the_python_loop_bit_for_bit(plate, sensor, fid, every, proto):
+    a, b = _pair(plate, sensor, fid, proto)
+    n_sub = a.fidelity.steps_per_sample
+    if every == 1:
+        ref = _slide(a.runner, a.window, a.protocol, n_sub)
+    else:
+        ref = _slide_sampled(a.runner, a.window, a.protocol, n_sub, every)
+    got = held_slide(b.runner, b.window, b.protocol, n_sub, every)
+    assert got is not None, "the compiled loop refused a held slide"
+    loads, forces, x_pad, stopped, _ = got
+    assert loads.tobytes() == ref.loads.tobytes()
+    assert forces.tobytes() == ref.forces.tobytes()
+    assert x_pad.tobytes() == ref.x_pad.tobytes()
+    assert stopped == ref.stopped_at_s
+    assert (
+        b.runner.drag_sum == a.runner.drag_sum and b.runner.n_slide_steps == a.runner.n_slide_steps
+    )
+    assert a.runner.n_slide_steps > 0 and np.ptp(ref.loads) > 0  # it slid, and felt something
+    assert b.runner.z_m == a.runner.z_m  # the pad left where the last held step put it
+
+
+def test_a_slide_that_stops_at_the_plate_end_stops_alike():
+    fast = Protocol(speed_m_s=0.12, force_n=1.0, duration_s=0.8, rate_hz=100.0)
+    a, b = _pair("finger7/ridges-4", "grid3x3", "L0", fast)
+    n_sub = a.fidelity.steps_per_sample
+    ref = _slide(a.runner, a.window, a.protocol, n_sub)
+    loads, _, x_pad, stopped, _ = held_slide(b.runner, b.window, b.protocol, n_sub, 1)
+    assert ref.stopped_at_s is not None and stopped == ref.stopped_at_s
+    assert loads.tobytes() == ref.loads.tobytes() and x_pad.tobytes() == ref.x_pad.tobytes()
+
+
+@pytest.mark.parametrize("n_sub", [1, 3, 10, 17])
+def test_sample_means_are_the_averagers_bit_for_bit(n_sub):
+    rng = np.random.default_rng(n_sub)
+    n, m = 7, 5
+    loads = rng.standard_normal((n * n_sub + 1, m)) * 10.0 ** rng.integers(-6, 3, size=(1, m))
+    forces = rng.random(n * n_sub + 1)
+    avg = SampleAverager(n, m, n_sub)
+    for i in range(n * n_sub):
+        s, k = divmod(i, n_sub)
+        avg.add(s, k, loads[i], forces[i])
+        if k == n_sub - 1:
+            avg.end_sample()
+    avg.finish(loads[-1], forces[-1])
+    got_l, got_f = sample_means(loads, forces, n, n_sub)
+    assert got_l.tobytes() == avg.loads.tobytes()
+    assert got_f.tobytes() == avg.forces.tobytes()
+
+
+def test_a_press_joint_that_moves_alone_leaves_the_slide_to_the_python_loop():
+    (p, _) = _pair("finger7/bumps-4x4", "grid3x3", "L0", PROTO)
+    r = p.runner
+    m = copy.copy(r._m_dyn)
+    m.jnt_stiffness[r._jz] = 50.0  # a spring on the press joint: it moves between held steps
+    r._m_dyn = m
+    assert held_slide(r, p.window, p.protocol, p.fidelity.steps_per_sample, 1) is None
+
+
+def test_a_skin_pressed_to_the_bottom_fails_as_the_per_step_slide_does():
+    """The skin's limit set just below what the bumps press it to once the pad slides onto
+    them from flat ground: both loops stop at the same step, with the same message."""
+    msgs = []
+    for compiled in (False, True):
+        p = prepare(Slide(get_plate("finger7/bumps-4x4"), "grid3x3", PROTO, 1, "L0"))
+        p.runner.max_pen_allowed = 1.5 * float(p.runner.hold.pen.max())  # pressed on flat
+        n_sub = p.fidelity.steps_per_sample
+        with pytest.raises(PhysicsError) as exc:
+            if compiled:
+                held_slide(p.runner, p.window, p.protocol, n_sub, 1)
+            else:
+                _slide(p.runner, p.window, p.protocol, n_sub)
+        msgs.append(str(exc.value))
+    assert msgs[0] == msgs[1] and "pressed to the bottom" in msgs[0], msgs
