@@ -10,10 +10,12 @@ import copy
 import numpy as np
 import pytest
 
+from sim_tactile.cache import ArtefactCache
 from sim_tactile.errors import PhysicsError
 from sim_tactile.plates import get_plate
-from sim_tactile.sim import Protocol, Slide, StepOptions, prepare
+from sim_tactile.sim import Protocol, Slide, StepOptions, prepare, run
 from sim_tactile.sim.slide import _slide, _slide_sampled
+from sim_tactile.sim.step import tabled
 from sim_tactile.sim.step.held_run import held_slide, sample_means
 from sim_tactile.sim.step.sampling import SampleAverager
 
@@ -124,3 +126,39 @@ def test_a_skin_pressed_to_the_bottom_fails_as_the_per_step_slide_does():
                 _slide(p.runner, p.window, p.protocol, n_sub)
         msgs.append(str(exc.value))
     assert msgs[0] == msgs[1] and "pressed to the bottom" in msgs[0], msgs
+
+
+TABLED = [
+    # shared tables by force level, crossed from flat ground: the runner's stretches off them
+    Slide(
+        get_plate("finger7/ridges-4"),
+        "grid3x3",
+        Protocol(speed_m_s=0.06, force_jitter=0.1, duration_s=0.94),
+        4,
+        "L0",
+        True,
+        plate_slides=25,
+    ),
+    # a uniform stretch: every step read off its one phase, the path glided
+    Slide(
+        get_plate("multilayer3/flat"),
+        "multilayer3x3x2",
+        Protocol(speed_m_s=0.065, force_n=5.0, duration_s=0.3),
+        7,
+        ideal=True,
+    ),
+]
+
+
+@pytest.mark.parametrize("slide", TABLED, ids=["ridges-off-and-on", "flat-glided"])
+def test_a_tabled_slide_records_what_its_step_by_step_loop_records(slide, monkeypatch, tmp_path):
+    cache = ArtefactCache(tmp_path)
+    fast = run(slide, cache).recording
+    monkeypatch.setattr(tabled, "glide", lambda *a, **k: None)  # the loop step by step
+    slow = run(slide, cache).recording
+    steps = [r.meta["skin_problem"].split("; ")[-1] for r in (fast, slow)]  # steps off it
+    assert steps[0] == steps[1], steps
+    assert "phase table" in fast.meta["skin_problem"]
+    assert fast.data.tobytes() == slow.data.tobytes()
+    for key in ("x_pad_m", "normal_force_n", "mean_drag_n"):
+        assert fast.meta[key] == slow.meta[key], key

@@ -22,6 +22,7 @@ from __future__ import annotations
 import copy
 import math
 import time
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -42,75 +43,62 @@ def held_slide(runner: Runner, window, proto, n_sub: int, every: int):
     compiled: ``(loads (T, N), forces (T,), x_pad (T,), stopped_at_s, wall_s)`` with the
     runner's drag sums updated, or None where the runner's held step is not the compiled one
     or its press joint moves under the dynamics alone (the Python loop serves)."""
-    hold = runner.hold
-    if not isinstance(hold, CompiledHeldStep):
+    if not isinstance(runner.hold, CompiledHeldStep):
         return None
     t0 = time.perf_counter()
     n = window.n_samples
     total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
-    path = _glide(runner, window, proto, total, n_sub)
+    r = runner
+    path = glide(
+        copy.copy(r.d_dyn), r._m_dyn, r._jx, r._jz, window, proto.speed_m_s, r.dt, total, n_sub
+    )
     if path is None:
         return None
-    x_before, vx, cmd, x_after, strokes = path
     solved = _solved_steps(total, every)
-    n_tax = runner.s.layout.n
-    loads = np.empty((total, n_tax))
+    loads = np.empty((total, runner.s.layout.n))
     forces = np.empty(total)
-    tops = np.empty(total)
-    zs = np.empty(total)
-    qpos = runner._qpos.copy()
-    F = proto.force_n
-    total_pa = F / runner._area
-    s = hold.solver
-    M, S, in_set, C, rowsum = s.same_set_state()
-    K = s.K if s.K is not None else NO_K
-    bounds = (runner.max_pen_allowed, runner.z0, runner.max_depth)
-    st, j, M2, S2, updates, rebuilds, rowsum2 = _held_steps(
-        x_before[solved],
-        qpos,
-        (hold.bone0, hold.jx, runner._jz),
-        hold.probes.probe,
-        hold._reduced,
-        (hold.winkler_k, C, K, s.floor, s.symmetric),
-        (M, S, in_set, rowsum, s.updates, s.refresh),
-        hold._limits,
-        total_pa,
-        (hold.pen, hold.f, hold.W, hold.area),
-        bounds,
-        (loads, forces, tops, zs, solved),
-    )
-    if M2 is not M:
-        s.adopt(M2, S2, updates, rebuilds, rowsum2)
-    if st:
-        _raise_at(runner, hold, st, solved[j], forces, tops, zs, F, cmd, total_pa)
-    _drag(runner, forces[solved], vx[solved], cmd[solved])
-    runner._qpos[runner._jz] = zs[solved[-1]]
+    held_steps(runner, path, solved, proto.force_n, loads, forces)
     _between(loads, forces, solved)
     out_loads, out_forces = sample_means(loads, forces, n, n_sub)
-    last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
-    x_pad = x_after[last] - 0.5 * cmd[last] / proto.rate_hz
-    return out_loads, out_forces, x_pad, strokes.stopped_at_s, time.perf_counter() - t0
+    x_pad = path.x_pad(n, n_sub, proto.rate_hz)
+    return out_loads, out_forces, x_pad, path.strokes.stopped_at_s, time.perf_counter() - t0
 
 
-def _glide(runner: Runner, window, proto, total: int, n_sub: int):
-    """The slide joint's path over ``total`` steps, stepped on a copy of the runner's MuJoCo
-    state as :meth:`~.runner.Runner.coast` steps it: ``(x before each step (the joint),
-    its speed then, the step's command, the pad's x on the plate after it, the strokes)``, or
-    None where the press joint moved."""
-    d = copy.copy(runner.d_dyn)
-    m, jx, jz = runner._m_dyn, runner._jx, runner._jz
+@dataclass
+class Path:
+    """A held slide's steps along the slide (:func:`glide`): the slide joint's position and
+    speed as each step starts, the step's speed command and the pad's x on the plate after
+    it, and the strokes (when it stopped)."""
+
+    x_joint: np.ndarray
+    vx: np.ndarray
+    cmd: np.ndarray
+    x_after: np.ndarray
+    strokes: Strokes
+
+    def x_pad(self, n: int, n_sub: int, rate_hz: float) -> np.ndarray:
+        """The pad's x at each of ``n`` samples' centres, as the per-step slide records it."""
+        last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
+        return self.x_after[last] - 0.5 * self.cmd[last] / rate_hz
+
+
+def glide(d, m, jx, jz, window, speed_m_s, dt, total: int, n_sub: int) -> Path | None:
+    """The slide joint's path over ``total`` steps of ``dt`` [s] along ``window``'s strokes,
+    stepped on the MuJoCo state ``d`` of the model ``m`` (slide joint ``jx``, press joint
+    ``jz``) as :meth:`~.runner.Runner.coast` steps it (MuJoCo's warnings checked at each
+    sample's end), or None where the press joint moved."""
     qpos, qvel, qfrc, ctrl = d.qpos, d.qvel, d.qfrc_applied, d.ctrl
     z = float(qpos[jz])
-    strokes = Strokes(window, proto.speed_m_s, runner.dt)
+    strokes = Strokes(window, speed_m_s, dt)
     x0 = window.x_start_m
-    x_before = np.empty(total)
+    x_joint = np.empty(total)
     vx = np.empty(total)
     cmd = np.empty(total)
     x_after = np.empty(total)
     for i in range(total):
         x = float(qpos[jx])
         v = strokes.command(x0 + x)
-        x_before[i], vx[i], cmd[i] = x, float(qvel[jx]), v
+        x_joint[i], vx[i], cmd[i] = x, float(qvel[jx]), v
         qvel[jz] = 0.0
         qfrc[jz] = 0.0
         qfrc[jx] = 0.0
@@ -124,7 +112,48 @@ def _glide(runner: Runner, window, proto, total: int, n_sub: int):
             )
     if float(qpos[jz]) != z or float(qvel[jz]) != 0.0:
         return None
-    return x_before, vx, cmd, x_after, strokes
+    return Path(x_joint, vx, cmd, x_after, strokes)
+
+
+def held_steps(runner: Runner, path: Path, steps: np.ndarray, force_n: float, loads, forces):
+    """The runner's held steps ``steps`` (increasing indices of ``path``) in one compiled
+    call, each from the height the one before it found (the first from the runner's), their
+    loads and forces written at those indices; the runner's drag sums and height updated as
+    its own steps update them, and its errors raised at the first step that fails."""
+    hold = runner.hold
+    tops = np.empty(loads.shape[0])
+    zs = np.empty(loads.shape[0])
+    qpos = runner._qpos.copy()
+    total_pa = force_n / runner._area
+    s = hold.solver
+    M, S, in_set, C, rowsum = s.same_set_state()
+    K = s.K if s.K is not None else NO_K
+    bounds = (runner.max_pen_allowed, runner.z0, runner.max_depth)
+    st, j, M2, S2, updates, rebuilds, rowsum2 = _held_steps(
+        path.x_joint[steps],
+        qpos,
+        (hold.bone0, hold.jx, runner._jz),
+        hold.probes.probe,
+        hold._reduced,
+        (hold.winkler_k, C, K, s.floor, s.symmetric),
+        (M, S, in_set, rowsum, s.updates, s.refresh),
+        hold._limits,
+        total_pa,
+        (hold.pen, hold.f, hold.W, hold.area),
+        bounds,
+        (loads, forces, tops, zs, steps),
+    )
+    if M2 is not M:
+        s.adopt(M2, S2, updates, rebuilds, rowsum2)
+    if st:
+        i = int(steps[j])
+        if st != CHECK:
+            hold.fail(st, total_pa)
+        runner._after_skin(float(forces[i]), float(tops[i]), force_n, 0.0)
+        runner._check_depth(force_n, float(forces[i]), float(zs[i]))
+        raise PhysicsError(f"the held step {i} failed its checks (status {st})")  # not reached
+    _drag(runner, forces[steps], path.vx[steps], path.cmd[steps])
+    runner._qpos[runner._jz] = zs[steps[-1]]
 
 
 def _solved_steps(total: int, every: int) -> np.ndarray:
@@ -156,15 +185,6 @@ def _drag(runner: Runner, forces, vx, cmd) -> None:
             drag_sum += abs(-mu * f * math.tanh(v / V_STICK))
             steps += 1
     runner.drag_sum, runner.n_slide_steps = drag_sum, steps
-
-
-def _raise_at(runner, hold, st, i, forces, tops, zs, F, cmd, total_pa) -> None:
-    """Raise the per-step slide's error at step ``i``."""
-    if st != CHECK:
-        hold.fail(st, total_pa)
-    runner._after_skin(float(forces[i]), float(tops[i]), F, 0.0)
-    runner._check_depth(F, float(forces[i]), float(zs[i]))
-    raise PhysicsError(f"the held step {i} failed its checks (status {st})")  # not reached
 
 
 @njit

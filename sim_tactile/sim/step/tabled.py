@@ -13,6 +13,7 @@ them (:func:`~.held_run.sample_means`, as :class:`~.sampling.SampleAverager` doe
 
 from __future__ import annotations
 
+import copy
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -30,7 +31,8 @@ from ..plan.slide import Slide
 from ..plan.span import span_fraction
 from .batched_held import batched_held
 from .build import runner_for, scene_for
-from .held_run import sample_means
+from .held import CompiledHeldStep
+from .held_run import glide, held_steps, sample_means
 from .mirror import mirrored_loads
 from .phase_table import PhaseTable, tabulate
 from .runner import V_STICK, Runner
@@ -89,12 +91,68 @@ def slide_tabled(
     :class:`~.runner.Runner`; a :class:`Glide` where every step lies in the interior).
 
     Returns ``(loads (T, N), forces (T,), x_pad (T,), stopped_at_s, wall_s, drag_sum,
-    n_slide_steps, tabled_steps)``, as the per-step slide records them."""
+    n_slide_steps, tabled_steps)``, as the per-step slide records them.
+
+    The pad's path is stepped first (:func:`~.held_run.glide`, on a copy of a runner's
+    MuJoCo state); the steps off the table, where the runner's held step is the compiled
+    one, then run in one compiled call a stretch (:func:`~.held_run.held_steps`), each
+    stretch from the table's height where it starts; elsewhere (another held step, a press
+    joint that moves under the dynamics alone) step by step (:func:`_stepped`). Both record
+    the same numbers bit for bit."""
     if float(np.max(table.top)) > max_pen_m:
         raise PhysicsError(
             f"skin pressed to the bottom: a node is {table.top.max() * 1e3:.3g} mm deep, beyond "
             f"the skin thickness {max_pen_m * 1e3:.3g} mm (lower the force or use a thicker skin)"
         )
+    args = (table, dyn, window, proto, n_sub, dt, friction)
+    held = dyn if isinstance(dyn, Runner) else None
+    if held is not None and not isinstance(held.hold, CompiledHeldStep):
+        return _stepped(*args)
+    t0 = time.perf_counter()
+    n = window.n_samples
+    total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
+    if held is None:
+        path = glide(dyn.d, dyn.m, dyn.jx, dyn.jz, window, proto.speed_m_s, dt, total, n_sub)
+    else:
+        d, m = copy.copy(held.d_dyn), held._m_dyn
+        path = glide(d, m, held._jx, held._jz, window, proto.speed_m_s, dt, total, n_sub)
+    if path is None:
+        return _stepped(*args)
+    plan = table.plan
+    x = window.x_start_m + path.x_joint  # the pad's x on the plate as each step reads its loads
+    inside = (plan.x_lo <= x) & (x <= plan.x_hi)
+    loads = np.empty((total, table.n_taxels))
+    forces = np.empty(total)
+    off = np.flatnonzero(~inside)
+    if off.size and held is None:
+        raise _left(x[off[0]], plan)
+    for run in np.split(off, np.flatnonzero(np.diff(off) != 1) + 1) if off.size else ():
+        if run[0] > 0:  # back from the table: start from its height here
+            held._qpos[held._jz] = table.at(x[run[0] : run[0] + 1])[3][0] - held.z0
+        held_steps(held, path, run, proto.force_n, loads, forces)
+    if inside.any():
+        loads[inside], forces[inside] = table.at(x[inside])[:2]
+    drag_sum, n_steps = _drag(forces, path.vx, path.cmd, inside, friction)
+    if held is not None:
+        drag_sum += held.drag_sum
+        n_steps += held.n_slide_steps
+    means, mean_forces = sample_means(loads, forces, n, n_sub)
+    x_pad = path.x_pad(n, n_sub, proto.rate_hz)
+    wall = time.perf_counter() - t0
+    stopped = path.strokes.stopped_at_s
+    return means, mean_forces, x_pad, stopped, wall, drag_sum, n_steps, int(inside.sum())
+
+
+def _left(x: float, plan: PhasePlan) -> PhysicsError:
+    return PhysicsError(
+        f"the pad left the repeating texture at x = {x * 1e3:.4g} mm "
+        f"(the table serves {plan.describe()})"
+    )
+
+
+def _stepped(table, dyn, window, proto, n_sub, dt, friction):
+    """:func:`slide_tabled` step by step: the dynamics stepped, and each step read off the
+    table or solved by the runner, in turn."""
     n = window.n_samples
     n_tax = table.n_taxels
     total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
@@ -118,10 +176,7 @@ def slide_tabled(
             vx[i] = dyn.vx if held is None else float(held._qvel[held._jx])
             dyn.coast(v)
         elif held is None:
-            raise PhysicsError(
-                f"the pad left the repeating texture at x = {x * 1e3:.4g} mm "
-                f"(the table serves {plan.describe()})"
-            )
+            raise _left(x, plan)
         else:
             if i and inside[i - 1]:  # back from the table: start from its height here
                 held._qpos[held._jz] = table.at(np.array([x]))[3][0] - held.z0
