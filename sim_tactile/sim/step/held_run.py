@@ -29,6 +29,7 @@ import numpy as np
 
 from ..._jit import njit
 from ...errors import PhysicsError
+from ..plan.protocol import SPEED_RAMP_S
 from ..skin.contact.kernels import NO_K
 from .held import CompiledHeldStep, _held_kernel
 from .runner import V_STICK, Runner
@@ -86,7 +87,11 @@ def glide(d, m, jx, jz, window, speed_m_s, dt, total: int, n_sub: int) -> Path |
     """The slide joint's path over ``total`` steps of ``dt`` [s] along ``window``'s strokes,
     stepped on the MuJoCo state ``d`` of the model ``m`` (slide joint ``jx``, press joint
     ``jz``) as :meth:`~.runner.Runner.coast` steps it (MuJoCo's warnings checked at each
-    sample's end), or None where the press joint moved."""
+    sample's end), or None where the press joint moved.
+
+    The steps up to the first at which a stroke turns or stops run in MuJoCo's own loop
+    (:func:`_rolled`: their commands are the first stroke's ramp, known ahead); the rest one
+    by one, each command read off the pad's position."""
     qpos, qvel, qfrc, ctrl = d.qpos, d.qvel, d.qfrc_applied, d.ctrl
     z = float(qpos[jz])
     strokes = Strokes(window, speed_m_s, dt)
@@ -95,7 +100,13 @@ def glide(d, m, jx, jz, window, speed_m_s, dt, total: int, n_sub: int) -> Path |
     vx = np.empty(total)
     cmd = np.empty(total)
     x_after = np.empty(total)
-    for i in range(total):
+    qvel[jz] = 0.0
+    qfrc[jz] = 0.0
+    qfrc[jx] = 0.0
+    k = _rolled(d, m, jx, jz, strokes, (x_joint, vx, cmd, x_after), x0)
+    if k < 0:
+        return None
+    for i in range(k, total):
         x = float(qpos[jx])
         v = strokes.command(x0 + x)
         x_joint[i], vx[i], cmd[i] = x, float(qvel[jx]), v
@@ -105,14 +116,67 @@ def glide(d, m, jx, jz, window, speed_m_s, dt, total: int, n_sub: int) -> Path |
         ctrl[0] = v
         mujoco.mj_step(m, d)
         x_after[i] = x0 + float(qpos[jx])
-        if i % n_sub == n_sub - 1 and d.warning.number.any():
-            bad = [mujoco.mjtWarning(k).name for k, w in enumerate(d.warning) if w.number]
-            raise PhysicsError(
-                f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"
-            )
+        if i % n_sub == n_sub - 1:
+            _check(d)
     if float(qpos[jz]) != z or float(qvel[jz]) != 0.0:
         return None
     return Path(x_joint, vx, cmd, x_after, strokes)
+
+
+#: MuJoCo's state that :func:`_rolled` rolls out from and restores.
+_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+def _rolled(d, m, jx, jz, strokes: Strokes, out, x0: float) -> int:
+    """Step ``d`` in MuJoCo's rollout loop while the commands are the first stroke's ramp
+    (``sign speed min(1, t / ramp)``, its time summed step by step as
+    :class:`~.strokes.Strokes` sums it), write the path of those steps into ``out`` and
+    leave ``d`` and ``strokes`` after them: returns how many (-1 where the press joint
+    moved)."""
+    from mujoco import rollout
+
+    x_joint, vx, cmd, x_after = out
+    total = x_joint.size
+    w = strokes.w
+    sign, speed = strokes.sign, strokes.speed
+    t = np.concatenate([[0.0], np.cumsum(np.full(total, strokes.dt))])  # before each call
+    v = sign * speed * np.minimum(1.0, t[:total] / SPEED_RAMP_S)
+    nq, nv = m.nq, m.nv
+    state0 = np.empty(mujoco.mj_stateSize(m, _STATE))
+    mujoco.mj_getState(m, d, state0, _STATE)
+    control = np.repeat(d.ctrl[None, :], total, axis=0)
+    control[:, 0] = v
+    with rollout.Rollout(nthread=0) as ro:
+        states, _ = ro.rollout(m, d, state0[None], control[None])
+    states = states[0]
+    qpos = states[:, 1 : 1 + nq]
+    qvel = states[:, 1 + nq : 1 + nq + nv]
+    if (qpos[:, jz] != state0[1 + jz]).any() or (qvel[:, jz] != 0.0).any():
+        return -1
+    x_joint[0], vx[0] = state0[1 + jx], state0[1 + nq + jx]
+    x_joint[1:], vx[1:] = qpos[:-1, jx], qvel[:-1, jx]
+    x = x0 + x_joint
+    turn = sign * x >= w.x_limit_m
+    if len(w.strokes) > 1:
+        turn |= sign * (x - w.strokes[0][1]) >= 0
+    k = int(np.argmax(turn)) if turn.any() else total
+    cmd[:k] = v[:k]
+    x_after[:k] = x0 + qpos[:k, jx]
+    _check(d)
+    if k < total:  # back to the state after step k - 1, for the step-by-step loop
+        mujoco.mj_setState(m, d, states[k - 1] if k else state0, _STATE)
+        d.ctrl[0] = v[k - 1] if k else d.ctrl[0]
+    strokes.t = strokes.t_stroke = float(t[k])
+    if k:
+        strokes.v = float(v[k - 1])
+    return k
+
+
+def _check(d) -> None:
+    """Raise where MuJoCo warned while stepping ``d`` (the run is not trustworthy)."""
+    if d.warning.number.any():
+        bad = [mujoco.mjtWarning(k).name for k, w in enumerate(d.warning) if w.number]
+        raise PhysicsError(f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy")
 
 
 def held_steps(runner: Runner, path: Path, steps: np.ndarray, force_n: float, loads, forces):
