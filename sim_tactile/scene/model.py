@@ -294,10 +294,35 @@ def build_scene(
     m_col, m_dyn, node_of_geom, jx, jz = _models(
         plate, finger, grid, z_damping, node_margin_m, cache
     )
-    m_col, m_dyn = copy.copy(m_col), copy.copy(m_dyn)
-    for m in (m_col, m_dyn):
-        m.opt.timestep = dt_s
-        # the start, and the offset across the slide (as the slide's own)
-        m.body_pos[m.body("bone").id] = (x0_m, y0_m, z0_m)
+    m_col, m_dyn = _placed(m_col, dt_s, x0_m, y0_m, z0_m), _placed(m_dyn, dt_s, x0_m, y0_m, z0_m)
     W = taxel_weights(grid, layout, finger, slide_dir, cache)
     return Scene(plate, finger, grid, layout, m_col, m_dyn, node_of_geom, W, int(jx), int(jz))
+
+
+def dynamics_model(
+    plate: Plate,
+    finger: Finger,
+    grid: SkinGrid,
+    *,
+    dt_s: float,
+    x0_m: float,
+    z0_m: float,
+    z_damping: float,
+    y0_m: float = 0.0,
+    node_margin_m: float = 0.0,
+    cache=None,
+) -> tuple:
+    """``(m_dyn, jx, jz)``: the dynamics model of :func:`build_scene`'s scene (the same
+    model, bit for bit) without the collision model and the taxels' weights: all a slide
+    read wholly off its phase table steps."""
+    _, m_dyn, _, jx, jz = _models(plate, finger, grid, z_damping, node_margin_m, cache)
+    return _placed(m_dyn, dt_s, x0_m, y0_m, z0_m), int(jx), int(jz)
+
+
+def _placed(model, dt_s: float, x0_m: float, y0_m: float, z0_m: float):
+    """A copy of a kept model at a slide's time step, its bone at the slide's start and
+    offset across the slide (what the compiler would have copied in)."""
+    m = copy.copy(model)
+    m.opt.timestep = dt_s
+    m.body_pos[m.body("bone").id] = (x0_m, y0_m, z0_m)
+    return m

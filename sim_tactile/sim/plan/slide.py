@@ -103,6 +103,12 @@ class Slide:
     def drawn(self) -> Protocol:
         """The slide's own speed, force and offset, as the simulation draws them from
         ``seed`` (:meth:`~.protocol.Protocol.drawn`), at the nominal rate."""
+        return self._drawn
+
+    @cached_property
+    def _drawn(self) -> Protocol:
+        """:meth:`drawn`, drawn once (a frozen protocol: the planner asks for it a dozen
+        times a slide)."""
         return self.nominal.drawn(self.seed)
 
     @cached_property

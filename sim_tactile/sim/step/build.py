@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from ...plates import Plate, surface_of
-from ...scene.model import build_scene
+from ...scene.model import build_scene, dynamics_model
 from ...scene.nodes import SkinGrid, skin_grid
 from ..collide.choose import make_collider
 from ..plan.fidelity import Fidelity, flat_stiffness
@@ -24,7 +24,20 @@ def scene_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache):
     """``(scene, z0)``: the scene with the pad centred at ``x0_m`` (the slide's start; a
     phase table's reference) and ``proto.offset_y_m``, its lowest point ``z0`` [m] above the
     plate's highest point under it."""
-    plate, layout, finger = slide.plate, slide.layout, slide.pad
+    args, kw, z0 = _scene_args(slide, proto, fid, x0_m, cache)
+    return build_scene(*args, slide.layout, **kw), z0
+
+
+def dynamics_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache):
+    """``(m_dyn, jx, jz)``: the dynamics model of :func:`scene_for`'s scene, alone."""
+    args, kw, _ = _scene_args(slide, proto, fid, x0_m, cache)
+    return dynamics_model(*args, **kw)
+
+
+def _scene_args(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache):
+    """The arguments of the scene of :func:`scene_for`: ``((plate, finger, grid), keywords,
+    z0)``."""
+    plate, finger = slide.plate, slide.pad
     grid = skin_grid(finger, fid.pitch_m, fid.pitch_y_m)
     z0 = APPROACH_CLEARANCE_M + max(
         0.0, float(np.nanmax(_plate_heights(plate, grid, x0_m, proto.offset_y_m)))
@@ -33,11 +46,7 @@ def scene_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache):
         flat_stiffness(finger, fid.coupled, fid.winkler_k_pa_per_m) / finger.bone_mass_kg
     )
     quasi_static = proto.force_control == "quasi-static"
-    scene = build_scene(
-        plate,
-        finger,
-        grid,
-        layout,
+    kw = dict(
         dt_s=fid.dt_s,
         x0_m=x0_m,
         y0_m=proto.offset_y_m,
@@ -46,7 +55,7 @@ def scene_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache):
         node_margin_m=slide.surface.margin_m if quasi_static else 0.0,
         cache=cache,
     )
-    return scene, z0
+    return (plate, finger, grid), kw, z0
 
 
 def runner_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache) -> Runner:

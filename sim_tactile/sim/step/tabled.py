@@ -30,7 +30,7 @@ from ..plan.protocol import Protocol, SlideWindow
 from ..plan.slide import Slide
 from ..plan.span import span_fraction
 from .batched_held import batched_held
-from .build import runner_for, scene_for
+from .build import dynamics_for, runner_for
 from .held import CompiledHeldStep
 from .held_run import glide, held_steps, sample_means
 from .mirror import mirrored_loads
@@ -262,8 +262,7 @@ def slide_on_table(
     over = 2 * proto.speed_m_s * fid.dt_s  # a stroke stops on the step past its limit
     if plan.covers(lo - over) and plan.covers(hi + over):
         runner, warnings = None, list(fid.warnings)
-        scene, _ = scene_for(slide, proto, fid, window.x_start_m, cache)
-        dyn = Glide(scene.m_dyn, scene.jx, scene.jz)
+        dyn = Glide(*dynamics_for(slide, proto, fid, window.x_start_m, cache))
     else:
         pressed = press()
         runner = dyn = pressed.runner
