@@ -11,7 +11,7 @@ a copy of the runner's MuJoCo state, then solves every held step of the window i
 :func:`_held_steps`: the same :func:`~.held._held_kernel` at the same positions, each from
 the height the step before it found (MuJoCo leaves the press joint where the held step put
 it), with the contact set carried from step to step. It is the per-step slide's arithmetic
-in another order: the records are equal bit for bit (``tests/test_sim_held.py``).
+in another order: the records are equal bit for bit (``tests/test_sim_held_run.py``).
 
 Where the press joint does move under the dynamics alone (a model whose bone feels gravity or
 a spring), the copy says so and the Python loop steps the slide.
