@@ -16,8 +16,8 @@ from sim_tactile.plates import get_plate
 from sim_tactile.sim import Protocol, Slide, StepOptions, prepare, run
 from sim_tactile.sim.slide import _slide, _slide_sampled
 from sim_tactile.sim.step import tabled
-from sim_tactile.sim.step.held_run import held_slide, sample_means
-from sim_tactile.sim.step.sampling import SampleAverager
+from sim_tactile.sim.step.held_run import held_slide
+from sim_tactile.sim.step.sampling import SampleAverager, sample_means
 
 PROTO = Protocol(speed_m_s=0.06, force_n=1.0, duration_s=0.25, rate_hz=100.0, offset_jitter_m=5e-4)
 PER_STEP = StepOptions(path="per-step")

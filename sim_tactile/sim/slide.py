@@ -31,10 +31,19 @@ from .plan.protocol import (
 )
 from .plan.slide import Slide
 from .step.build import runner_for
-from .step.held_run import held_slide, sample_means
+from .step.held_run import held_slide
 from .step.phase_table import SETTLE_M, SETTLE_STEPS
 from .step.runner import Runner, drag_factor, drag_warning
-from .step.sampling import SampleAverager, SimResult, sensor_output, versions
+from .step.sampling import (
+    SampleAverager,
+    SimResult,
+    fill_between,
+    sample_means,
+    sample_x,
+    sensor_output,
+    solved_steps,
+    versions,
+)
 from .step.strokes import Strokes
 from .step.tabled import slide_on_table
 
@@ -362,26 +371,21 @@ def _slide_sampled(
     strokes = Strokes(window, proto.speed_m_s, runner.dt)
     F, x0 = proto.force_n, window.x_start_m
     t0 = time.perf_counter()
+    solved = solved_steps(total, every)
     g = -1  # the last step solved
-    while g < total - 1:
-        m = 1 if g < 0 else min(every, total - 1 - g)
-        for i in range(g + 1, g + m):  # the dynamics alone
+    for j in solved.tolist():
+        for i in range(g + 1, j):  # the dynamics alone
             runner.coast(strokes.command(x0 + runner.x_m))
             x_after[i], v_after[i] = x0 + runner.x_m, strokes.v
-        j = g + m
         forces[j] = runner.step(
             force_cmd=F, slide_v=strokes.command(x0 + runner.x_m), taxel_out=loads[j]
         )
         x_after[j], v_after[j] = x0 + runner.x_m, strokes.v
-        if g >= 0 and m > 1:  # the steps between on the line from g to j
-            w = (np.arange(1, m) / m)[:, None]
-            loads[g + 1 : j] = (1.0 - w) * loads[g] + w * loads[j]
-            forces[g + 1 : j] = (1.0 - w[:, 0]) * forces[g] + w[:, 0] * forces[j]
         runner.check_warnings()
         g = j
+    fill_between(loads, forces, solved)  # the steps between on the line between solves
     means, mean_forces = sample_means(loads, forces, n, n_sub)  # as _slide averages them
-    last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
-    x_pad = x_after[last] - 0.5 * v_after[last] / proto.rate_hz
+    x_pad = sample_x(x_after, v_after, n, n_sub, proto.rate_hz)
     return _Slide(means, mean_forces, x_pad, strokes.stopped_at_s, time.perf_counter() - t0)
 
 

@@ -221,24 +221,33 @@ class CompiledHeldStep:
         np.take(self._small, self.group, out=self.pen)
         return near
 
-    def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
-        """:meth:`PlainHeldStep.step` in one call on the reduced problem; the contact set is
-        updated when it changes."""
+    def kernel_args(self) -> tuple:
+        """``(probe, reduced, skin, state, limits)``: the arguments of :func:`_held_kernel`
+        this step keeps, the contact set's state as it stands (:meth:`step`, and the
+        compiled slide's :func:`~.held_run.held_steps`)."""
         s = self.solver
         M, S, in_set, C, rowsum = s.same_set_state()
         K = s.K if s.K is not None else NO_K
+        skin = (self.winkler_k, C, K, s.floor, s.symmetric)
+        state = (M, S, in_set, rowsum, s.updates, s.refresh)
+        return self.probes.probe, self._reduced, skin, state, self._limits
+
+    def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
+        """:meth:`PlainHeldStep.step` in one call on the reduced problem; the contact set is
+        updated when it changes."""
+        probe, reduced, skin, state, limits = self.kernel_args()
         st, force, top, M2, S2, updates, rebuilds, rowsum2 = _held_kernel(
             (self.bone0, qpos, self.jx, jz),
-            self.probes.probe,
-            self._reduced,
-            (self.winkler_k, C, K, s.floor, s.symmetric),
-            (M, S, in_set, rowsum, s.updates, s.refresh),
-            self._limits,
+            probe,
+            reduced,
+            skin,
+            state,
+            limits,
             total,
             (self.pen, self.f, self.W, self.area, taxel_out),
         )
-        if M2 is not M:  # the set changed
-            s.adopt(M2, S2, updates, rebuilds, rowsum2)
+        if M2 is not state[0]:  # the set changed
+            self.solver.adopt(M2, S2, updates, rebuilds, rowsum2)
         if st == 0:
             return force, top
         self.fail(st, total)

@@ -1,5 +1,5 @@
-"""A held slide's steps in one compiled call (:func:`held_slide`), and the samples' trapezoid
-means of a slide's steps in another (:func:`sample_means`).
+"""A held slide's steps in one compiled call (:func:`held_slide`), its path stepped first
+(:func:`glide`).
 
 Under quasi-static force control a slide's path is kinematic: the held step sets the pad's
 height, zeroes the bone's vertical speed and force, and MuJoCo moves it along the slide with
@@ -30,9 +30,9 @@ import numpy as np
 from ..._jit import njit
 from ...errors import PhysicsError
 from ..plan.protocol import SPEED_RAMP_S
-from ..skin.contact.kernels import NO_K
 from .held import CompiledHeldStep, _held_kernel
 from .runner import V_STICK, Runner
+from .sampling import fill_between, mujoco_warnings, sample_means, sample_x, solved_steps
 from .strokes import Strokes
 
 #: Kernel status: a step's load or depth needs the runner's own checks (which raise).
@@ -55,11 +55,11 @@ def held_slide(runner: Runner, window, proto, n_sub: int, every: int):
     )
     if path is None:
         return None
-    solved = _solved_steps(total, every)
+    solved = solved_steps(total, every)
     loads = np.empty((total, runner.s.layout.n))
     forces = np.empty(total)
     held_steps(runner, path, solved, proto.force_n, loads, forces)
-    _between(loads, forces, solved)
+    fill_between(loads, forces, solved)
     out_loads, out_forces = sample_means(loads, forces, n, n_sub)
     x_pad = path.x_pad(n, n_sub, proto.rate_hz)
     return out_loads, out_forces, x_pad, path.strokes.stopped_at_s, time.perf_counter() - t0
@@ -79,8 +79,7 @@ class Path:
 
     def x_pad(self, n: int, n_sub: int, rate_hz: float) -> np.ndarray:
         """The pad's x at each of ``n`` samples' centres, as the per-step slide records it."""
-        last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
-        return self.x_after[last] - 0.5 * self.cmd[last] / rate_hz
+        return sample_x(self.x_after, self.cmd, n, n_sub, rate_hz)
 
 
 def glide(d, m, jx, jz, window, speed_m_s, dt, total: int, n_sub: int) -> Path | None:
@@ -165,7 +164,6 @@ def _rolled(d, m, jx, jz, strokes: Strokes, out, x0: float) -> int:
     _check(d)
     if k < total:  # back to the state after step k - 1, for the step-by-step loop
         mujoco.mj_setState(m, d, states[k - 1] if k else state0, _STATE)
-        d.ctrl[0] = v[k - 1] if k else d.ctrl[0]
     strokes.t = strokes.t_stroke = float(t[k])
     if k:
         strokes.v = float(v[k - 1])
@@ -174,8 +172,8 @@ def _rolled(d, m, jx, jz, strokes: Strokes, out, x0: float) -> int:
 
 def _check(d) -> None:
     """Raise where MuJoCo warned while stepping ``d`` (the run is not trustworthy)."""
-    if d.warning.number.any():
-        bad = [mujoco.mjtWarning(k).name for k, w in enumerate(d.warning) if w.number]
+    bad = mujoco_warnings(d)
+    if bad:
         raise PhysicsError(f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy")
 
 
@@ -189,26 +187,20 @@ def held_steps(runner: Runner, path: Path, steps: np.ndarray, force_n: float, lo
     zs = np.empty(loads.shape[0])
     qpos = runner._qpos.copy()
     total_pa = force_n / runner._area
-    s = hold.solver
-    M, S, in_set, C, rowsum = s.same_set_state()
-    K = s.K if s.K is not None else NO_K
     bounds = (runner.max_pen_allowed, runner.z0, runner.max_depth)
+    args = hold.kernel_args()
     st, j, M2, S2, updates, rebuilds, rowsum2 = _held_steps(
         path.x_joint[steps],
         qpos,
         (hold.bone0, hold.jx, runner._jz),
-        hold.probes.probe,
-        hold._reduced,
-        (hold.winkler_k, C, K, s.floor, s.symmetric),
-        (M, S, in_set, rowsum, s.updates, s.refresh),
-        hold._limits,
+        *args,
         total_pa,
         (hold.pen, hold.f, hold.W, hold.area),
         bounds,
         (loads, forces, tops, zs, steps),
     )
-    if M2 is not M:
-        s.adopt(M2, S2, updates, rebuilds, rowsum2)
+    if M2 is not args[3][0]:  # the set changed
+        hold.solver.adopt(M2, S2, updates, rebuilds, rowsum2)
     if st:
         i = int(steps[j])
         if st != CHECK:
@@ -218,25 +210,6 @@ def held_steps(runner: Runner, path: Path, steps: np.ndarray, force_n: float, lo
         raise PhysicsError(f"the held step {i} failed its checks (status {st})")  # not reached
     _drag(runner, forces[steps], path.vx[steps], path.cmd[steps])
     runner._qpos[runner._jz] = zs[steps[-1]]
-
-
-def _solved_steps(total: int, every: int) -> np.ndarray:
-    """The steps ``_slide_sampled`` solves: the first, then every ``every``-th, and the
-    last."""
-    out = list(range(0, total - 1, every))
-    out.append(total - 1)
-    return np.array(sorted(set(out)), dtype=np.int64)
-
-
-def _between(loads: np.ndarray, forces: np.ndarray, solved: np.ndarray) -> None:
-    """The steps between two solved ones on the line between them (in the step's index), as
-    ``_slide_sampled`` writes them."""
-    for g, j in zip(solved[:-1].tolist(), solved[1:].tolist(), strict=True):
-        m = j - g
-        if m > 1:
-            w = (np.arange(1, m) / m)[:, None]
-            loads[g + 1 : j] = (1.0 - w) * loads[g] + w * loads[j]
-            forces[g + 1 : j] = (1.0 - w[:, 0]) * forces[g] + w[:, 0] * forces[j]
 
 
 def _drag(runner: Runner, forces, vx, cmd) -> None:
@@ -291,35 +264,3 @@ def _held_steps(xs, qpos, pose, probe, reduced, skin, state, limits, total, out,
         if z0 + z < -max_depth or not (np.isfinite(z) and abs(z) < 0.05):
             return CHECK, k, M, S, updates, rebuilds, rowsum
     return 0, xs.shape[0], M, S, updates, rebuilds, rowsum
-
-
-def sample_means(loads: np.ndarray, forces: np.ndarray, n: int, n_sub: int):
-    """Each of ``n`` samples the trapezoid mean of its ``n_sub`` steps of ``loads`` (S, N)
-    and ``forces`` (S,) (``S = n n_sub + 1``: the last step closes the last sample), as
-    :class:`~.sampling.SampleAverager` forms it step by step: ``(loads (n, N), forces (n,))``,
-    equal to it bit for bit."""
-    out_l = np.empty((n, loads.shape[1]))
-    out_f = np.empty(n)
-    _trapezoid(np.ascontiguousarray(loads), np.ascontiguousarray(forces), n_sub, out_l, out_f)
-    return out_l, out_f
-
-
-@njit
-def _trapezoid(loads, forces, n_sub, out_l, out_f):
-    """:func:`sample_means`: the sums in the averager's order (each sample's steps in turn,
-    from zero), then ``(sum + (end - start) / 2) / n_sub``."""
-    n, m = out_l.shape
-    acc = np.empty(m)
-    for s in range(n):
-        a = s * n_sub
-        b = a + n_sub
-        for t in range(m):
-            acc[t] = 0.0
-        fsum = 0.0
-        for i in range(a, b):
-            for t in range(m):
-                acc[t] += loads[i, t]
-            fsum += forces[i]
-        for t in range(m):
-            out_l[s, t] = (acc[t] + 0.5 * (loads[b, t] - loads[a, t])) / n_sub
-        out_f[s] = (fsum + 0.5 * (forces[b] - forces[a])) / n_sub

@@ -26,6 +26,7 @@ from ..plan.fidelity import MAX_OMEGA_DT, Fidelity
 from ..plan.options import StepOptions  # noqa: F401  (its old home, for one release)
 from ..skin.models import SkinModel
 from .held import HeldStep
+from .sampling import mujoco_warnings
 
 #: Velocity of the friction regularisation [m/s]: Coulomb drag mu*N*tanh(v / V_STICK).
 V_STICK = 1e-3
@@ -262,11 +263,7 @@ class Runner:
 
     def check_warnings(self) -> None:
         """Raise if MuJoCo warned while stepping or colliding (the run is not trustworthy)."""
-        d = self.d_dyn
-        bad = []
-        if d.warning.number.any():
-            bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
-        bad += self.collider.warnings()
+        bad = mujoco_warnings(self.d_dyn) + self.collider.warnings()
         if bad:
             raise PhysicsError(
                 f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"

@@ -11,6 +11,7 @@ import mujoco
 import numpy as np
 
 from ... import __version__
+from ..._jit import njit
 from ...records import Recording
 from ..plan.fidelity import Fidelity
 
@@ -66,6 +67,69 @@ class SampleAverager:
     def _close(self, s: int, now: np.ndarray, f_end: float) -> None:
         self.loads[s] = (self._prev_sum + 0.5 * (now - self._prev_first)) / self.n_sub
         self.forces[s] = (self._f_prev_sum + 0.5 * (f_end - self._f_prev_first)) / self.n_sub
+
+
+def sample_means(loads: np.ndarray, forces: np.ndarray, n: int, n_sub: int):
+    """Each of ``n`` samples the trapezoid mean of its ``n_sub`` steps of ``loads`` (S, N)
+    and ``forces`` (S,) (``S = n n_sub + 1``: the last step closes the last sample), as
+    :class:`SampleAverager` forms it step by step: ``(loads (n, N), forces (n,))``, equal to
+    it bit for bit, in one compiled call."""
+    out_l = np.empty((n, loads.shape[1]))
+    out_f = np.empty(n)
+    _trapezoid(np.ascontiguousarray(loads), np.ascontiguousarray(forces), n_sub, out_l, out_f)
+    return out_l, out_f
+
+
+@njit
+def _trapezoid(loads, forces, n_sub, out_l, out_f):
+    """:func:`sample_means`: the sums in the averager's order (each sample's steps in turn,
+    from zero), then ``(sum + (end - start) / 2) / n_sub``."""
+    n, m = out_l.shape
+    acc = np.empty(m)
+    for s in range(n):
+        a = s * n_sub
+        b = a + n_sub
+        for t in range(m):
+            acc[t] = 0.0
+        fsum = 0.0
+        for i in range(a, b):
+            for t in range(m):
+                acc[t] += loads[i, t]
+            fsum += forces[i]
+        for t in range(m):
+            out_l[s, t] = (acc[t] + 0.5 * (loads[b, t] - loads[a, t])) / n_sub
+        out_f[s] = (fsum + 0.5 * (forces[b] - forces[a])) / n_sub
+
+
+def sample_x(x_after: np.ndarray, cmd: np.ndarray, n: int, n_sub: int, rate_hz: float):
+    """The pad's x at each of ``n`` samples' centres from its x after each step and each
+    step's speed command (half a sample back from the sample's last step)."""
+    last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
+    return x_after[last] - 0.5 * cmd[last] / rate_hz
+
+
+def solved_steps(total: int, every: int) -> np.ndarray:
+    """The steps of ``total`` at which a slide solved at every ``every``-th step solves:
+    the first, every ``every``-th, and the last."""
+    return np.append(np.arange(0, total - 1, every, dtype=np.int64), total - 1)
+
+
+def fill_between(loads: np.ndarray, forces: np.ndarray, solved: np.ndarray) -> None:
+    """The steps between two solved ones on the line between them (in the step's index:
+    the pad's travel, which the arm's servo keeps even)."""
+    for g, j in zip(solved[:-1].tolist(), solved[1:].tolist(), strict=True):
+        m = j - g
+        if m > 1:
+            w = (np.arange(1, m) / m)[:, None]
+            loads[g + 1 : j] = (1.0 - w) * loads[g] + w * loads[j]
+            forces[g + 1 : j] = (1.0 - w[:, 0]) * forces[g] + w[:, 0] * forces[j]
+
+
+def mujoco_warnings(d) -> list[str]:
+    """The names of the warnings MuJoCo raised while stepping the state ``d``."""
+    if not d.warning.number.any():
+        return []
+    return [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
 
 
 def sensor_output(loads: np.ndarray, sensor, rate_hz: float, seed: int, ideal: bool):

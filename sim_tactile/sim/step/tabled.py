@@ -8,7 +8,7 @@ from the table (:meth:`~.phase_table.PhaseTable.at`) instead of a collision quer
 contact solve. A step outside it (the approach onto the texture and the exit, on a slide
 that starts on flat ground) is the per-step held step, started from the table's height for
 its pose. Each sample is the trapezoid mean of its steps, as the per-step slide averages
-them (:func:`~.held_run.sample_means`, as :class:`~.sampling.SampleAverager` does).
+them (:func:`~.sampling.sample_means`, as :class:`~.sampling.SampleAverager` does).
 """
 
 from __future__ import annotations
@@ -32,10 +32,11 @@ from ..plan.span import span_fraction
 from .batched_held import batched_held
 from .build import dynamics_for, runner_for
 from .held import CompiledHeldStep
-from .held_run import glide, held_steps, sample_means
+from .held_run import glide, held_steps
 from .mirror import mirrored_loads
 from .phase_table import PhaseTable, tabulate
 from .runner import V_STICK, Runner
+from .sampling import mujoco_warnings, sample_means, sample_x
 from .shared_tables import Blend, kept_table
 from .strokes import Strokes
 
@@ -68,9 +69,8 @@ class Glide:
         mujoco.mj_step(self.m, d)
 
     def check_warnings(self) -> None:
-        d = self.d
-        if d.warning.number.any():
-            bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
+        bad = mujoco_warnings(self.d)
+        if bad:
             raise PhysicsError(
                 f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"
             )
@@ -112,10 +112,10 @@ def slide_tabled(
     n = window.n_samples
     total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
     if held is None:
-        path = glide(dyn.d, dyn.m, dyn.jx, dyn.jz, window, proto.speed_m_s, dt, total, n_sub)
-    else:
-        d, m = copy.copy(held.d_dyn), held._m_dyn
-        path = glide(d, m, held._jx, held._jz, window, proto.speed_m_s, dt, total, n_sub)
+        d, m, jx, jz = dyn.d, dyn.m, dyn.jx, dyn.jz
+    else:  # a copy: the runner's own state stays where the press left it
+        d, m, jx, jz = copy.copy(held.d_dyn), held._m_dyn, held._jx, held._jz
+    path = glide(d, m, jx, jz, window, proto.speed_m_s, dt, total, n_sub)
     if path is None:
         return _stepped(*args)
     plan = table.plan
@@ -193,8 +193,7 @@ def _stepped(table, dyn, window, proto, n_sub, dt, friction):
         drag_sum += held.drag_sum
         n_steps += held.n_slide_steps
     means, mean_forces = sample_means(loads, forces, n, n_sub)
-    last = np.arange(1, n + 1) * n_sub - 1  # each sample's last step
-    x_pad = x_after[last] - 0.5 * cmd[last] / proto.rate_hz
+    x_pad = sample_x(x_after, cmd, n, n_sub, proto.rate_hz)
     wall = time.perf_counter() - t0
     return (
         means,
