@@ -9,9 +9,10 @@ from collections.abc import Iterator
 from dataclasses import replace
 
 
-def add_arguments(ap: argparse.ArgumentParser, slides: str) -> None:
-    """The options that name a scene's slides (``slides``: the default indices)."""
-    ap.add_argument("--scene", required=True, help="a simulated task id")
+def add_arguments(ap: argparse.ArgumentParser, slides: str, scene: str | None = None) -> None:
+    """The options that name a scene's slides (``slides``: the default indices; ``scene``:
+    the default scene, else it must be named)."""
+    ap.add_argument("--scene", required=scene is None, default=scene, help="a simulated task id")
     ap.add_argument("--plates", default=None, help="comma-separated plate names (default: all)")
     ap.add_argument("--slides", default=slides, help="comma-separated slide indices per plate")
     ap.add_argument("--json", action="store_true")

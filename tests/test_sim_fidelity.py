@@ -168,3 +168,29 @@ def test_levels_and_bad_input():
     assert (l0.pitch_m, l0.dt_s) == (l1.pitch_m, l1.dt_s)
     with pytest.raises(ConfigError, match="fidelity = 'L3' is not valid; valid: auto, L0"):
         _auto("finger7/ridges-4", level="L3")
+
+
+@pytest.mark.parametrize(
+    "sensor, dt_s, warned",
+    [
+        ("pvdf2", None, True),  # 1 step a 1 ms sample: the vibration under-resolved
+        ("pvdf2", 1.25e-4, False),  # 8 steps a sample: resolved to a few percent
+        ("icub60", None, False),  # a capacitive sensor reports the load itself
+    ],
+)
+def test_a_piezoelectric_sensor_on_a_rough_plate_is_warned_of_its_step(sensor, dt_s, warned):
+    from sim_tactile.sim import Slide
+
+    slide = Slide(plate=get_plate("roughness8/ra-6.3"), sensor=sensor, seed=0, dt_s=dt_s)
+    got = [w for w in slide.resolved.warnings if "piezoelectric" in w]
+    assert bool(got) == warned
+    if warned:
+        assert slide.resolved.steps_per_sample == 1
+        assert "dt_s at most 0.000125 s" in got[0]  # the remedy, with its value
+
+
+def test_no_vibration_warning_on_a_plate_without_roughness():
+    from sim_tactile.sim import Slide
+
+    slide = Slide(plate=get_plate("finger7/ridges-4"), sensor="pvdf2", seed=0)
+    assert not [w for w in slide.resolved.warnings if "piezoelectric" in w]

@@ -31,6 +31,7 @@ from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
 from .solver import dense_is_dear, dense_step_is_dear
 from .span import span_pays, table_plan
+from .vibration import vibration_warning
 
 
 @dataclass(frozen=True)
@@ -126,8 +127,10 @@ class Slide:
     @cached_property
     def resolved(self) -> Fidelity:
         """The fidelity the slide runs at (:func:`~.fidelity.choose_fidelity` of its
-        ``fidelity``, ``pitch_m`` and ``dt_s`` for its drawn protocol)."""
-        return choose_fidelity(
+        ``fidelity``, ``pitch_m`` and ``dt_s`` for its drawn protocol), with the sensor's
+        own warning where its transducer asks more of the step
+        (:func:`~.vibration.vibration_warning`)."""
+        fid = choose_fidelity(
             self.plate,
             self.layout,
             self.pad,
@@ -136,6 +139,9 @@ class Slide:
             pitch_m=self.pitch_m,
             dt_s=self.dt_s,
         )
+        t = self.sensor_def.transducer
+        warn = vibration_warning(self.plate, t if isinstance(t, tuple) else (t,), fid)
+        return fid if warn is None else replace(fid, warnings=(*fid.warnings, warn))
 
     def table_plan(self) -> PhasePlan | None:
         """The phase plan where the slide's loads are read off a phase table, else None: the

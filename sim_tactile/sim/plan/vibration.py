@@ -1,0 +1,38 @@
+"""What a sensor's transducer asks of the time step beyond what the loads ask: a
+piezoelectric sensor on a rough plate (:func:`vibration_warning`)."""
+
+from __future__ import annotations
+
+from ...plates.define.spec import Plate
+from ...plates.define.surface import surface_of
+from ...sensors.transducers import Piezoelectric
+from .fidelity import Fidelity
+
+#: Steps a sample at which a piezoelectric sensor's output on a rough plate is resolved to
+#: a few percent. It reports the load's vibration (its high-pass reads a steady load as zero),
+#: and a sample is the mean of its steps' loads, which the pad's fine roughness moves from
+#: step to step: on roughness8's eight plates with pvdf2 (perf/bench_vibration.py, slides 0
+#: and 5), against 16 steps a sample, the output is 15-81% off at one step a sample, 7-54% at
+#: two, 3-15% at four and 1-8% at eight, while the raw loads are within 0.06-5.3% at one.
+VIBRATION_STEPS = 8
+
+
+def vibration_warning(plate: Plate, transducers, fid: Fidelity) -> str | None:
+    """The warning for a piezoelectric sensor (one of ``transducers``) on a rough plate at
+    fewer than :data:`VIBRATION_STEPS` steps a sample (``fid``), else None: its output, the
+    load's vibration, is then resolved to tens of percent only."""
+    if surface_of(plate).ra_m is None or fid.steps_per_sample >= VIBRATION_STEPS:
+        return None
+    if not any(isinstance(t, Piezoelectric) for t in transducers):
+        return None
+    n = fid.steps_per_sample
+    finer = fid.dt_s * n / VIBRATION_STEPS
+    return (
+        f"a piezoelectric sensor reports the load's vibration, and on this rough plate a sample "
+        f"of {n} step{'s' if n > 1 else ''} ({fid.dt_s * 1e3:.3g} ms) resolves it to tens of "
+        f"percent only (the loads themselves to a few); for a few percent: dt_s at most "
+        f"{finer:.3g} s ({VIBRATION_STEPS} steps a sample, about {VIBRATION_STEPS // n}x the time)"
+    )
+
+
+__all__ = ["VIBRATION_STEPS", "vibration_warning"]
