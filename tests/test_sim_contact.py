@@ -286,3 +286,39 @@ def test_block_updates_stay_the_inverse_while_ridges_slide_under_fine_nodes():
             np.testing.assert_allclose(p, fresh, rtol=0, atol=SOLVER_RTOL * fresh.max())
     assert changes > 50  # the update paths ran
     assert worst < 1e-8
+
+
+def test_the_drift_checks_running_sums_follow_the_set():
+    """The drift check reads ``C_SS v`` (v: ones, and each node's sign) from sums the block
+    updates keep by node; while the set grows, shrinks and is rebuilt, they stay the sums a
+    fresh pass over C gives, to rounding, and every set's inverse passes the check."""
+    from sim_tactile.sim.skin.contact import ActiveSet
+    from sim_tactile.sim.skin.contact.kernels import DRIFT_TOL
+
+    xs = (np.arange(40) - 19.5) * 0.25e-3
+    ys = (np.arange(6) - 2.5) * 1e-3
+    X, Y = np.meshgrid(xs, ys)
+    xy = np.column_stack([X.ravel(), Y.ravel()])
+    C = compliance_matrix(xy, 0.25e-3, 0.4e6, pitch_y_m=1e-3)
+    solver = ActiveSet(C, refresh=30)
+    sign = np.where(np.arange(C.shape[0]) % 2 == 0, 1.0, -1.0)
+    total = 0.5 / (0.25e-3 * 1e-3)
+    sizes, changes, last = set(), 0, None
+    for k in range(80):
+        phase = np.mod(xy[:, 0] + k * 0.1e-3, 3e-3)
+        pen = np.where(phase < 1.2e-3, 5e-5 * (1 - (xy[:, 1] / 4e-3) ** 2), -1e-3)
+        solver.solve_force(pen, total)
+        S = solver.S
+        sizes.add(S.size)
+        changes += last is not None and set(S) != last
+        last = set(S)
+        if not S.size:
+            continue
+        CSS = C[np.ix_(S, S)]
+        want = np.column_stack([CSS.sum(axis=1), CSS @ sign[S]])
+        np.testing.assert_allclose(
+            solver.sums[S], want, rtol=1e-10, atol=1e-12 * np.abs(want).max()
+        )
+        resid = np.abs(solver.M @ want - np.column_stack([np.ones(S.size), sign[S]])).max()
+        assert resid <= 2 * DRIFT_TOL
+    assert len(sizes) > 5 and changes > 40 and solver.rebuilds > 1  # the paths ran

@@ -229,7 +229,7 @@ class CompiledHeldStep:
         M, S, in_set, C, rowsum = s.same_set_state()
         K = s.K if s.K is not None else NO_K
         skin = (self.winkler_k, C, K, s.floor, s.symmetric)
-        state = (M, S, in_set, rowsum, s.updates, s.refresh)
+        state = (M, S, in_set, s.sums, rowsum, s.updates, s.refresh)
         return self.probes.probe, self._reduced, skin, state, self._limits
 
     def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
@@ -310,7 +310,8 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     - ``skin``: ``(winkler_k, C, K, floor, sym)``: the Winkler stiffness (> 0 for L0), else
       the reduced compliance, its inverse, the depth above which a node can touch and
       whether the compliance is symmetric;
-    - ``state``: ``(M, S, in_set, rowsum, updates, refresh)``: the contact set's state;
+    - ``state``: ``(M, S, in_set, cu, rowsum, updates, refresh)``: the contact set's state
+      (``cu``: the drift check's running sums, updated in place);
     - ``limits``: ``(tol_rel, max_iter, n_collisions, qs_margin)``;
     - ``out``: ``(pen, f, W, area, taxel_out)``: the depths and pressures it writes, and the
       taxel readout.
@@ -321,7 +322,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     bone0, qpos, jx, jz = pose
     small, group, mult = reduced
     winkler_k, C, K, floor, sym = skin
-    M, S, in_set, rowsum, updates, refresh = state
+    M, S, in_set, cu, rowsum, updates, refresh = state
     tol_rel, max_iter, n_collisions, qs_margin = limits
     pen, f, W, area, taxel_out = out
     n = pen.shape[0]
@@ -362,6 +363,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
                 False,
                 floor,
                 sym,
+                cu,
             )
             rebuilds += rb
             rowsum = M @ np.ones(S.size)  # M 1 for the new M (BLAS, as _force_loop forms it)

@@ -236,7 +236,7 @@ def _held_steps(xs, qpos, pose, probe, reduced, skin, state, limits, total, out,
     S, updates, rebuilds, rowsum)``: status 0 done, else the kernel's status (or
     :data:`CHECK`) at the ``k``-th position."""
     bone0, jx, jz = pose
-    M, S, in_set, rowsum, updates, refresh = state
+    M, S, in_set, cu, rowsum, updates, refresh = state
     pen, f, W, area = out
     max_pen, z0, max_depth = bounds
     loads, forces, tops, zs, steps = rec
@@ -249,7 +249,7 @@ def _held_steps(xs, qpos, pose, probe, reduced, skin, state, limits, total, out,
             probe,
             reduced,
             skin,
-            (M, S, in_set, rowsum, updates, refresh),
+            (M, S, in_set, cu, rowsum, updates, refresh),
             limits,
             total,
             (pen, f, W, area, loads[i]),

@@ -56,6 +56,9 @@ class ActiveSet:
         self.updates = 0
         self.rebuilds = 0
         self._in = np.zeros(C.shape[0], bool)
+        #: the drift check's running sums ``C_SS v`` by node (:func:`~.kernels.set_sums`),
+        #: kept in step with S by the kernels
+        self._cu = np.zeros((C.shape[0], 2))
         self._rowsum, self._rowsum_of = np.zeros(0), None
 
     # -- the contact problem
@@ -82,6 +85,7 @@ class ActiveSet:
             p,
             self.floor,
             self.symmetric,
+            self._cu,
         )
         self._take(M, S, updates, rebuilds)
         if status:
@@ -133,6 +137,7 @@ class ActiveSet:
             False,  # the same-set case was tried above
             self.floor,
             self.symmetric,
+            self._cu,
         )
         self._take(M, S, updates, rebuilds)
         if status == 1:
@@ -150,6 +155,12 @@ class ActiveSet:
         if self._rowsum_of is not self.M:
             self._rowsum, self._rowsum_of = self.M.sum(axis=1), self.M
         return self.M, self.S, self._in, self.C, self._rowsum
+
+    @property
+    def sums(self) -> np.ndarray:
+        """The drift check's running sums (``cu`` of :func:`~.kernels.solve_loop`), which a
+        compiled step that solves this problem updates in place."""
+        return self._cu
 
     def adopt(self, M, S, updates: int, rebuilds: int, rowsum) -> None:
         """Take the state a compiled step computed on this problem: the inverse ``M`` on the

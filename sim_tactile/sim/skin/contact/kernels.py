@@ -59,42 +59,86 @@ def take(X, rows, cols):
     return out
 
 
-#: Largest residual |M C_SS v - v| (v: ones, and alternating signs) that a block-updated
-#: inverse may carry before it is rebuilt from C. The updates can amplify round-off
-#: geometrically: on finger7's ridges at 0.25 x 2 mm nodes it grew about 1.6x per update, to
-#: 5e-3 within the 100 updates of REFRESH (taxel loads 3% off, mirror taxels unequal); at
-#: 0.5 x 2 mm it stayed below 1e-12.
+#: Largest residual |M C_SS v - v| (v: ones, and each node's sign: + for even nodes, - for
+#: odd) that a block-updated inverse may carry before it is rebuilt from C. The updates can
+#: amplify round-off geometrically: on finger7's ridges at 0.25 x 2 mm nodes it grew about
+#: 1.6x per update, to 5e-3 within the 100 updates of REFRESH (taxel loads 3% off, mirror
+#: taxels unequal); at 0.5 x 2 mm it stayed below 1e-12. Checked after every update.
 DRIFT_TOL = 1e-9
+#: The running sums of an :class:`~.active_set.ActiveSet` where none are kept (a caller that
+#: renumbers its set): the drift check then sums ``C_SS v`` afresh.
+NO_SUMS = np.zeros((0, 2))
 
 
 @njit
-def drifted(M, C, S, tol):
-    """Whether M is no longer inv(C[S, S]) to ``tol``: M C_SS v against v for v of ones and
-    of alternating signs (O(|S|^2), the cost of one update's products)."""
-    m = S.size
-    u = np.empty((m, 2))
-    for i in range(m):
+def _sign(node) -> float:
+    """The drift check's second vector at ``node``: + for even nodes, - for odd ones (a
+    node's own, whatever its place in the set, so that the sums follow the set's changes)."""
+    return 1.0 if node % 2 == 0 else -1.0
+
+
+@njit
+def set_sums(C, S, cu):
+    """``cu[j] = ((C_SS 1)_j, (C_SS s)_j)`` for every node j of S, afresh (s: :func:`_sign`)."""
+    _sums(C, S, S, cu, 0.0)
+
+
+@njit
+def _sums(C, rows, cols, cu, sign):
+    """The running sums of the nodes ``rows`` over the columns ``cols`` (T): set to
+    ``((C_jT 1), (C_jT s))`` afresh (``sign`` 0), or moved by those columns joining (1) or
+    leaving (-1) the set, O(|rows| |cols|)."""
+    for i in range(rows.size):
+        row = rows[i]
         a = 0.0
         b = 0.0
-        for j in range(m):
-            c = C[S[i], S[j]]
+        for k in range(cols.size):
+            c = C[row, cols[k]]
             a += c
-            b += c if j % 2 == 0 else -c
-        u[i, 0] = a
-        u[i, 1] = b
+            b += _sign(cols[k]) * c
+        if sign == 0.0:
+            cu[row, 0] = a
+            cu[row, 1] = b
+        else:
+            cu[row, 0] += sign * a
+            cu[row, 1] += sign * b
+
+
+@njit
+def drifted(M, C, S, cu, tol):
+    """Whether M is no longer inv(C[S, S]) to ``tol``: M C_SS v against v for v of ones and
+    of the nodes' signs, ``C_SS v`` read from the running sums ``cu`` where they are kept
+    (O(|S|^2): one product with M), else summed afresh."""
+    m = S.size
+    u = np.empty((m, 2))
+    if cu.shape[0] == 0:
+        own = np.empty((C.shape[0], 2))
+        set_sums(C, S, own)
+        cu = own
+    for i in range(m):
+        u[i, 0] = cu[S[i], 0]
+        u[i, 1] = cu[S[i], 1]
     w = M @ u
     for i in range(m):
-        if abs(w[i, 0] - 1.0) > tol or abs(w[i, 1] - (1.0 if i % 2 == 0 else -1.0)) > tol:
+        if abs(w[i, 0] - 1.0) > tol or abs(w[i, 1] - _sign(S[i])) > tol:
             return True
     return False
 
 
 @njit
-def _checked(M, C, K, S, sym, updates, rebuilds):
+def _rebuilt(C, K, S, sym, cu):
+    """inv(C[S, S]) afresh (:func:`inverse_subset`), and the running sums with it."""
+    if cu.shape[0]:
+        set_sums(C, S, cu)
+    return inverse_subset(C, K, S, sym)
+
+
+@njit
+def _checked(M, C, K, S, sym, updates, rebuilds, cu):
     """After a block update: M rebuilt from C (S sorted) if it has drifted."""
-    if drifted(M, C, S, DRIFT_TOL):
+    if drifted(M, C, S, cu, DRIFT_TOL):
         S = np.sort(S)
-        return inverse_subset(C, K, S, sym), S, 0, rebuilds + 1
+        return _rebuilt(C, K, S, sym, cu), S, 0, rebuilds + 1
     return M, S, updates, rebuilds
 
 
@@ -123,7 +167,7 @@ def inverse_subset(C, K, S, sym=True):
 
 @njit
 def solve_loop(
-    M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor=0.0, sym=True
+    M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor=0.0, sym=True, cu=NO_SUMS
 ):
     """The active-set iteration of :meth:`ActiveSet.solve` from the current set: nodes that
     can no longer touch or carry tension leave, nodes left inside the plate join; the
@@ -131,8 +175,10 @@ def solve_loop(
     touch when its depth exceeds ``floor``: 0 where no load lifts the skin toward the plate
     (the half-space), -inf where one can (a layered skin), though the set starts from the
     nodes that overlap the plate. ``sym``: C is symmetric (the block updates use it); a
-    compliance that is not (friction coupled in) takes the general formulas. Returns
-    ``(converged, M, S, updates, rebuilds)`` and writes the pressures to ``p``."""
+    compliance that is not (friction coupled in) takes the general formulas. ``cu``: the
+    running sums of the drift check (:func:`set_sums`, kept in step with S; :data:`NO_SUMS`:
+    none kept). Returns ``(converged, M, S, updates, rebuilds)`` and writes the pressures to
+    ``p``."""
     n = pen.shape[0]
     rebuilds = 0
     for j in range(n):
@@ -166,7 +212,7 @@ def solve_loop(
             keep = ~drop
             if not keep.any() or updates >= refresh:
                 S = np.sort(S[keep])
-                M = inverse_subset(C, K, S, sym) if S.size else np.zeros((0, 0))
+                M = _rebuilt(C, K, S, sym, cu) if S.size else np.zeros((0, 0))
                 updates = 0
                 rebuilds += 1
                 in_set[:] = False
@@ -174,8 +220,10 @@ def solve_loop(
             else:
                 M = inverse_without(M, np.flatnonzero(keep), np.flatnonzero(drop), sym)
                 in_set[S[drop]] = False
+                if cu.shape[0]:
+                    _sums(C, S[keep], S[drop], cu, -1.0)
                 S = S[keep]
-                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds)
+                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds, cu)
             if S.size == 0 and it > 0:
                 return True, M, S, updates, rebuilds  # everything left: no load
             continue
@@ -200,16 +248,19 @@ def solve_loop(
         if A.size:  # nodes still inside the plate join the set
             if S.size == 0 or updates >= refresh:
                 S = np.sort(np.concatenate((S, A)))
-                M = inverse_subset(C, K, S, sym)
+                M = _rebuilt(C, K, S, sym, cu)
                 updates = 0
                 rebuilds += 1
                 in_set[:] = False
                 in_set[S] = True
             else:
                 M = inverse_with(M, C, S, A, sym)
+                if cu.shape[0]:
+                    _sums(C, S, A, cu, 1.0)  # the set's nodes gain A's columns
+                    _sums(C, A, np.concatenate((S, A)), cu, 0.0)  # and A's own, afresh
                 S = np.concatenate((S, A))
                 in_set[A] = True
-                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds)
+                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds, cu)
             continue
         for k in range(S.size):
             p[S[k]] = pS[k]
@@ -234,10 +285,11 @@ def force_loop(
     try_same=True,
     floor=0.0,
     sym=True,
+    cu=NO_SUMS,
 ):
-    """:meth:`ActiveSet.solve_force` in one call. Returns ``(status, dz, M, S, updates,
-    rebuilds)``: status 1 converged (pressures in ``p``), 0 not converged, 2 no node within
-    the margin."""
+    """:meth:`ActiveSet.solve_force` in one call (``cu``: as :func:`solve_loop` takes it).
+    Returns ``(status, dz, M, S, updates, rebuilds)``: status 1 converged (pressures in
+    ``p``), 0 not converged, 2 no node within the margin."""
     n = pen.shape[0]
     rebuilds = 0
     if try_same and S.size:  # the common case: the set holds at the shift it implies
@@ -274,7 +326,20 @@ def force_loop(
                 shifted[j] = pen[j] + dz
             if not (S.size and kkt_same_set(M, S, shifted, C, in_set, tol_rel, p, floor)):
                 ok, M, S, updates, rb = solve_loop(
-                    M, S, in_set, C, K, shifted, tol_rel, updates, refresh, max_iter, p, floor, sym
+                    M,
+                    S,
+                    in_set,
+                    C,
+                    K,
+                    shifted,
+                    tol_rel,
+                    updates,
+                    refresh,
+                    max_iter,
+                    p,
+                    floor,
+                    sym,
+                    cu,
                 )
                 rebuilds += rb
                 if not ok:
@@ -353,7 +418,26 @@ def inverse_without(M, keep, drop, sym=True):
     Mkk = take(M, keep, keep)
     Mrk = np.ascontiguousarray(Mkr.T) if sym else take(M, drop, keep)
     X = np.linalg.solve(Mrr, Mrk)
-    return Mkk - Mkr @ X
+    return _minus(Mkk, Mkr @ X)
+
+
+@njit
+def _minus(A, B):
+    """``A - B`` into ``A`` (a new array of its caller's), element by element as the
+    expression computes it, without a third array."""
+    for i in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            A[i, j] = A[i, j] - B[i, j]
+    return A
+
+
+@njit
+def _plus_into(out, A, B):
+    """``out[:m, :m] = A + B`` element by element (A, B: m x m), without the sum's own
+    array."""
+    for i in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            out[i, j] = A[i, j] + B[i, j]
 
 
 @njit
@@ -370,7 +454,7 @@ def inverse_with(M, C, S, A, sym=True):
     if sym:
         Zi = np.linalg.inv(D - np.ascontiguousarray(B.T) @ MB)
         G = MB @ Zi
-        out[:n, :n] = M + G @ np.ascontiguousarray(MB.T)
+        _plus_into(out, M, G @ np.ascontiguousarray(MB.T))
         out[:n, n:] = -G
         out[n:, :n] = -G.T
         out[n:, n:] = Zi
@@ -378,7 +462,7 @@ def inverse_with(M, C, S, A, sym=True):
     E = take(C, A, S) @ M  # C_AS M
     Zi = np.linalg.inv(D - E @ B)
     G = MB @ Zi
-    out[:n, :n] = M + G @ E
+    _plus_into(out, M, G @ E)
     out[:n, n:] = -G
     out[n:, :n] = -(Zi @ E)
     out[n:, n:] = Zi
