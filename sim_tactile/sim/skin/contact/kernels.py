@@ -415,20 +415,22 @@ def inverse_without(M, keep, drop, sym=True):
     (``sym``: M_RK taken as M_KR's transpose)."""
     Mkr = take(M, keep, drop)
     Mrr = take(M, drop, drop)
-    Mkk = take(M, keep, keep)
     Mrk = np.ascontiguousarray(Mkr.T) if sym else take(M, drop, keep)
     X = np.linalg.solve(Mrr, Mrk)
-    return _minus(Mkk, Mkr @ X)
+    return _take_minus(M, keep, Mkr @ X)
 
 
 @njit
-def _minus(A, B):
-    """``A - B`` into ``A`` (a new array of its caller's), element by element as the
-    expression computes it, without a third array."""
-    for i in range(A.shape[0]):
-        for j in range(A.shape[1]):
-            A[i, j] = A[i, j] - B[i, j]
-    return A
+def _take_minus(M, keep, P):
+    """``M[keep][:, keep] - P`` element by element as the expression computes it, in one
+    pass: the block is read where it lies, not gathered into an array of its own first."""
+    k = keep.size
+    out = np.empty((k, k))
+    for i in range(k):
+        row = keep[i]
+        for j in range(k):
+            out[i, j] = M[row, keep[j]] - P[i, j]
+    return out
 
 
 @njit
