@@ -114,15 +114,22 @@ def solved_steps(total: int, every: int) -> np.ndarray:
     return np.append(np.arange(0, total - 1, every, dtype=np.int64), total - 1)
 
 
+@njit
 def fill_between(loads: np.ndarray, forces: np.ndarray, solved: np.ndarray) -> None:
     """The steps between two solved ones on the line between them (in the step's index:
-    the pad's travel, which the arm's servo keeps even)."""
-    for g, j in zip(solved[:-1].tolist(), solved[1:].tolist(), strict=True):
+    the pad's travel, which the arm's servo keeps even): step ``g + k`` of a gap of ``m``
+    takes ``(1 - k/m) a + (k/m) b``, each product rounded on its own."""
+    n_t = loads.shape[1]
+    for q in range(solved.size - 1):
+        g = solved[q]
+        j = solved[q + 1]
         m = j - g
-        if m > 1:
-            w = (np.arange(1, m) / m)[:, None]
-            loads[g + 1 : j] = (1.0 - w) * loads[g] + w * loads[j]
-            forces[g + 1 : j] = (1.0 - w[:, 0]) * forces[g] + w[:, 0] * forces[j]
+        for k in range(1, m):
+            w = k / m
+            u = 1.0 - w
+            for t in range(n_t):
+                loads[g + k, t] = u * loads[g, t] + w * loads[j, t]
+            forces[g + k] = u * forces[g] + w * forces[j]
 
 
 def mujoco_warnings(d) -> list[str]:
