@@ -2,7 +2,7 @@
 reports, against the same slide at finer steps.
 
     python perf/bench_vibration.py [--scene roughness8-v1] [--plates P,...] [--slides 0]
-        [--dts 1,0.5,0.25,0.125,0.0625] [--json]
+        [--dts 1,0.5,0.25,0.125,0.0625] [--paths] [--json]
 
 For each plate (all of the scene's, sorted, or ``--plates``) and slide (``--slides``: its
 index among the plate's slides of the full task, seed 0), the slide's ideal taxel loads are
@@ -13,6 +13,10 @@ length and, for each step, the relative L2 of that output against the finest ste
 the raw loads, in percent. The loads agree to a fraction of a percent at every step; the
 vibration, which is all a piezoelectric film reports, converges only once the pad advances
 less than about a correlation length a step.
+
+``--paths`` compares instead, at the slide's own step, the fast paths against the per-step
+solve: ``solve_every = 2`` and the table along the slide (``path = phase-table``, which
+``auto`` takes for a set of many slides a plate), their output and their raw loads.
 """
 
 from __future__ import annotations
@@ -36,7 +40,10 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_arguments(ap, slides="0", scene="roughness8-v1")
     ap.add_argument("--dts", default="1,0.5,0.25,0.125,0.0625", help="time steps [ms]")
+    ap.add_argument("--paths", action="store_true", help="the fast paths at the slide's step")
     args = ap.parse_args()
+    if args.paths:
+        return paths(args)
 
     from sim_tactile.cache import ArtefactCache
     from sim_tactile.sim import StepOptions, run
@@ -81,6 +88,41 @@ def main() -> int:
                     for dt, v in row["steps"].items()
                 )
                 print(f"{plate} slide {k} ({speed:.3f} m/s): {cells}", flush=True)
+    if args.json:
+        json.dump(rows, sys.stdout, indent=1)
+    return 0
+
+
+def _output(run, slide, opts, cache):
+    """The slide's ideal loads with ``opts`` and its sensor's output of them, noise-free."""
+    sensor = slide.sensor_def
+    x = run(replace(slide, options=opts), cache).recording.data.astype(float)
+    return x, sensor.transducer.apply(x, sensor.rate_hz)
+
+
+def paths(args) -> int:
+    """``--paths``: each fast path's output and raw loads against the per-step solve's."""
+    from sim_tactile.cache import ArtefactCache
+    from sim_tactile.sim import StepOptions, run
+
+    ways = {"every 2nd step": StepOptions(solve_every=2), "table": StepOptions(path="phase-table")}
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        cache = ArtefactCache(tmp)
+        for plate, k, slide in task_slides(args):
+            ref_x, ref_y = _output(run, slide, StepOptions(path="per-step"), cache)
+            row = {"plate": plate, "slide": k}
+            for name, opts in ways.items():
+                x, y = _output(run, slide, opts, cache)
+                row[name] = {"output_pct": rel(y, ref_y), "loads_pct": rel(x, ref_x)}
+            rows.append(row)
+            if not args.json:
+                cells = "; ".join(
+                    f"{name}: output {row[name]['output_pct']:.1f}%, loads "
+                    f"{row[name]['loads_pct']:.2f}%"
+                    for name in ways
+                )
+                print(f"{plate} slide {k}: {cells}", flush=True)
     if args.json:
         json.dump(rows, sys.stdout, indent=1)
     return 0
