@@ -210,9 +210,11 @@ def test_auto_takes_a_profiles_table_where_the_set_has_slides_enough_to_pay_for_
     """``auto`` takes a rough profile's table where the slides of its plate in the set
     (``plate_slides``) take more solves step by step than its tables' estimated positions at
     every force level they read; a slide alone stays per step. The description records the
-    path, so the two are two cache entries."""
+    path, so the two are two cache entries. (The BioTac's impedance reports the load; a
+    piezoelectric sensor, which reports its vibration, is solved at every step:
+    tests/test_sim_auto_path.py.)"""
     protocol = Protocol(force_jitter=0.25)
-    alone = Slide(get_plate("roughness8/ra-50"), "pvdf2", protocol)
+    alone = Slide(get_plate("roughness8/ra-50"), "biotac19", protocol)
     assert alone.table_plan() is None and "path" not in alone.describe()
     many = replace(alone, plate_slides=60)
     plan = many.table_plan()

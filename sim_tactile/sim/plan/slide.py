@@ -31,7 +31,7 @@ from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
 from .solver import dense_is_dear, dense_step_is_dear
 from .span import span_pays, table_plan
-from .vibration import vibration_warning
+from .vibration import reports_vibration, vibration_warning
 
 
 @dataclass(frozen=True)
@@ -139,9 +139,14 @@ class Slide:
             pitch_m=self.pitch_m,
             dt_s=self.dt_s,
         )
-        t = self.sensor_def.transducer
-        warn = vibration_warning(self.plate, t if isinstance(t, tuple) else (t,), fid)
+        warn = vibration_warning(self.plate, self._transducers, fid)
         return fid if warn is None else replace(fid, warnings=(*fid.warnings, warn))
+
+    @property
+    def _transducers(self) -> tuple:
+        """The sensor's transducers (one, or one a layer)."""
+        t = self.sensor_def.transducer
+        return t if isinstance(t, tuple) else (t,)
 
     def table_plan(self) -> PhasePlan | None:
         """The phase plan where the slide's loads are read off a phase table, else None: the
@@ -170,13 +175,18 @@ class Slide:
         at every step instead (the same problem, within 0.005% of the dense solve); where
         it is held on a dense skin solved as a full problem (:func:`~.solver.dense_step_is_dear`),
         at every :data:`~.options.AUTO_SOLVE_EVERY`-th step;
-        ``per-step`` is the reference, the knobs as given. The resolved options say which
-        (``path`` ``phase-table`` or ``per-step``). The probe rig has its own slide."""
+        ``per-step`` is the reference, the knobs as given. A sensor that reports the load's
+        vibration (:func:`~.vibration.reports_vibration`) is solved at every step under
+        ``auto``: the fast paths' errors were measured on the loads, and they smooth the
+        vibration between their points. The resolved options say which (``path``
+        ``phase-table`` or ``per-step``). The probe rig has its own slide."""
         opts = self.options
         # auto chooses only where no knob of the numbers was set by hand (the device says
         # where the batched solves run, not what they give)
         default = replace(opts, device="cpu") == StepOptions()
         if self.rig is not None or (opts.path == "auto" and not default):
+            return None, replace(opts, path="per-step")
+        if opts.path == "auto" and reports_vibration(self._transducers):
             return None, replace(opts, path="per-step")
         proto = self.drawn()
         auto = opts.path == "auto"

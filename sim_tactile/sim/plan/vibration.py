@@ -1,5 +1,6 @@
-"""What a sensor's transducer asks of the time step beyond what the loads ask: a
-piezoelectric sensor on a rough plate (:func:`vibration_warning`)."""
+"""What a sensor that reports the load's vibration asks beyond what the loads ask: its own
+time step on a rough plate (:func:`vibration_warning`), and the per-step solve
+(:func:`reports_vibration`: ``auto``'s fast paths were measured on the loads)."""
 
 from __future__ import annotations
 
@@ -17,13 +18,24 @@ from .fidelity import Fidelity
 VIBRATION_STEPS = 8
 
 
+def reports_vibration(transducers) -> bool:
+    """Whether a sensor with these transducers reports the load's vibration (one is
+    piezoelectric: its high-pass reads a steady load as zero). ``auto`` then solves such a
+    slide at every step (:attr:`~.slide.Slide.route`): its tables and its solves at every
+    n-th step smooth the vibration between their points, which their measured errors on the
+    loads do not show (``pvdf2`` on roughness8's plates, perf/bench_vibration.py --paths
+    --slides 0,5: every 2nd step moved the output by 2.4-62% and the table along the slide by
+    0.7-77%, the loads by under 1% both)."""
+    return any(isinstance(t, Piezoelectric) for t in transducers)
+
+
 def vibration_warning(plate: Plate, transducers, fid: Fidelity) -> str | None:
     """The warning for a piezoelectric sensor (one of ``transducers``) on a rough plate at
     fewer than :data:`VIBRATION_STEPS` steps a sample (``fid``), else None: its output, the
     load's vibration, is then resolved to tens of percent only."""
     if surface_of(plate).ra_m is None or fid.steps_per_sample >= VIBRATION_STEPS:
         return None
-    if not any(isinstance(t, Piezoelectric) for t in transducers):
+    if not reports_vibration(transducers):
         return None
     n = fid.steps_per_sample
     finer = fid.dt_s * n / VIBRATION_STEPS
@@ -35,4 +47,4 @@ def vibration_warning(plate: Plate, transducers, fid: Fidelity) -> str | None:
     )
 
 
-__all__ = ["VIBRATION_STEPS", "vibration_warning"]
+__all__ = ["VIBRATION_STEPS", "reports_vibration", "vibration_warning"]
