@@ -100,6 +100,21 @@ def test_a_sets_slides_know_the_full_runs_slides_a_plate():
     ]
 
 
+def test_a_sets_time_step_reaches_its_slides_and_its_description():
+    """``SlideSet(dt_s=...)`` steps every slide at most that long (a piezoelectric sensor's
+    vibration asks for it); the set's description and each slide's key record it, so
+    nothing stepped otherwise is served for it; out of range, the error names it."""
+    base = SlideSet(TWO, "grid3x3", Protocol(), 4, 2)
+    fine = replace(base, dt_s=1.25e-4)
+    jobs = fine.jobs(0)
+    assert {j.dt_s for j in jobs} == {1.25e-4}
+    assert all(j.resolved.dt_s <= 1.25e-4 for j in jobs)
+    assert fine.describe()["dt_s"] == 1.25e-4 and "dt_s" not in base.describe()
+    assert jobs[0].key() != base.jobs(0)[0].key()
+    with pytest.raises(ConfigError, match=r"dt_s = 0\.1 s is out of range"):
+        replace(base, dt_s=0.1)
+
+
 def test_slides_are_cached_and_reproducible(cache):
     """Two slides of two plates: a second call reads the cache and gives identical data; the
     window is the crossing time at the nominal speed, so every slide has one length."""

@@ -75,6 +75,9 @@ class SlideSet:
     calibration: a sensor calibration (``sim-tactile calibrate``) applied to the sensor.
     pitch_m: the skin's node pitch [m] along the slide, fixed for every slide (None: the
         fidelity's choice; the level's pitch across the slide follows it as in ``simulate``).
+    dt_s: the time step [s] of every slide, at most this (None: the fidelity's choice; a
+        piezoelectric sensor on a rough plate resolves its vibration at about 8 steps a
+        sample: :mod:`~sim_tactile.sim.plan.vibration`).
     options: how every slide is computed (:class:`~sim_tactile.sim.plan.options.StepOptions`:
         ``solve_every``, ``solve_tol``, ``path``, ...; the defaults: the fast paths whose
         measured error is within target).
@@ -97,12 +100,15 @@ class SlideSet:
     calibration: Calibration | None = None
     rig: ProbeRig | None = None
     pitch_m: float | None = None
+    dt_s: float | None = None
     options: StepOptions = field(default_factory=StepOptions)
     sensor_spec: Sensor | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if self.pitch_m is not None:
             v.in_range("pitch_m", self.pitch_m, 20e-6, 5e-3, unit="m")
+        if self.dt_s is not None:
+            v.in_range("dt_s", self.dt_s, 1e-6, 1e-2, unit="s")
         if self.rig is not None and self.protocol.duration_s is None:
             raise ConfigError("a slide set on the probe rig needs protocol.duration_s (its window)")
         if len(self.plates) < 2:
@@ -195,6 +201,8 @@ class SlideSet:
             d["rig"] = self.rig.to_json()
         if self.pitch_m is not None:
             d["pitch_m"] = self.pitch_m
+        if self.dt_s is not None:
+            d["dt_s"] = self.dt_s
         return {**d, **keyed(self.options)}
 
     def setup(self, quick: bool) -> dict:
@@ -237,6 +245,7 @@ class SlideSet:
                         self.ideal,
                         self.finger,
                         pitch_m=self.pitch_m,
+                        dt_s=self.dt_s,
                         rig=self.rig,
                         options=self.options,
                         label=f"{name} slide {k}",
