@@ -425,3 +425,35 @@ def test_a_plates_collider_is_built_as_before(cache):
     assert col.items.size > 0
     for a, b in zip((col.start, col.items, col.cell_top), want, strict=True):
         assert np.array_equal(a, b)
+
+
+def test_scenes_placed_from_one_kept_model_share_its_collider(cache):
+    """Two slides of one plate at different offsets and starts: their scenes are placed
+    copies of one kept model, so their colliders share what the model gives (the plate's
+    geoms, the nodes in the bone's frame) and each binds its own pose; each reads the
+    depths a collider made afresh from its own scene reads."""
+    from sim_tactile.sim import Slide
+    from sim_tactile.sim.step.build import scene_for
+
+    plate = get_plate("finger7/bumps-4x4")
+    a = Slide(plate, "grid3x3", Protocol(offset_y_m=0.0), 0)
+    b = replace(a, protocol=Protocol(offset_y_m=0.7e-3, speed_m_s=0.05))
+    scenes = []
+    for s in (a, b):
+        proto = s.drawn()
+        scenes.append(scene_for(s, proto, s.resolved, s.window.x_start_m + 1e-3, cache)[0])
+    sa, sb = scenes
+    assert sa.model_key and sa.model_key == sb.model_key
+    ca, cb = PrimitiveCollider.from_scene(sa), PrimitiveCollider.from_scene(sb)
+    assert ca.local is cb.local and ca.pos is cb.pos  # shared, read only
+    assert not np.array_equal(ca.bone0, cb.bone0)  # each at its own start
+    for sc, c in ((sa, ca), (sb, cb)):
+        bone = sc.m_col.body("bone").id
+        fresh = PrimitiveCollider.from_model(sc.m_col, sc.node_of_geom, bone, plate)
+        fresh.bind(sc.m_col.body_pos[bone], sc.jx, sc.jz)
+        qpos = np.zeros(sc.m_col.nq)
+        qpos[sc.jz] = -0.4e-3  # pressed into the bumps
+        got, want = np.empty(len(c.radius)), np.empty(len(c.radius))
+        assert c.depths_at(qpos, got) == fresh.depths_at(qpos, want)
+        np.testing.assert_array_equal(got, want)
+        assert np.isfinite(got).any()

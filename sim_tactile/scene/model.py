@@ -64,6 +64,9 @@ class Scene:
     W: np.ndarray  # (M, N) taxel weights of node loads
     jx: int  # dof index of slide_x
     jz: int  # dof index of press_z
+    #: the content key of the kept models this scene's are placed copies of (:data:`SCENES`):
+    #: what does not move with the placement is the same for every scene of that key
+    model_key: str = ""
 
     @property
     def n_nodes(self) -> int:
@@ -123,7 +126,7 @@ register_memo("compiled scene models", SCENES.clear)
 
 
 def _models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:
-    """``(m_col, m_dyn, node_of_geom, jx, jz)`` of the scene with the bone at the origin
+    """``(m_col, m_dyn, node_of_geom, jx, jz, key)`` of the scene with the bone at the origin
     and MuJoCo's default time step, kept in :data:`SCENES` under the content key of
     everything they depend on: the plate's MJCF artefact (its parameters and the code that
     writes it), the pad, the node grid, the damping, the margin and this module's source;
@@ -155,7 +158,7 @@ def _models(plate, finger, grid, z_damping, node_margin_m, cache) -> tuple:
     SCENES[key] = kept
     while len(SCENES) > SCENES_KEPT:
         SCENES.popitem(last=False)
-    return kept
+    return (*kept, key)
 
 
 #: The cache's file kinds of a scene's two compiled models (:func:`_models`): MuJoCo's
@@ -291,12 +294,12 @@ def build_scene(
     process (:data:`SCENES`, by content) and each slide takes copies, placed at its own start
     and time step: what a slide sets after compiling (the bone's position, the time step) is
     what the compiler would have copied in (the same models, bit for bit, tested)."""
-    m_col, m_dyn, node_of_geom, jx, jz = _models(
+    m_col, m_dyn, node_of_geom, jx, jz, key = _models(
         plate, finger, grid, z_damping, node_margin_m, cache
     )
     m_col, m_dyn = _placed(m_col, dt_s, x0_m, y0_m, z0_m), _placed(m_dyn, dt_s, x0_m, y0_m, z0_m)
     W = taxel_weights(grid, layout, finger, slide_dir, cache)
-    return Scene(plate, finger, grid, layout, m_col, m_dyn, node_of_geom, W, int(jx), int(jz))
+    return Scene(plate, finger, grid, layout, m_col, m_dyn, node_of_geom, W, int(jx), int(jz), key)
 
 
 def dynamics_model(
@@ -315,7 +318,7 @@ def dynamics_model(
     """``(m_dyn, jx, jz)``: the dynamics model of :func:`build_scene`'s scene (the same
     model, bit for bit) without the collision model and the taxels' weights: all a slide
     read wholly off its phase table steps."""
-    _, m_dyn, _, jx, jz = _models(plate, finger, grid, z_damping, node_margin_m, cache)
+    _, m_dyn, _, jx, jz, _ = _models(plate, finger, grid, z_damping, node_margin_m, cache)
     return _placed(m_dyn, dt_s, x0_m, y0_m, z0_m), int(jx), int(jz)
 
 

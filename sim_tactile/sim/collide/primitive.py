@@ -18,13 +18,16 @@ approximate one (measured 4.5e-7 m off; ours equals a brute-force distance).
 
 from __future__ import annotations
 
+import copy
 import math
+from collections import OrderedDict
 from typing import NamedTuple
 
 import mujoco
 import numpy as np
 
 from ..._jit import njit
+from ...cache import register_memo
 from ...plates import surface_of
 from .height import report_depth
 from .shapes import cylinder_distance, ridge_distance
@@ -81,6 +84,14 @@ def grid_buckets(lo, hi, tops, origin, cell: float, shape):
     cell_top = np.full(n0 * n1, -np.inf)
     np.maximum.at(cell_top, cells, np.asarray(tops, dtype=np.float64)[geom])
     return start, geom[order].astype(np.int64), cell_top
+
+
+#: The unbound colliders of the kept scene models, by their content key
+#: (:data:`~sim_tactile.scene.model.SCENES`): None where a model's plate is not primitive.
+KEPT: OrderedDict[str, PrimitiveCollider | None] = OrderedDict()
+#: Most colliders :data:`KEPT` holds (the kept scene models' number).
+KEPT_MAX = 8
+register_memo("primitive colliders of kept scene models", KEPT.clear)
 
 
 class PrimitiveCollider:
@@ -201,12 +212,26 @@ class PrimitiveCollider:
     @classmethod
     def from_scene(cls, scene) -> PrimitiveCollider | None:
         """:meth:`from_model` for a scene's plate and skin, bound to its finger's joints so
-        that :meth:`depths_at` reads the bone's pose from ``qpos``."""
+        that :meth:`depths_at` reads the bone's pose from ``qpos``. What :meth:`from_model`
+        reads does not move with the scene's placement (the plate is static, the nodes sit
+        in the bone's frame), so the scenes placed from one kept model (``scene.model_key``)
+        share it (:data:`KEPT`), each binding a copy of its own."""
         m = scene.m_col
         bone = m.body("bone").id
-        c = cls.from_model(m, scene.node_of_geom, bone, scene.plate)
-        if c is not None:
-            c.bind(m.body_pos[bone], scene.jx, scene.jz)
+        key = getattr(scene, "model_key", "")
+        if key and key in KEPT:
+            KEPT.move_to_end(key)
+            kept = KEPT[key]
+        else:
+            kept = cls.from_model(m, scene.node_of_geom, bone, scene.plate)
+            if key:
+                KEPT[key] = kept
+                while len(KEPT) > KEPT_MAX:
+                    KEPT.popitem(last=False)
+        if kept is None:
+            return None
+        c = copy.copy(kept)  # its arrays are read only; bind sets the copy's own pose
+        c.bind(m.body_pos[bone], scene.jx, scene.jz)
         return c
 
     def bind(self, bone0: np.ndarray, jx: int, jz: int) -> None:
