@@ -56,7 +56,7 @@ from ...plates.define.surface import surface_of
 from ..plan.lattices import PAD_SHAPE_CODES, check_anchorable, period_lines, row_lines
 from .clipped import rect_entry
 from .contact import MAX_ITER, REFRESH, TOL_REL
-from .contact.kernels import NO_K, force_loop, force_same_set
+from .contact.kernels import NO_K, NO_SUMS, force_loop, force_same_set
 
 
 @njit
@@ -315,6 +315,7 @@ class AnchoredLattice:
                 False,
                 0.0,
                 False,
+                NO_SUMS,  # the set is renumbered as the window moves: no running sums
             )
             if st == 2:
                 raise PhysicsError("no cell of the anchored lattice lies over the plate")

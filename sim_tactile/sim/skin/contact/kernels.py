@@ -166,9 +166,7 @@ def inverse_subset(C, K, S, sym=True):
 
 
 @njit
-def solve_loop(
-    M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor=0.0, sym=True, cu=NO_SUMS
-):
+def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor, sym, cu):
     """The active-set iteration of :meth:`ActiveSet.solve` from the current set: nodes that
     can no longer touch or carry tension leave, nodes left inside the plate join; the
     inverse ``M`` follows by block updates, rebuilt every ``refresh`` updates. A node can
@@ -177,7 +175,8 @@ def solve_loop(
     nodes that overlap the plate. ``sym``: C is symmetric (the block updates use it); a
     compliance that is not (friction coupled in) takes the general formulas. ``cu``: the
     running sums of the drift check (:func:`set_sums`, kept in step with S; :data:`NO_SUMS`:
-    none kept). Returns ``(converged, M, S, updates, rebuilds)`` and writes the pressures to
+    none kept; passed, not defaulted: numba keeps no compiled kernel whose omitted argument
+    defaults to an array, and would compile it again in every process). Returns ``(converged, M, S, updates, rebuilds)`` and writes the pressures to
     ``p``."""
     n = pen.shape[0]
     rebuilds = 0
@@ -282,10 +281,10 @@ def force_loop(
     refresh,
     max_iter,
     p,
-    try_same=True,
-    floor=0.0,
-    sym=True,
-    cu=NO_SUMS,
+    try_same,
+    floor,
+    sym,
+    cu,
 ):
     """:meth:`ActiveSet.solve_force` in one call (``cu``: as :func:`solve_loop` takes it).
     Returns ``(status, dz, M, S, updates, rebuilds)``: status 1 converged (pressures in
