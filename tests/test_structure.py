@@ -147,3 +147,36 @@ def test_every_package_is_installed():
     }
     assert found - listed == set()
     assert "sim_tactile.assets" in listed and (ROOT.parent / "assets" / "__init__.py").is_file()
+
+
+def _array_defaults(source: str) -> list[str]:
+    """``name: default`` of each compiled kernel (``@njit``) whose argument defaults to
+    anything but a literal."""
+    out = []
+    for n in ast.walk(ast.parse(source)):
+        if not isinstance(n, ast.FunctionDef):
+            continue
+        names = [d.func if isinstance(d, ast.Call) else d for d in n.decorator_list]
+        if not any(getattr(d, "id", getattr(d, "attr", None)) == "njit" for d in names):
+            continue
+        for d in n.args.defaults + [k for k in n.args.kw_defaults if k is not None]:
+            if not isinstance(d, ast.Constant):
+                out.append(f"{n.name}: {ast.unparse(d)}")
+    return out
+
+
+def test_no_kernel_defaults_an_argument_to_an_array():
+    """numba keeps no compiled kernel called with an omitted argument whose default is an
+    array: it compiles that kernel, and every kernel that calls it, again in each process
+    (the plate-anchored lattice paid 4 s a run so). Kernels take such arguments explicitly."""
+    found = {
+        str(p.relative_to(ROOT)): bad
+        for p in sorted(ROOT.rglob("*.py"))
+        if (bad := _array_defaults(p.read_text()))
+    }
+    assert found == {}
+
+
+def test_the_kernel_default_check_finds_one():
+    src = "NO = None\n@njit\ndef f(a, b=NO, c=0.0):\n    return a\n"
+    assert _array_defaults(src) == ["f: NO"]
