@@ -31,8 +31,8 @@ from ..._jit import njit
 from ...errors import PhysicsError
 from ..plan.protocol import SPEED_RAMP_S
 from .held import CompiledHeldStep, _held_kernel
-from .runner import V_STICK, Runner
-from .sampling import fill_between, mujoco_warnings, sample_means, sample_x, solved_steps
+from .runner import V_STICK, Runner, coast
+from .sampling import check_mujoco, fill_between, sample_means, sample_x, solved_steps
 from .strokes import Strokes
 
 #: Kernel status: a step's load or depth needs the runner's own checks (which raise).
@@ -91,7 +91,7 @@ def glide(d, m, jx, jz, window, speed_m_s, dt, total: int, n_sub: int) -> Path |
     The steps up to the first at which a stroke turns or stops run in MuJoCo's own loop
     (:func:`_rolled`: their commands are the first stroke's ramp, known ahead); the rest one
     by one, each command read off the pad's position."""
-    qpos, qvel, qfrc, ctrl = d.qpos, d.qvel, d.qfrc_applied, d.ctrl
+    qpos, qvel, qfrc = d.qpos, d.qvel, d.qfrc_applied
     z = float(qpos[jz])
     strokes = Strokes(window, speed_m_s, dt)
     x0 = window.x_start_m
@@ -109,14 +109,10 @@ def glide(d, m, jx, jz, window, speed_m_s, dt, total: int, n_sub: int) -> Path |
         x = float(qpos[jx])
         v = strokes.command(x0 + x)
         x_joint[i], vx[i], cmd[i] = x, float(qvel[jx]), v
-        qvel[jz] = 0.0
-        qfrc[jz] = 0.0
-        qfrc[jx] = 0.0
-        ctrl[0] = v
-        mujoco.mj_step(m, d)
+        coast(m, d, jx, jz, v)
         x_after[i] = x0 + float(qpos[jx])
         if i % n_sub == n_sub - 1:
-            _check(d)
+            check_mujoco(d)
     if float(qpos[jz]) != z or float(qvel[jz]) != 0.0:
         return None
     return Path(x_joint, vx, cmd, x_after, strokes)
@@ -161,20 +157,13 @@ def _rolled(d, m, jx, jz, strokes: Strokes, out, x0: float) -> int:
     k = int(np.argmax(turn)) if turn.any() else total
     cmd[:k] = v[:k]
     x_after[:k] = x0 + qpos[:k, jx]
-    _check(d)
+    check_mujoco(d)
     if k < total:  # back to the state after step k - 1, for the step-by-step loop
         mujoco.mj_setState(m, d, states[k - 1] if k else state0, _STATE)
     strokes.t = strokes.t_stroke = float(t[k])
     if k:
         strokes.v = float(v[k - 1])
     return k
-
-
-def _check(d) -> None:
-    """Raise where MuJoCo warned while stepping ``d`` (the run is not trustworthy)."""
-    bad = mujoco_warnings(d)
-    if bad:
-        raise PhysicsError(f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy")
 
 
 def held_steps(runner: Runner, path: Path, steps: np.ndarray, force_n: float, loads, forces):

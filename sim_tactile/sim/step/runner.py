@@ -26,7 +26,7 @@ from ..plan.fidelity import MAX_OMEGA_DT, Fidelity
 from ..plan.options import StepOptions  # noqa: F401  (its old home, for one release)
 from ..skin.models import SkinModel
 from .held import HeldStep
-from .sampling import mujoco_warnings
+from .sampling import check_mujoco
 
 #: Velocity of the friction regularisation [m/s]: Coulomb drag mu*N*tanh(v / V_STICK).
 V_STICK = 1e-3
@@ -59,6 +59,18 @@ def drag_warning(speed_m_s: float) -> str | None:
 
 #: Steps between checks of the dynamic coupling's omega * dt.
 _STIFFNESS_CHECK_STEPS = 50
+
+
+def coast(m, d, jx: int, jz: int, slide_v: float) -> None:
+    """One step of the finger's dynamics ``m`` on the state ``d`` without a skin solve, under
+    quasi-static force control: the press joint ``jz`` keeps its height (no speed, no force
+    on it) while MuJoCo slides the slide joint ``jx`` at ``slide_v`` (:meth:`Runner.coast`,
+    a table's :class:`~.tabled.Glide`, :func:`~.held_run.glide`)."""
+    d.qvel[jz] = 0.0
+    d.qfrc_applied[jz] = 0.0
+    d.qfrc_applied[jx] = 0.0
+    d.ctrl[0] = slide_v
+    mujoco.mj_step(m, d)
 
 
 class Runner:
@@ -196,11 +208,7 @@ class Runner:
         """One step of the finger's dynamics without a skin solve, under quasi-static force
         control: the bone keeps its height (the held step set it) while MuJoCo slides it at
         ``slide_v``; the skin's answer for this step is read elsewhere (``solve_every``)."""
-        self._qvel[self._jz] = 0.0
-        self._qfrc[self._jz] = 0.0
-        self._qfrc[self._jx] = 0.0
-        self._ctrl[0] = slide_v
-        mujoco.mj_step(self._m_dyn, self.d_dyn)
+        coast(self._m_dyn, self.d_dyn, self._jx, self._jz, slide_v)
 
     def _after_skin(self, Fs: float, top: float, force_cmd: float, slide_v: float) -> float:
         """Check the skin's load and depth; returns the friction drag on the bone [N]. The
@@ -263,8 +271,4 @@ class Runner:
 
     def check_warnings(self) -> None:
         """Raise if MuJoCo warned while stepping or colliding (the run is not trustworthy)."""
-        bad = mujoco_warnings(self.d_dyn) + self.collider.warnings()
-        if bad:
-            raise PhysicsError(
-                f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"
-            )
+        check_mujoco(self.d_dyn, self.collider.warnings())

@@ -12,6 +12,7 @@ import numpy as np
 
 from ... import __version__
 from ..._jit import njit
+from ...errors import PhysicsError
 from ...records import Recording
 from ..plan.fidelity import Fidelity
 
@@ -132,11 +133,14 @@ def fill_between(loads: np.ndarray, forces: np.ndarray, solved: np.ndarray) -> N
             forces[g + k] = u * forces[g] + w * forces[j]
 
 
-def mujoco_warnings(d) -> list[str]:
-    """The names of the warnings MuJoCo raised while stepping the state ``d``."""
-    if not d.warning.number.any():
-        return []
-    return [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number]
+def check_mujoco(d, also: list[str] | tuple = ()) -> None:
+    """Raise where MuJoCo warned while stepping the state ``d`` (or ``also`` names other
+    warnings: a collider's): the run is not trustworthy."""
+    bad = list(also)
+    if d.warning.number.any():
+        bad = [mujoco.mjtWarning(i).name for i, w in enumerate(d.warning) if w.number] + bad
+    if bad:
+        raise PhysicsError(f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy")
 
 
 def sensor_output(loads: np.ndarray, sensor, rate_hz: float, seed: int, ideal: bool):

@@ -35,8 +35,8 @@ from .held import CompiledHeldStep
 from .held_run import glide, held_steps
 from .mirror import mirrored_loads
 from .phase_table import PhaseTable, tabulate
-from .runner import V_STICK, Runner
-from .sampling import mujoco_warnings, sample_means, sample_x
+from .runner import V_STICK, Runner, coast
+from .sampling import check_mujoco, sample_means, sample_x
 from .shared_tables import Blend, kept_table
 from .strokes import Strokes
 
@@ -61,19 +61,10 @@ class Glide:
         return float(self.d.qvel[self.jx])
 
     def coast(self, slide_v: float) -> None:
-        d = self.d
-        d.qvel[self.jz] = 0.0
-        d.qfrc_applied[self.jz] = 0.0
-        d.qfrc_applied[self.jx] = 0.0
-        d.ctrl[0] = slide_v
-        mujoco.mj_step(self.m, d)
+        coast(self.m, self.d, self.jx, self.jz, slide_v)
 
     def check_warnings(self) -> None:
-        bad = mujoco_warnings(self.d)
-        if bad:
-            raise PhysicsError(
-                f"MuJoCo warning(s) {', '.join(bad)}: the simulation is not trustworthy"
-            )
+        check_mujoco(self.d)
 
 
 def slide_tabled(
