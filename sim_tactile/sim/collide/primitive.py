@@ -218,7 +218,7 @@ class PrimitiveCollider:
         share it (:data:`KEPT`), each binding a copy of its own."""
         m = scene.m_col
         bone = m.body("bone").id
-        key = getattr(scene, "model_key", "")
+        key = scene.model_key
         if key and key in KEPT:
             KEPT.move_to_end(key)
             kept = KEPT[key]

@@ -254,10 +254,11 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
                 in_set[S] = True
             else:
                 M = inverse_with(M, C, S, A, sym)
+                T = np.concatenate((S, A))
                 if cu.shape[0]:
                     _sums(C, S, A, cu, 1.0)  # the set's nodes gain A's columns
-                    _sums(C, A, np.concatenate((S, A)), cu, 0.0)  # and A's own, afresh
-                S = np.concatenate((S, A))
+                    _sums(C, A, T, cu, 0.0)  # and A's own, afresh
+                S = T
                 in_set[A] = True
                 M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds, cu)
             continue
