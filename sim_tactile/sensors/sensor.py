@@ -66,20 +66,24 @@ class Sensor:
         return self.imperfections.apply(out, layout.positions, rate_hz, rng)
 
     @property
-    def units(self) -> str:
+    def transducers(self) -> tuple:
+        """The transducers: one per layer, one for every taxel, or none (a bare layout's ideal
+        loads)."""
         tr = self.transducer
         if tr is None:
-            return "N"
-        return (tr[0] if isinstance(tr, tuple) else tr).units
+            return ()
+        return tr if isinstance(tr, tuple) else (tr,)
+
+    @property
+    def units(self) -> str:
+        trs = self.transducers
+        return trs[0].units if trs else "N"
 
     def transducer_json(self) -> dict | str:
         """The transducer and imperfections as JSON data ("ideal" for a bare layout)."""
-        tr = self.transducer
-        if tr is None:
+        if self.transducer is None:
             return "ideal"
-        trs = [
-            asdict(t) | {"kind": type(t).__name__} for t in (tr if isinstance(tr, tuple) else (tr,))
-        ]
+        trs = [asdict(t) | {"kind": type(t).__name__} for t in self.transducers]
         imp = self.imperfections.to_json() if self.imperfections is not None else None
         return {"name": self.name, "transducer": trs, "imperfections": imp}
 

@@ -139,14 +139,8 @@ class Slide:
             pitch_m=self.pitch_m,
             dt_s=self.dt_s,
         )
-        warn = vibration_warning(self.plate, self._transducers, fid)
+        warn = vibration_warning(self.plate, self.sensor_def.transducers, fid)
         return fid if warn is None else replace(fid, warnings=(*fid.warnings, warn))
-
-    @property
-    def _transducers(self) -> tuple:
-        """The sensor's transducers (one, or one a layer)."""
-        t = self.sensor_def.transducer
-        return t if isinstance(t, tuple) else (t,)
 
     def table_plan(self) -> PhasePlan | None:
         """The phase plan where the slide's loads are read off a phase table, else None: the
@@ -184,9 +178,8 @@ class Slide:
         # auto chooses only where no knob of the numbers was set by hand (the device says
         # where the batched solves run, not what they give)
         default = replace(opts, device="cpu") == StepOptions()
-        if self.rig is not None or (opts.path == "auto" and not default):
-            return None, replace(opts, path="per-step")
-        if opts.path == "auto" and reports_vibration(self._transducers):
+        vibration = opts.path == "auto" and reports_vibration(self.sensor_def.transducers)
+        if self.rig is not None or vibration or (opts.path == "auto" and not default):
             return None, replace(opts, path="per-step")
         proto = self.drawn()
         auto = opts.path == "auto"
