@@ -53,16 +53,13 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         cache = ArtefactCache(tmp)
         for plate, k, slide in task_slides(args):
-            sensor = slide.sensor_def
             tex = slide.plate.params().get("texture") or {}
             corr = tex.get("corr_length_m")
             speed = slide.drawn().speed_m_s
             loads, outs = {}, {}
             for dt in dts:
-                s = replace(slide, dt_s=dt, options=StepOptions(path="per-step"))
-                x = run(s, cache).recording.data.astype(float)
-                loads[dt] = x
-                outs[dt] = sensor.transducer.apply(x, sensor.rate_hz)
+                step = StepOptions(path="per-step")
+                loads[dt], outs[dt] = _output(run, replace(slide, dt_s=dt), step, cache)
             ref = dts[-1]
             row = {
                 "plate": plate,
