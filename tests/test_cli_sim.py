@@ -27,12 +27,15 @@ def test_simulate_json_and_npz(cli, tmp_path):
             "--duration",
             "0.3",
             "--ideal",
+            "--dt",
+            "0.0005",
             "--out",
             str(out),
             "--json",
         ],
     )
     doc = json.loads(res.stdout)
+    assert doc["dt_s"] <= 0.0005  # the step forced
     assert {
         "out",
         "n_taxels",
@@ -97,6 +100,21 @@ def test_simulate_bad_sensor_is_one_line(cli, tmp_path):
     )
     assert res.returncode != 0 and res.stdout == ""
     assert len(res.stderr.strip().splitlines()) == 1 and "nope" in res.stderr
+
+
+@pytest.mark.parametrize(
+    ("flag", "value", "name"), [("--dt", "-1", "dt_s"), ("--node-pitch", "0.1", "pitch_m")]
+)
+def test_simulate_forced_step_or_pitch_out_of_range_is_one_line(cli, tmp_path, flag, value, name):
+    res = cli(
+        ["simulate", "--plate", "finger7/flat", flag, value, "--out", str(tmp_path / "x.npz")],
+        check=False,
+    )
+    assert res.returncode != 0 and not (tmp_path / "x.npz").exists()
+    line = res.stderr.strip()
+    assert (
+        len(line.splitlines()) == 1 and f"{name} = {float(value):g}" in line and "valid: [" in line
+    )
 
 
 @pytest.mark.slow

@@ -115,6 +115,47 @@ def test_a_sets_time_step_reaches_its_slides_and_its_description():
         replace(base, dt_s=0.1)
 
 
+def test_a_configuration_file_forces_the_step_and_the_node_pitch(tmp_path):
+    """``dt_s`` and ``pitch_m`` in a configuration file reach the set and its slides (what
+    the vibration and pitch warnings ask a ``generate`` user to set); a value out of range or
+    not a number is refused naming the file, the key, the value and the valid range."""
+    from sim_tactile.slides.config import config_slide_set, load_config
+
+    def set_of(extra: str):
+        path = tmp_path / "c.toml"
+        path.write_text(
+            f'plates = {list(TWO)!r}\nsensor = "grid3x3"\nslides_per_plate = 4\n{extra}'.replace(
+                "'", '"'
+            )
+        )
+        return config_slide_set(load_config(path), where=str(path), base_dir=tmp_path)[0]
+
+    ss = set_of("dt_s = 1.25e-4\npitch_m = 4e-4\n")
+    assert (ss.dt_s, ss.pitch_m) == (1.25e-4, 4e-4)
+    job = ss.jobs(0)[0]
+    assert job.resolved.dt_s <= 1.25e-4 and job.resolved.pitch_m == 4e-4
+    assert set_of("").jobs(0)[0].key() != job.key()
+    with pytest.raises(
+        ConfigError, match=r"c\.toml: dt_s = 0\.5 s is out of range; valid: \[1e-06, 0\.01\]"
+    ):
+        set_of("dt_s = 0.5\n")
+    with pytest.raises(ConfigError, match=r"c\.toml: pitch_m must be a number .*got 'fine'"):
+        set_of('pitch_m = "fine"\n')
+
+
+@pytest.mark.parametrize("dt_s", [-1.0, 0.0, 1.0, float("nan")])
+def test_a_slides_own_step_out_of_range_is_refused_naming_it(dt_s):
+    """``Slide(dt_s=...)`` (and so ``simulate``) checks the step it forces as a set does: a
+    negative, zero or too long step was taken silently (clamped to the sample period, or the
+    fidelity's own), and NaN failed deep inside the planner."""
+    from sim_tactile.sim import Slide
+
+    with pytest.raises(ConfigError, match=r"dt_s .* valid: \[1e-06, 0\.01\] s"):
+        Slide(get_plate(TWO[0]), "grid3x3", dt_s=dt_s)
+    with pytest.raises(ConfigError, match=r"pitch_m .* valid: \[2e-05, 0\.005\] m"):
+        Slide(get_plate(TWO[0]), "grid3x3", pitch_m=dt_s)
+
+
 def test_slides_are_cached_and_reproducible(cache):
     """Two slides of two plates: a second call reads the cache and gives identical data; the
     window is the crossing time at the nominal speed, so every slide has one length."""

@@ -42,6 +42,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         fidelity=args.fidelity,
         seed=args.seed,
         ideal=args.ideal,
+        pitch_m=args.node_pitch,
+        dt_s=args.dt,
         options=options_of(args),
     )
     for w in res.warnings:
@@ -225,6 +227,20 @@ def _add_simulate(sub) -> None:
         "--ideal",
         action="store_true",
         help="Record the noise-free normal load on each taxel [N] instead of the sensor's output.",
+    )
+    sm.add_argument(
+        "--node-pitch",
+        type=float,
+        default=None,
+        help="The skin's node pitch along the slide [m], in [2e-05, 0.005] (default: the "
+        "fidelity's).",
+    )
+    sm.add_argument(
+        "--dt",
+        type=float,
+        default=None,
+        help="The time step [s], at most this, in [1e-06, 0.01] (default: the fidelity's; a "
+        "piezoelectric sensor on a rough plate needs about 8 steps a sample).",
     )
     add_knob_args(sm)
     sm.add_argument("--out", required=True, help="The recording to write (.npz).")

@@ -20,6 +20,11 @@
                                  # its error per task scene: the manual's results)
     # solve_tol = 1e-4           # optional: the spectral contact solve's tolerance, in
                                  # [1e-12, 1e-3] (absent: 1e-10, the reference)
+    # pitch_m = 0.25e-3          # optional: the skin's node pitch along the slide, in
+                                 # [2e-5, 5e-3] m (absent: the fidelity's)
+    # dt_s = 1.25e-4             # optional: every slide's time step at most this, in
+                                 # [1e-6, 1e-2] s (absent: the fidelity's; a piezoelectric
+                                 # sensor on a rough plate needs about 8 steps a sample)
 
     [protocol]                   # sim.protocol.Protocol: speed_m_s, force_n, duration_s,
     speed_m_s = 0.06             # rate_hz, press_s, settle_s, passes, return_stroke,
@@ -61,7 +66,7 @@ from ..plates.parts.user import is_user_plate, parse_ref
 from ..sensors import Finger, check_pad, get_sensor, sensor_names
 from ..sensors.files import load_sensor_file
 from ..sim.plan.fidelity import FIDELITIES
-from ..sim.plan.options import KNOBS, StepOptions
+from ..sim.plan.options import DT_RANGE_S, KNOBS, PITCH_RANGE_M, StepOptions
 from ..sim.plan.protocol import Protocol
 from ..sim.plan.rig import ProbeRig
 from ..toml_text import check_text_size
@@ -88,6 +93,8 @@ TOP_KEYS = {
     "ideal": "true or false",
     # the public knobs of how a slide is computed, as sim.plan.options declares them
     **{k.name: k.valid() for k in KNOBS if k.public},
+    "pitch_m": "the node pitch along the slide, a number in [{:g}, {:g}] m".format(*PITCH_RANGE_M),
+    "dt_s": "every slide's time step at most this, a number in [{:g}, {:g}] s".format(*DT_RANGE_S),
     "protocol": "table",
     "randomise": "table",
     "finger": "table",
@@ -202,9 +209,21 @@ def _slide_set(cfg: dict, base_dir: Path | None) -> tuple[SlideSet, int, str]:
         finger=finger,
         rig=rig,
         sensor_spec=spec,
+        pitch_m=_number(cfg, "pitch_m"),
+        dt_s=_number(cfg, "dt_s"),
         options=StepOptions.from_table({k.name: cfg[k.name] for k in KNOBS if k.name in cfg}),
     )
     return ss, seed, name
+
+
+def _number(cfg: dict, key: str) -> float | None:
+    """The number ``cfg[key]`` (None where absent); its range is the slide set's to check."""
+    if key not in cfg:
+        return None
+    x = cfg[key]
+    if isinstance(x, bool) or not isinstance(x, int | float):
+        raise ConfigError(f"{key} must be a number ({TOP_KEYS[key]}), got {x!r}")
+    return float(x)
 
 
 def _beside(value: str, base_dir: Path | None) -> Path:

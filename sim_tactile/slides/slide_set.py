@@ -25,7 +25,7 @@ from ..plates.parts.user import is_user_plate, parse_ref
 from ..records import TactileDataset
 from ..sensors import Finger, Sensor, get_sensor, sensor_names
 from ..sensors.calibration import Calibration, calibrated
-from ..sim.plan.options import StepOptions, keyed
+from ..sim.plan.options import StepOptions, check_forced, keyed
 from ..sim.plan.protocol import Protocol, SlideWindow
 from ..sim.plan.rig import ProbeRig
 from .jobs import SlideJob
@@ -105,10 +105,7 @@ class SlideSet:
     sensor_spec: Sensor | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
-        if self.pitch_m is not None:
-            v.in_range("pitch_m", self.pitch_m, 20e-6, 5e-3, unit="m")
-        if self.dt_s is not None:
-            v.in_range("dt_s", self.dt_s, 1e-6, 1e-2, unit="s")
+        check_forced(self.pitch_m, self.dt_s)
         if self.rig is not None and self.protocol.duration_s is None:
             raise ConfigError("a slide set on the probe rig needs protocol.duration_s (its window)")
         if len(self.plates) < 2:

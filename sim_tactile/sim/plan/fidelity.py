@@ -377,11 +377,11 @@ def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale):
 def _raised(wanted: float, pitch: float, level: str) -> str:
     """The warning for a node pitch that the level's node cap raised above what the
     features asked for (``wanted``) to ``pitch`` [m]."""
+    own = "a node pitch of your own (a data set's pitch_m, simulate --node-pitch, Python's pitch_m"
     finer = (
-        "a node pitch of your own (pitch_m in Python; slower)"
+        f"{own}; slower)"
         if level == "L2"
-        else "fidelity L2 (half this pitch, about 4x the nodes and 8x the time) or a node "
-        "pitch of your own (pitch_m in Python)"
+        else f"fidelity L2 (half this pitch, about 4x the nodes and 8x the time) or {own})"
     )
     return (
         f"node pitch raised from {wanted * 1e3:.3g} to {pitch * 1e3:.3g} mm to keep the skin "
@@ -423,7 +423,7 @@ def _texture_warnings(plate: Plate, layout, scale: float | None, pitch: float) -
         warnings.append(
             f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
             f"({pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes; a node "
-            f"pitch of at most {scale / 2 * 1e3:.3g} mm resolves it (pitch_m in Python; slower)"
+            f"pitch of at most {scale / 2 * 1e3:.3g} mm resolves it (pitch_m; slower)"
         )
     surf = surface_of(plate)
     if surf.ra_m is not None:

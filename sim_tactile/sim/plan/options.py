@@ -27,6 +27,21 @@ MAX_SOLVE_EVERY = 64
 #: The range a spectral contact solve's tolerance may be set in (``StepOptions.solve_tol``;
 #: its default, the reference, is :data:`~sim_tactile.sim.skin.contact.spectral.TOL`).
 SOLVE_TOL_RANGE = (1e-12, 1e-3)
+#: The node pitch [m] and the time step [s] a slide may force (``pitch_m``, ``dt_s`` of a
+#: slide, a set or a configuration file; :func:`check_forced`).
+PITCH_RANGE_M = (20e-6, 5e-3)
+DT_RANGE_S = (1e-6, 1e-2)
+
+
+def check_forced(pitch_m: float | None, dt_s: float | None) -> None:
+    """Refuse a forced node pitch or time step (None: not forced) outside its range
+    (:data:`PITCH_RANGE_M`, :data:`DT_RANGE_S`), naming it."""
+    if pitch_m is not None:
+        v.in_range("pitch_m", pitch_m, *PITCH_RANGE_M, unit="m")
+    if dt_s is not None:
+        v.in_range("dt_s", dt_s, *DT_RANGE_S, unit="s")
+
+
 #: What ``path = auto`` takes where a slide is solved step by step with a spectral skin (the
 #: dear solve: tens of FFT products a step) and its knobs are at their defaults: the
 #: spectral solve to this tolerance, whose loads agree with the reference's to better than

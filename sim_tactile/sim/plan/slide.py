@@ -25,7 +25,7 @@ from ...plates.define.spec import Plate
 from ...plates.define.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
 from .fidelity import Fidelity, choose_fidelity, solved_spectrally
-from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, keyed
+from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, check_forced, keyed
 from .phase import PhasePlan, depths_by_column, table_pays, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
@@ -74,6 +74,7 @@ class Slide:
 
     def __post_init__(self) -> None:
         v.integer("plate_slides", self.plate_slides, 1, None)
+        check_forced(self.pitch_m, self.dt_s)
 
     # ------------------------------------------------------------------ resolved once
     @cached_property

@@ -43,8 +43,8 @@ def vibration_warning(plate: Plate, transducers, fid: Fidelity) -> str | None:
         f"a piezoelectric sensor reports the load's vibration, and on this rough plate a sample "
         f"of {n} step{'s' if n > 1 else ''} of {fid.dt_s * 1e3:.3g} ms resolves it to tens of "
         f"percent only (the loads themselves to a few); for a few percent: dt_s at most "
-        f"{finer:.3g} s in Python (simulate, Slide or SlideSet: {VIBRATION_STEPS} steps a "
-        f"sample, {VIBRATION_STEPS // n}x the steps)"
+        f"{finer:.3g} s ({VIBRATION_STEPS} steps a sample, {VIBRATION_STEPS // n}x the steps: "
+        "a data set's dt_s, simulate --dt, or dt_s in Python)"
     )
 
 

@@ -264,9 +264,20 @@ class CompiledHeldStep:
         )
 
 
-def _mirror_of(c: PrimitiveCollider) -> np.ndarray | None:
+def _mirror_of(c: PrimitiveCollider | SurfaceCollider) -> np.ndarray | None:
     """Each node's mirror image across y = 0 (same x, z, radius, margin; y negated,
-    bit-exact), or None if some node has none."""
+    bit-exact), or None if some node has none: :func:`_mirror_pairs`, kept in this process
+    under the nodes' content key (every slide of a scene pairs the same nodes)."""
+    parts = {"nodes": array_digest(c.local, c.radius, c.margin)}
+    compute = lambda: _mirror_pairs(c)  # noqa: E731
+    found, mirror = setup_memo("mirror pairs of skin nodes", parts, compute, (__name__,))
+    return mirror if found else None
+
+
+def _mirror_pairs(c: PrimitiveCollider | SurfaceCollider) -> tuple[bool, np.ndarray]:
+    """``(found, mirror)``: each node's mirror image (see :func:`_mirror_of`), or found
+    False (and an empty array) if some node has none."""
+    none = (False, np.empty(0, dtype=np.int64))
     key = {
         (x, y, z, r, m): i
         for i, ((x, y, z), r, m) in enumerate(
@@ -274,14 +285,14 @@ def _mirror_of(c: PrimitiveCollider) -> np.ndarray | None:
         )
     }
     if len(key) != len(c.radius):
-        return None
+        return none
     out = np.empty(len(key), dtype=np.int64)
     for (x, y, z, r, m), i in key.items():
         j = key.get((x, -y, z, r, m))  # -0.0 == 0.0: the centre line maps to itself
         if j is None:
-            return None
+            return none
         out[i] = j
-    return out
+    return True, out
 
 
 def _mirror_symmetric(C: np.ndarray, mirror: np.ndarray) -> bool:
