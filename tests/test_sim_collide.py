@@ -209,6 +209,38 @@ def test_the_ridge_and_cylinder_distances_against_brute_force():
     assert cylinder_distance(0.0, 0.0, -h + 0.05e-3, r, h, False) == pytest.approx(-0.05e-3)
 
 
+def test_the_profile_collider_reads_a_run_of_one_x_once_bit_for_bit():
+    """The held step's probes come in runs of one x (columns): the compiled loop reads the
+    profile once a run and keeps the surface's own numpy height bit for bit, at nodes inside
+    the textured area, on the base beside it and off the plate (NaN), and at x = 0 and -0."""
+    plate = get_plate("roughness8/ra-50")
+    half_w = plate.width_m / 2
+    rng = np.random.default_rng(5)
+    xs = np.concatenate([rng.uniform(-6e-3, 6e-3, 10), [0.0, -0.0]])
+    n = 600
+    local = np.column_stack(
+        [
+            np.sort(rng.choice(xs, n)),
+            rng.uniform(-1.3 * half_w, 1.3 * half_w, n),  # across the area's and plate's edges
+            rng.uniform(0.0, 1e-4, n),
+        ]
+    )
+    c = SurfaceCollider(local, np.full(n, 1e-4), np.full(n, 1e-4), surface_of(plate))
+    c.bind([0.0, 0.0, 0.0], 0, 1)
+    kinds = {"near": 0, "far": 0, "off": 0}
+    for _ in range(60):
+        q = np.array([rng.uniform(-0.6, 0.6) * plate.length_m, rng.uniform(-2e-4, 6e-4)])
+        got, want = np.empty(n), np.empty(n)
+        assert c.depths_at(q, got) == c.depths_numpy(q, want)
+        assert got.tobytes() == want.tobytes()
+        centre = c.bone0 + [q[0], 0.0, q[1]] + c.local
+        h = surface_of(plate).height(centre[:, 0], centre[:, 1])
+        kinds["near"] += int(np.isfinite(got).sum())
+        kinds["far"] += int((np.isfinite(h) & ~np.isfinite(got)).sum())
+        kinds["off"] += int(np.isnan(h).sum())
+    assert min(kinds.values()) > 500, kinds
+
+
 @pytest.mark.parametrize("plate", ["roughness8/ra-50", "textures20/rough-ra100"])
 def test_the_profile_collider_reads_the_height_map_at_each_node(plate, cache):
     """Each node's depth is the plate's height at its centre (height_at) less its lowest

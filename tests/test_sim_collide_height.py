@@ -151,25 +151,29 @@ def test_the_compiled_height_is_height_at_bit_for_bit(make):
     assert np.isnan(got[~inside]).sum() > 1000
 
 
-def _bound(plate: Plate, n=400, seed=0) -> SurfaceCollider:
-    """A collider on ``n`` random probes bound to the joints ``qpos = (x, z)``."""
+def _bound(plate: Plate, n=400, seed=0, columns=False) -> SurfaceCollider:
+    """A collider on ``n`` random probes bound to the joints ``qpos = (x, z)``; with
+    ``columns``, in runs of one x (12 of them, in order), as the held step's probes come."""
     rng = np.random.default_rng(seed)
-    local = np.column_stack(
-        [rng.uniform(-5 * MM, 5 * MM, n), rng.uniform(-4 * MM, 4 * MM, n), rng.uniform(0, 1e-4, n)]
-    )
+    x = rng.uniform(-5 * MM, 5 * MM, n)
+    if columns:
+        x = np.sort(rng.choice(x[:12], n))
+    local = np.column_stack([x, rng.uniform(-4 * MM, 4 * MM, n), rng.uniform(0, 1e-4, n)])
     r, m = rng.uniform(0.05, 0.2, n) * MM, rng.uniform(0.0, 0.5, n) * MM
     c = SurfaceCollider(local, r, m, surface_of(plate))
     c.bind([0.0, rng.uniform(-1 * MM, 1 * MM), 0.0], 0, 1)
     return c
 
 
+@pytest.mark.parametrize("columns", [False, True], ids=["scattered", "columns"])
 @pytest.mark.parametrize("make", [_rough, _wide, _grating], ids=["rough", "wide", "grating"])
-def test_the_compiled_loop_is_its_numpy_reference_and_height_at(make):
+def test_the_compiled_loop_is_its_numpy_reference_and_height_at(make, columns):
     """The depths bit for bit three ways (the compiled loop, its numpy reference, height_at
     less each probe's lowest point), within each probe's margin, at poses on, off and past
-    the plate; the kernel of the held step and a subset of the probes alike."""
+    the plate; the kernel of the held step and a subset of the probes alike. In columns, the
+    loop reads a rough plate's profile once a run of one x."""
     plate = make()
-    c = _bound(plate)
+    c = _bound(plate, columns=columns)
     n = len(c.radius)
     rng = np.random.default_rng(3)
     sub = rng.permutation(n)[: n // 3]

@@ -13,7 +13,8 @@ its centre, in one compiled loop (:func:`surface_depths`) over the surface's arr
   on its base. MuJoCo's height-field collider had served it: several contacts a node, at
   most 50 a pair.
 
-Each point's height (:func:`surface_at`) is the surface's own numpy height
+Each point's height (:func:`surface_in_row`, a rough plate's profile read once for each x a run
+of nodes shares: :func:`surface_row`) is the surface's own numpy height
 (:meth:`~sim_tactile.plates.define.surface.Surface.height`) bit for bit (tested): the one compiled
 copy of it. :mod:`~sim_tactile.sim.collide.choose` chooses the collider.
 """
@@ -152,19 +153,6 @@ def interp_at(q, xp, fp, left, right):
 
 
 @njit
-def profile_surface_at(x, y, px, pz, ax, ay, sx, sy):
-    """A rough plate's surface height at (x, y), as
-    :meth:`ProfileSurface.height <sim_tactile.plates.define.surface.Surface.height>` gives it: the
-    profile (:func:`interp_at`) over the textured area ``|x| <= ax, |y| <= ay``, the base (0)
-    elsewhere on the plate, NaN beyond ``sx, sy``."""
-    if abs(x) > sx or abs(y) > sy:
-        return np.nan
-    if abs(x) <= ax and abs(y) <= ay:
-        return interp_at(x, px, pz, pz[0], pz[pz.size - 1])
-    return 0.0
-
-
-@njit
 def map_height_at(x, y, z, pixel):
     """:func:`~sim_tactile.plates.define.surface.map_height` at one point, in its operation order
     (the same number bit for bit, tested): the cell by ``floor``, clipped to the map's edge
@@ -194,37 +182,79 @@ def map_surface_at(x, y, z, pixel, ax, ay, sx, sy):
     return 0.0
 
 
-def surface_at(x, y, s):
-    """The height at (x, y) of the surface whose arrays are ``s`` (compiled code only: its
-    implementation is chosen by the class of ``s``)."""
-    raise NotImplementedError("surface_at runs in compiled code only")
+def surface_row(x, s):
+    """What the height at x shares along y (compiled code only): a rough plate's profile
+    value at ``x`` (:func:`interp_at`: linear between its samples), which
+    :func:`profile_in_row` reads across the textured area; nothing for a height map (0.0,
+    unread)."""
+    raise NotImplementedError("surface_row runs in compiled code only")
 
 
-def _surface_at(x, y, s):
+def surface_in_row(x, y, row, s):
+    """The surface's height at (x, y), as
+    :meth:`~sim_tactile.plates.define.surface.Surface.height` gives it, given
+    :func:`surface_row`'s ``row`` at ``x`` (compiled code only; its implementation is chosen
+    by the class of ``s``)."""
+    raise NotImplementedError("surface_in_row runs in compiled code only")
+
+
+@njit
+def profile_in_row(x, y, row, ax, ay, sx, sy):
+    """A rough plate's surface height at (x, y), as
+    :meth:`ProfileSurface.height <sim_tactile.plates.define.surface.Surface.height>` gives it,
+    given its profile's value at ``x`` (``row``): the profile over the textured area
+    ``|x| <= ax, |y| <= ay``, the base (0) elsewhere on the plate, NaN beyond ``sx, sy``."""
+    if abs(x) > sx or abs(y) > sy:
+        return np.nan
+    if abs(x) <= ax and abs(y) <= ay:
+        return row
+    return 0.0
+
+
+def _surface_row(x, s):
     kind = getattr(s, "instance_class", None)
     if kind is ProfileArrays:
-        return lambda x, y, s: profile_surface_at(x, y, s.px, s.pz, s.ax, s.ay, s.sx, s.sy)
+        return lambda x, s: interp_at(x, s.px, s.pz, s.pz[0], s.pz[s.pz.size - 1])
     if kind is MapArrays:
-        return lambda x, y, s: map_surface_at(x, y, s.z, s.pixel, s.ax, s.ay, s.sx, s.sy)
+        return lambda x, s: 0.0
+    return None
+
+
+def _surface_in_row(x, y, row, s):
+    kind = getattr(s, "instance_class", None)
+    if kind is ProfileArrays:
+        return lambda x, y, row, s: profile_in_row(x, y, row, s.ax, s.ay, s.sx, s.sy)
+    if kind is MapArrays:
+        return lambda x, y, row, s: map_surface_at(x, y, s.z, s.pixel, s.ax, s.ay, s.sx, s.sy)
     return None
 
 
 @when_numba
 def _register(numba) -> None:
-    """The compiled implementation of :func:`surface_at`."""
+    """The compiled implementations of :func:`surface_row` and :func:`surface_in_row`."""
     from numba.extending import overload
 
-    overload(surface_at)(_surface_at)
+    overload(surface_row)(_surface_row)
+    overload(surface_in_row)(_surface_in_row)
 
 
 @njit
 def surface_depths(bone, local, radius, margin, arrays, pen):
     """:meth:`SurfaceCollider.depths_numpy` in one loop for the bone at world position
     ``bone`` (3,): each node's depth below the surface (its ``arrays``) at its centre within
-    its margin, else -inf (and where the surface is NaN); whether any is near."""
+    its margin, else -inf (and where the surface is NaN); whether any is near. A rough
+    plate's profile is read once for a run of nodes at one x (:func:`surface_row`): the
+    held step's probes come in columns (27 x values for 378 probes of ``pvdf2``'s pad), and
+    the profile's search was half its step."""
     near = False
+    last_x = np.nan  # no x equals it: the first node reads its row
+    row = 0.0
     for i in range(local.shape[0]):
-        h = surface_at(bone[0] + local[i, 0], bone[1] + local[i, 1], arrays)
+        x = bone[0] + local[i, 0]
+        if x != last_x:
+            row = surface_row(x, arrays)
+            last_x = x
+        h = surface_in_row(x, bone[1] + local[i, 1], row, arrays)
         near |= report_depth(pen, i, h - ((bone[2] + local[i, 2]) - radius[i]), margin[i])
     return near
 
