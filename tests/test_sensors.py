@@ -69,13 +69,16 @@ def test_the_piezoelectric_high_pass_is_scipys_lfilter_bit_for_bit(n, monkeypatc
     from sim_tactile.sensors import transducers
 
     rng = np.random.default_rng(n)
-    x = rng.lognormal(0.0, 2.0, (n, 3)) * rng.choice([-1.0, 1.0], (n, 3))
-    for a in (0.9937, 0.5, 1.0 / 3.0):
-        ref = lfilter([a, -a], [1.0, -a], x, axis=0)
-        got = transducers.high_pass(x, a)
-        assert got.shape == ref.shape and np.array_equal(got, ref), (n, a)
-        if n > 2:
-            assert not np.allclose(got, a * np.diff(x, axis=0, prepend=0.0))
+    # a few channels (each in Python's floats), many (numpy's rows), one (a 1-D recording)
+    for shape in ((n, 3), (n, 40), (n,)):
+        x = rng.lognormal(0.0, 2.0, shape) * rng.choice([-1.0, 1.0], shape)
+        for a in (0.9937, 0.5, 1.0 / 3.0):
+            ref = lfilter([a, -a], [1.0, -a], x, axis=0)
+            got = transducers.high_pass(x, a)
+            assert got.shape == ref.shape and got.dtype == ref.dtype, (shape, a)
+            assert np.array_equal(got, ref), (shape, a)
+            if n > 2:
+                assert not np.allclose(got, a * np.diff(x, axis=0, prepend=0.0))
     if n == 250:  # the loop itself serves the long branch's lengths too
         monkeypatch.setattr(transducers, "HIGH_PASS_LOOP_MAX", 10**9)
         y = rng.normal(size=(3000, 2))
