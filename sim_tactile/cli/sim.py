@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..errors import ConfigError
 from ..sim.plan.fidelity import FIDELITIES, PRESS_LEVELS
+from ..sim.plan.options import DT_RANGE_S, PITCH_RANGE_M
 from ..sim.plan.protocol import FORCE_CONTROLS, STARTS
 from ._common import add_command, add_knob_args, add_plate_args, emit, log, options_of, plate_of
 
@@ -232,15 +233,15 @@ def _add_simulate(sub) -> None:
         "--node-pitch",
         type=float,
         default=None,
-        help="The skin's node pitch along the slide [m], in [2e-05, 0.005] (default: the "
-        "fidelity's).",
+        help="The skin's node pitch along the slide [m], in [{:g}, {:g}] (default: the "
+        "fidelity's).".format(*PITCH_RANGE_M),
     )
     sm.add_argument(
         "--dt",
         type=float,
         default=None,
-        help="The time step [s], at most this, in [1e-06, 0.01] (default: the fidelity's; a "
-        "piezoelectric sensor on a rough plate needs about 8 steps a sample).",
+        help="The time step [s], at most this, in [{:g}, {:g}] (default: the fidelity's; a "
+        "piezoelectric sensor on a rough plate needs about 8 steps a sample).".format(*DT_RANGE_S),
     )
     add_knob_args(sm)
     sm.add_argument("--out", required=True, help="The recording to write (.npz).")
