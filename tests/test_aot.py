@@ -58,8 +58,10 @@ def _samples() -> list:
         (1.0, 2),
         (np.zeros(2), np.zeros(2)),
         ((np.zeros(2), 3), True),
-        SurfaceProbe(np.zeros((2, 3)), np.zeros(2), np.zeros(2), (1.0, np.zeros(3))),
-        SurfaceProbe(np.zeros((2, 3)), np.zeros(2), np.zeros(2), (1.0, 2.0)),
+        SurfaceProbe(
+            np.zeros((2, 3)), np.zeros(2), np.zeros(2), (1.0, np.zeros(3)), np.zeros(2, np.int64)
+        ),
+        SurfaceProbe(np.zeros((2, 3)), np.zeros(2), np.zeros(2), (1.0, 2.0), np.zeros(2, np.int64)),
         pickle.loads(pickle.dumps(np.zeros(3))),  # a dtype equal to float64's, not its object
         np.zeros(3, ">f8"),
     ]

@@ -57,7 +57,7 @@ def _node_depths(bone, probe, pen):
         )
     if kind is SurfaceProbe:
         return lambda bone, probe, pen: surface_depths(
-            bone, probe.local, probe.radius, probe.margin, probe.surface, pen
+            bone, probe.local, probe.radius, probe.margin, probe.surface, probe.order, pen
         )
     return None
 
