@@ -103,12 +103,24 @@ def test_sample_means_are_the_averagers_bit_for_bit(n_sub):
 
 
 def test_a_press_joint_that_moves_alone_leaves_the_slide_to_the_python_loop():
-    (p, _) = _pair("finger7/bumps-4x4", "grid3x3", "L0", PROTO)
-    r = p.runner
-    m = copy.copy(r._m_dyn)
-    m.jnt_stiffness[r._jz] = 50.0  # a spring on the press joint: it moves between held steps
-    r._m_dyn = m
-    assert held_slide(r, p.window, p.protocol, p.fidelity.steps_per_sample, 1) is None
+    """The compiled slide refuses, and leaves the runner as it found it (its path was
+    glided on the runner's own MuJoCo state, then put back): the Python loop then gives what
+    it gives from an untouched twin, bit for bit."""
+    p, q = _pair("finger7/bumps-4x4", "grid3x3", "L0", PROTO)
+    for x in (p, q):
+        m = copy.copy(x.runner._m_dyn)
+        m.jnt_stiffness[x.runner._jz] = 50.0  # a spring on the press joint: it moves
+        x.runner._m_dyn = m
+    r, n_sub = p.runner, p.fidelity.steps_per_sample
+    before = r.d_dyn.qpos.copy(), r.d_dyn.qvel.copy(), r.d_dyn.time
+    assert held_slide(r, p.window, p.protocol, n_sub, 1) is None
+    assert r.d_dyn.qpos.tobytes() == before[0].tobytes() and r.d_dyn.time == before[2]
+    assert r.d_dyn.qvel.tobytes() == before[1].tobytes()
+    got = _slide(r, p.window, p.protocol, n_sub)
+    ref = _slide(q.runner, q.window, q.protocol, n_sub)
+    assert got.loads.tobytes() == ref.loads.tobytes() and np.ptp(ref.loads) > 0
+    assert got.forces.tobytes() == ref.forces.tobytes()
+    assert got.x_pad.tobytes() == ref.x_pad.tobytes()
 
 
 def test_a_skin_pressed_to_the_bottom_fails_as_the_per_step_slide_does():
