@@ -282,6 +282,12 @@ class Kernel:
                     if k:  # the signature of the last call first: a kernel is called alike
                         self._entries = (entries[k], *entries[:k], *entries[k + 1 :])
                     return fn(*args)
+        if self._disp is None and self._entries:  # built ahead, but not for these arguments
+            _warn(
+                f"kernel {self.__module__}.{self.__qualname__} was not compiled ahead of time "
+                "for these arguments' types, so numba serves it (its start-up costs about "
+                "0.6 s a command); run 'sim-tactile kernels build' again after this command"
+            )
         return self.dispatcher(*args, **kwargs)
 
     def __getattr__(self, name):

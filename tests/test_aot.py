@@ -16,6 +16,7 @@ import os
 import pickle
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -93,6 +94,26 @@ def test_the_argument_check_is_numbas_typeof():
     assert not _aot.matcher([["i"]])((2**63,))  # beyond int64: numba refuses it
 
 
+def test_a_call_no_signature_serves_says_once_that_numba_serves_it():
+    """A kernel built ahead of time, called with types it was not built for, goes to numba
+    (whose start-up a command then pays) and warns once that a build would serve it; a kernel
+    with no extension of its own says nothing."""
+    from sim_tactile.errors import CacheWarning
+
+    def f(x):
+        return x
+
+    made = []
+    k = _aot.Kernel(f, lambda: made.append(1) or (lambda x: x + 1), [(lambda a: False, None)])
+    with pytest.warns(CacheWarning, match=r"kernels build"):
+        assert k(1) == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert k(2) == 3 and made == [1]  # once
+        plain = _aot.Kernel(f, lambda: lambda x: x * 10, ())
+        assert plain(3) == 30
+
+
 def test_a_spec_it_does_not_know_is_refused():
     with pytest.raises(ValueError, match="unknown argument spec"):
         _aot.matcher([["x"]])
@@ -164,8 +185,9 @@ def test_an_extension_serves_its_kernels_bit_for_bit_without_numba(tmp_path):
     index = json.loads((where / _aot.INDEX).read_text())
     assert index["stamp"] == kernel_stamp(MODULE) and (where / index["file"]).is_file()
 
-    aot, _ = _child(env)
+    aot, err = _child(env)
     assert aot["kind"] == "Kernel"
+    assert "was not compiled ahead of time" not in err  # every call served, or not built
     assert aot["numba_after_call"] is False  # served ahead of time: numba never loaded
     assert aot["value"] == jit["value"]  # bit for bit
     # anchored's kernel is numba's (not built), calling the extension's module's kernel
@@ -198,11 +220,15 @@ def read(f, oy):
     out = np.zeros(2)
     anchored.read_surface(0.0, cxr, wxr, 5, tx, th, oy, f, out)
     return [v.hex() for v in out]
-res = {"contig": read(f.ravel(), oy)}
-if sys.argv[1] == "all":
-    res["strided"] = read((np.arange(80.0) / 2)[::2], oy)
-    res["fortran"] = read(f.ravel(), np.asfortranarray(oy))
-    res["f32"] = read(f.ravel().astype(np.float32), oy)
+import warnings
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    res = {"contig": read(f.ravel(), oy)}
+    if sys.argv[1] == "all":
+        res["strided"] = read((np.arange(80.0) / 2)[::2], oy)
+        res["fortran"] = read(f.ravel(), np.asfortranarray(oy))
+        res["f32"] = read(f.ravel().astype(np.float32), oy)
+res["said"] = sum("was not compiled ahead of time" in str(w.message) for w in caught)
 res["kind"] = type(anchored.read_surface).__name__
 res["numba"] = "numba" in sys.modules
 print(json.dumps(res))
@@ -224,10 +250,11 @@ print(json.dumps(res))
     (mod,) = _build(env, module)["modules"]
     assert mod["built"] >= 1
     served = run("plain")
-    assert served["kind"] == "Kernel" and not served["numba"]
+    assert served["kind"] == "Kernel" and not served["numba"] and served["said"] == 0
     assert served["contig"] == plain["contig"]
     aot = run("all")
     assert aot["numba"]  # the calls no signature serves loaded numba
+    assert aot["said"] == 1  # and said so, once for the kernel
     env["SIM_TACTILE_AOT"] = "0"
     jit = run("all")
     for k in ("contig", "strided", "fortran", "f32"):
