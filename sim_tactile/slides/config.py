@@ -221,7 +221,7 @@ def _number(cfg: dict, key: str) -> float | None:
     if key not in cfg:
         return None
     x = cfg[key]
-    if isinstance(x, bool) or not isinstance(x, int | float):
+    if not _is_number(x):
         raise ConfigError(f"{key} must be a number ({TOP_KEYS[key]}), got {x!r}")
     return float(x)
 

@@ -269,15 +269,12 @@ def _mirror_of(c: PrimitiveCollider | SurfaceCollider) -> np.ndarray | None:
     bit-exact), or None if some node has none: :func:`_mirror_pairs`, kept in this process
     under the nodes' content key (every slide of a scene pairs the same nodes)."""
     parts = {"nodes": array_digest(c.local, c.radius, c.margin)}
-    compute = lambda: _mirror_pairs(c)  # noqa: E731
-    found, mirror = setup_memo("mirror pairs of skin nodes", parts, compute, (__name__,))
-    return mirror if found else None
+    compute = lambda: (_mirror_pairs(c),)  # noqa: E731
+    return setup_memo("mirror pairs of skin nodes", parts, compute, (__name__,))[0]
 
 
-def _mirror_pairs(c: PrimitiveCollider | SurfaceCollider) -> tuple[bool, np.ndarray]:
-    """``(found, mirror)``: each node's mirror image (see :func:`_mirror_of`), or found
-    False (and an empty array) if some node has none."""
-    none = (False, np.empty(0, dtype=np.int64))
+def _mirror_pairs(c: PrimitiveCollider | SurfaceCollider) -> np.ndarray | None:
+    """Each node's mirror image (see :func:`_mirror_of`), or None if some node has none."""
     key = {
         (x, y, z, r, m): i
         for i, ((x, y, z), r, m) in enumerate(
@@ -285,14 +282,14 @@ def _mirror_pairs(c: PrimitiveCollider | SurfaceCollider) -> tuple[bool, np.ndar
         )
     }
     if len(key) != len(c.radius):
-        return none
+        return None
     out = np.empty(len(key), dtype=np.int64)
     for (x, y, z, r, m), i in key.items():
         j = key.get((x, -y, z, r, m))  # -0.0 == 0.0: the centre line maps to itself
         if j is None:
-            return none
+            return None
         out[i] = j
-    return True, out
+    return out
 
 
 def _mirror_symmetric(C: np.ndarray, mirror: np.ndarray) -> bool:
