@@ -323,19 +323,3 @@ def test_the_drift_checks_running_sums_follow_the_set():
         assert resid <= 2 * DRIFT_TOL
     assert len(sizes) > 5 and changes > 40 and solver.rebuilds > 1  # the paths ran
 
-
-def test_a_skins_floor_is_kept_for_a_read_only_compliance_only():
-    """A kept (read-only) compliance's floor is looked at once; a writeable one each time,
-    so a change to it is seen."""
-    from sim_tactile.sim.skin.contact.active_set import FLOORS, skin_floor
-
-    C = np.ones((3, 3))
-    assert skin_floor(C) == 0.0
-    C[0, 1] = -1.0  # a layered skin's lift: a writeable array is read again
-    assert skin_floor(C) == -np.inf and id(C) not in FLOORS
-    K = np.ones((3, 3))
-    K.flags.writeable = False
-    L = -np.ones((3, 3))
-    L.flags.writeable = False
-    assert skin_floor(K) == 0.0 and FLOORS[id(K)] == (K, 0.0)
-    assert skin_floor(L) == -np.inf and skin_floor(K) == 0.0

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ....cache import register_memo
 from ....errors import PhysicsError
 from .kernels import NO_K, force_loop, force_same_set, kkt_same_set, solve_loop
 from .reference import MAX_ITER, TOL_REL
@@ -12,31 +11,8 @@ from .reference import MAX_ITER, TOL_REL
 
 def skin_floor(C: np.ndarray) -> float:
     """The depth above which a node can touch, for compliance ``C``: 0 when every entry is
-    >= 0 (a load only pushes the skin away from the plate), else -inf. A read-only ``C`` (a
-    kept skin's, which every slide of a scene shares) is looked at once (:data:`FLOORS`)."""
-    if C.flags.writeable:
-        return _floor(C)
-    hit = FLOORS.get(id(C))
-    if hit is not None and hit[0] is C:  # kept with its array: the id is not another's
-        return hit[1]
-    f = _floor(C)
-    FLOORS[id(C)] = (C, f)
-    while len(FLOORS) > FLOORS_KEPT:
-        del FLOORS[next(iter(FLOORS))]
-    return f
-
-
-def _floor(C: np.ndarray) -> float:
+    >= 0 (a load only pushes the skin away from the plate), else -inf."""
     return 0.0 if bool((C >= 0).all()) else -np.inf
-
-
-#: The floors of read-only compliances, by the array's id with the array itself (which keeps
-#: the id its own): a dense skin's sign check read its whole matrix for every slide (0.1 ms
-#: for 729 nodes).
-FLOORS: dict[int, tuple[np.ndarray, float]] = {}
-#: Most floors :data:`FLOORS` keeps, the oldest dropped first.
-FLOORS_KEPT = 16
-register_memo("floors of kept compliances", FLOORS.clear)
 
 
 #: block updates of a contact set's inverse before it is rebuilt from the compliance
