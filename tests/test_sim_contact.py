@@ -322,4 +322,3 @@ def test_the_drift_checks_running_sums_follow_the_set():
         resid = np.abs(solver.M @ want - np.column_stack([np.ones(S.size), sign[S]])).max()
         assert resid <= 2 * DRIFT_TOL
     assert len(sizes) > 5 and changes > 40 and solver.rebuilds > 1  # the paths ran
-

@@ -53,7 +53,7 @@ from .measured_errors import (
     node_count,
     refinement,
 )
-from .options import MAX_SOLVE_EVERY, SOLVE_TOL_RANGE  # noqa: F401  (their old home)
+from .options import MAX_SOLVE_EVERY, OWN_PITCH, SOLVE_TOL_RANGE  # noqa: F401  (two re-exported)
 
 LEVELS = ("L0", "L1", "L2")
 #: What a ``fidelity`` argument may be (a :class:`Fidelity` too, in Python).
@@ -377,7 +377,7 @@ def _node_grid(plate, finger, level, auto_pitch, taxel_x, taxel_y, scale):
 def _raised(wanted: float, pitch: float, level: str) -> str:
     """The warning for a node pitch that the level's node cap raised above what the
     features asked for (``wanted``) to ``pitch`` [m]."""
-    own = "a node pitch of your own (a data set's pitch_m, simulate --node-pitch, Python's pitch_m"
+    own = f"a node pitch of your own ({OWN_PITCH}"
     finer = (
         f"{own}; slower)"
         if level == "L2"
@@ -423,7 +423,7 @@ def _texture_warnings(plate: Plate, layout, scale: float | None, pitch: float) -
         warnings.append(
             f"the smallest feature ({scale * 1e3:.3g} mm) is below two node pitches "
             f"({pitch * 1e3:.3g} mm): its load is smeared over neighbouring nodes; a node "
-            f"pitch of at most {scale / 2 * 1e3:.3g} mm resolves it (pitch_m; slower)"
+            f"pitch of at most {scale / 2 * 1e3:.3g} mm resolves it ({OWN_PITCH}; slower)"
         )
     surf = surface_of(plate)
     if surf.ra_m is not None:

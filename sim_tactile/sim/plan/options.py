@@ -31,6 +31,8 @@ SOLVE_TOL_RANGE = (1e-12, 1e-3)
 #: slide, a set or a configuration file; :func:`check_forced`).
 PITCH_RANGE_M = (20e-6, 5e-3)
 DT_RANGE_S = (1e-6, 1e-2)
+#: Where a node pitch of one's own is set (the warnings that ask for one name them).
+OWN_PITCH = "a data set's pitch_m, simulate --node-pitch, Python's pitch_m"
 
 
 def check_forced(pitch_m: float | None, dt_s: float | None) -> None:
