@@ -79,6 +79,30 @@ def test_the_command_line_leaves_mujocos_opengl_unloaded_unless_asked():
     assert out[0] == "egl"
 
 
+def test_the_command_line_starts_openblas_on_one_thread_unless_the_environment_says():
+    """Start-up: the command line's BLAS runs on one thread (its parallelism is its worker
+    processes; OpenBLAS's idle threads spin on the CPU); a thread count that the environment
+    names, through any of the variables OpenBLAS reads, is kept."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import sim_tactile.cli, numpy; from threadpoolctl import threadpool_info; "
+        "print(sorted({i['num_threads'] for i in threadpool_info() "
+        "if i['internal_api'] == 'openblas'}))"
+    )
+    names = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
+    env = {k: v for k, v in os.environ.items() if k not in names}
+    out = subprocess.check_output([sys.executable, "-c", code], text=True, env=env).strip()
+    assert out == "[1]"
+    for name in names:
+        out = subprocess.check_output(
+            [sys.executable, "-c", code], text=True, env={**env, name: "2"}
+        ).strip()
+        assert out == "[2]", name
+
+
 def test_tasks_lists_every_registered_task_one_line_each(cli):
     lines = cli(["tasks"]).stdout.strip().split("\n\n")[0].splitlines()
     assert lines[0].split() == ["id", "paper", "sensor", "classes", "slides", "needs", "quick"]

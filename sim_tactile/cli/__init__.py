@@ -22,6 +22,16 @@ from collections.abc import Sequence
 # The command line never renders: MuJoCo's OpenGL back-end (glfw, cffi and pycparser, some
 # 50 ms of every command's start-up) is left unloaded, unless the environment names one.
 os.environ.setdefault("MUJOCO_GL", "disable")
+# A command's parallelism is its worker processes (``--workers``), each on one core, and the
+# slides already run BLAS on one thread. OpenBLAS's idle threads busy-wait for about 0.1 s
+# after the library loads and after each threaded call: CPU time a one-core worker pays, some
+# 0.15 s at start-up alone. So the command line starts OpenBLAS with one thread, unless the
+# environment names a thread count through one of the variables OpenBLAS reads, in its order
+# of precedence: ``OPENBLAS_NUM_THREADS``, ``GOTO_NUM_THREADS``, ``OMP_NUM_THREADS``.
+os.environ.setdefault(
+    "OPENBLAS_NUM_THREADS",
+    os.environ.get("GOTO_NUM_THREADS") or os.environ.get("OMP_NUM_THREADS") or "1",
+)
 
 from .. import __version__
 from ..errors import SimTactileError, Terminated, os_error_message
