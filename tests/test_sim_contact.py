@@ -322,3 +322,49 @@ def test_the_drift_checks_running_sums_follow_the_set():
         resid = np.abs(solver.M @ want - np.column_stack([np.ones(S.size), sign[S]])).max()
         assert resid <= 2 * DRIFT_TOL
     assert len(sizes) > 5 and changes > 40 and solver.rebuilds > 1  # the paths ran
+
+
+@pytest.mark.parametrize("sym", [True, False])
+def test_each_block_update_checks_the_inverse_it_writes(sym):
+    """A node block joining (the Schur complement of C) and leaving (of M), on a symmetric
+    and on a friction-coupled compliance: the updated inverse is inv(C_TT) of the new set, and
+    the update's own drift check, made row by row as it writes, passes it; an inverse put off
+    by 1e-6 in one row, in the set's kept part or in its new rows, is flagged."""
+    from sim_tactile.scene.layered import layered_compliance_matrix
+    from sim_tactile.scene.tractions import shear_normal_compliance
+    from sim_tactile.sensors.stack import Layer, Stack
+    from sim_tactile.sim.skin.contact.kernels import (
+        NO_SUMS,
+        check_vectors,
+        inverse_with,
+        inverse_without,
+    )
+
+    xs = np.arange(-5, 6) * 0.5e-3
+    X, Y = np.meshgrid(xs, xs[::2])
+    xy = np.column_stack([X.ravel(), Y.ravel()])
+    st = Stack((Layer(1e-3, 0.3e6, 0.5),))
+    C = layered_compliance_matrix(xy, 0.5e-3, st, pitch_y_m=1e-3)
+    if not sym:
+        C = C - 0.5 * shear_normal_compliance(xy, 0.5e-3, st, pitch_y_m=1e-3)
+    S = np.arange(3, 40, dtype=np.int64)
+    A = np.array([0, 50, 62], dtype=np.int64)
+    T = np.concatenate((S, A))
+    M = np.linalg.inv(C[np.ix_(S, S)])
+    out, off = inverse_with(M, C, S, A, sym, check_vectors(C, T, NO_SUMS))
+    np.testing.assert_allclose(out, np.linalg.inv(C[np.ix_(T, T)]), rtol=1e-9, atol=0)
+    assert not off
+    bad = M.copy()
+    bad[7] *= 1 + 1e-6
+    assert inverse_with(bad, C, S, A, sym, check_vectors(C, T, NO_SUMS))[1]
+    keep = np.flatnonzero(~np.isin(T, [5, 17, 50]))
+    kept = T[keep]
+    drop = np.flatnonzero(np.isin(T, [5, 17, 50]))
+    u = check_vectors(C, kept, NO_SUMS)
+    back, off = inverse_without(out, keep, drop, sym, T, u)
+    np.testing.assert_allclose(back, np.linalg.inv(C[np.ix_(kept, kept)]), rtol=1e-9, atol=0)
+    assert not off
+    for row in (0, T.size - 1):  # a kept row of S, a kept row that joined
+        bad = out.copy()
+        bad[row] *= 1 + 1e-6
+        assert inverse_without(bad, keep, drop, sym, T, u)[1], row

@@ -105,24 +105,32 @@ def _sums(C, rows, cols, cu, sign):
 
 
 @njit
-def drifted(M, C, S, cu, tol):
-    """Whether M is no longer inv(C[S, S]) to ``tol``: M C_SS v against v for v of ones and
-    of the nodes' signs, ``C_SS v`` read from the running sums ``cu`` where they are kept
-    (O(|S|^2): one product with M), else summed afresh."""
-    m = S.size
-    u = np.empty((m, 2))
+def check_vectors(C, T, cu):
+    """The drift check's vectors for the set ``T`` (in M's order): ``(C_TT 1, C_TT s)``, read
+    from the running sums ``cu`` where they are kept, else summed afresh (s: :func:`_sign`)."""
+    m = T.size
     if cu.shape[0] == 0:
         own = np.empty((C.shape[0], 2))
-        set_sums(C, S, own)
+        set_sums(C, T, own)
         cu = own
+    u = np.empty((2, m))
     for i in range(m):
-        u[i, 0] = cu[S[i], 0]
-        u[i, 1] = cu[S[i], 1]
-    w = M @ u
-    for i in range(m):
-        if abs(w[i, 0] - 1.0) > tol or abs(w[i, 1] - _sign(S[i])) > tol:
-            return True
-    return False
+        u[0, i] = cu[T[i], 0]
+        u[1, i] = cu[T[i], 1]
+    return u
+
+
+@njit(fastmath={"reassoc"})
+def _row_off(row, u, sign, tol) -> bool:
+    """Whether one row of M fails the drift check: ``|row . u_0 - 1|`` or ``|row . u_1 -
+    sign|`` above ``tol``. The sums may be reordered (``reassoc``: vectorised): a check against
+    a tolerance far above round-off, not a value kept."""
+    a = 0.0
+    b = 0.0
+    for j in range(row.size):
+        a += row[j] * u[0, j]
+        b += row[j] * u[1, j]
+    return abs(a - 1.0) > tol or abs(b - sign) > tol
 
 
 @njit
@@ -134,9 +142,10 @@ def _rebuilt(C, K, S, sym, cu):
 
 
 @njit
-def _checked(M, C, K, S, sym, updates, rebuilds, cu):
-    """After a block update: M rebuilt from C (S sorted) if it has drifted."""
-    if drifted(M, C, S, cu, DRIFT_TOL):
+def _checked(M, C, K, S, sym, updates, rebuilds, cu, off):
+    """After a block update: M rebuilt from C (S sorted) if it has drifted (``off``: the
+    update's own drift check, :func:`_row_off` of each row)."""
+    if off:
         S = np.sort(S)
         return _rebuilt(C, K, S, sym, cu), S, 0, rebuilds + 1
     return M, S, updates, rebuilds
@@ -217,12 +226,13 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
                 in_set[:] = False
                 in_set[S] = True
             else:
-                M = inverse_without(M, np.flatnonzero(keep), np.flatnonzero(drop), sym)
-                in_set[S[drop]] = False
                 if cu.shape[0]:
                     _sums(C, S[keep], S[drop], cu, -1.0)
+                u = check_vectors(C, S[keep], cu)
+                M, off = inverse_without(M, np.flatnonzero(keep), np.flatnonzero(drop), sym, S, u)
+                in_set[S[drop]] = False
                 S = S[keep]
-                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds, cu)
+                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds, cu, off)
             if S.size == 0 and it > 0:
                 return True, M, S, updates, rebuilds  # everything left: no load
             continue
@@ -253,14 +263,14 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
                 in_set[:] = False
                 in_set[S] = True
             else:
-                M = inverse_with(M, C, S, A, sym)
                 T = np.concatenate((S, A))
                 if cu.shape[0]:
                     _sums(C, S, A, cu, 1.0)  # the set's nodes gain A's columns
                     _sums(C, A, T, cu, 0.0)  # and A's own, afresh
+                M, off = inverse_with(M, C, S, A, sym, check_vectors(C, T, cu))
                 S = T
                 in_set[A] = True
-                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds, cu)
+                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds, cu, off)
             continue
         for k in range(S.size):
             p[S[k]] = pS[k]
@@ -410,62 +420,64 @@ def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b, floor=0.0) -> flo
 
 
 @njit
-def inverse_without(M, keep, drop, sym=True):
+def inverse_without(M, keep, drop, sym, S, u):
     """inv(C_KK) from M = inv(C_SS), S = K + R: the Schur complement M_KK - M_KR inv(M_RR) M_RK
-    (``sym``: M_RK taken as M_KR's transpose)."""
+    (``sym``: M_RK taken as M_KR's transpose). Returns it and whether it has drifted from
+    the inverse: M C_KK v against v, for the vectors ``u = C_KK v`` of the set ``S[keep]``
+    (:func:`check_vectors`), checked row by row as it is written (:func:`_row_off`)."""
     Mkr = take(M, keep, drop)
     Mrr = take(M, drop, drop)
     Mrk = np.ascontiguousarray(Mkr.T) if sym else take(M, drop, keep)
     X = np.linalg.solve(Mrr, Mrk)
-    return _take_minus(M, keep, Mkr @ X)
-
-
-@njit
-def _take_minus(M, keep, P):
-    """``M[keep][:, keep] - P`` element by element as the expression computes it, in one
-    pass: the block is read where it lies, not gathered into an array of its own first."""
+    P = Mkr @ X
     k = keep.size
     out = np.empty((k, k))
-    for i in range(k):
+    off = False
+    for i in range(k):  # M[keep][:, keep] - P, read where it lies, as the expression computes it
         row = keep[i]
         for j in range(k):
             out[i, j] = M[row, keep[j]] - P[i, j]
-    return out
+        if not off:
+            off = _row_off(out[i], u, _sign(S[row]), DRIFT_TOL)
+    return out, off
 
 
 @njit
-def _plus_into(out, A, B):
-    """``out[:m, :m] = A + B`` element by element (A, B: m x m), without the sum's own
-    array."""
-    for i in range(A.shape[0]):
-        for j in range(A.shape[1]):
-            out[i, j] = A[i, j] + B[i, j]
-
-
-@njit
-def inverse_with(M, C, S, A, sym=True):
+def inverse_with(M, C, S, A, sym, u):
     """inv(C_TT) for T = S + A from M = inv(C_SS), through the Schur complement of C_SS:
     Z = C_AA - C_AS M C_SA, inv = [[M + M C_SA Z^-1 C_AS M, -M C_SA Z^-1],
     [-Z^-1 C_AS M, Z^-1]]; ``sym``: C_AS = C_SA' and M symmetric, which the symmetric
-    formulas use."""
+    formulas use. Returns it and whether it fails the drift check against the vectors ``u``
+    of T (:func:`inverse_without`), checked row by row as it is written."""
     n, a = S.size, A.size
     B = take(C, S, A)
     D = take(C, A, A)
     MB = M @ B
-    out = np.empty((n + a, n + a))
     if sym:
         Zi = np.linalg.inv(D - np.ascontiguousarray(B.T) @ MB)
         G = MB @ Zi
-        _plus_into(out, M, G @ np.ascontiguousarray(MB.T))
-        out[:n, n:] = -G
-        out[n:, :n] = -G.T
-        out[n:, n:] = Zi
-        return out
-    E = take(C, A, S) @ M  # C_AS M
-    Zi = np.linalg.inv(D - E @ B)
-    G = MB @ Zi
-    _plus_into(out, M, G @ E)
-    out[:n, n:] = -G
-    out[n:, :n] = -(Zi @ E)
-    out[n:, n:] = Zi
-    return out
+        H = G @ np.ascontiguousarray(MB.T)
+        L = G.T  # the lower-left block is -G'
+    else:
+        E = take(C, A, S) @ M  # C_AS M
+        Zi = np.linalg.inv(D - E @ B)
+        G = MB @ Zi
+        H = G @ E
+        L = Zi @ E
+    out = np.empty((n + a, n + a))
+    off = False
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = M[i, j] + H[i, j]
+        for j in range(a):
+            out[i, n + j] = -G[i, j]
+        if not off:
+            off = _row_off(out[i], u, _sign(S[i]), DRIFT_TOL)
+    for i in range(a):
+        for j in range(n):
+            out[n + i, j] = -L[i, j]
+        for j in range(a):
+            out[n + i, n + j] = Zi[i, j]
+        if not off:
+            off = _row_off(out[n + i], u, _sign(A[i]), DRIFT_TOL)
+    return out, off
