@@ -370,11 +370,11 @@ def test_each_block_update_checks_the_inverse_it_writes(sym):
         assert inverse_without(bad, keep, drop, sym, T, u)[1], row
 
 
-def test_the_loads_on_nodes_outside_the_set_are_the_plain_loops_bit_for_bit():
+def test_the_ordered_product_is_the_plain_loops_bit_for_bit():
     """The same-set checks' displacements at the nodes outside the set, four rows at a time:
     each equals the plain loop's sum over the set in its order, in Python's floats, byte for
     byte, for every count of rows (the blocks of four and the rest) and a set out of order."""
-    from sim_tactile.sim.skin.contact.kernels import loads_on
+    from sim_tactile.sim.skin.contact.kernels import ordered_product
 
     rng = np.random.default_rng(3)
     C = rng.standard_normal((40, 40))
@@ -382,7 +382,7 @@ def test_the_loads_on_nodes_outside_the_set_are_the_plain_loops_bit_for_bit():
     pS = rng.standard_normal(23) * 1e3
     for count in range(10):
         rows = rng.choice(40, size=count, replace=False).astype(np.int64)
-        got = loads_on(C, S, pS, rows)
+        got = ordered_product(C, rows, S, pS)
         want = []
         for j in rows:
             acc = 0.0

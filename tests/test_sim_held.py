@@ -246,25 +246,3 @@ def _ideal_slide(plate, sensor, duration_s, options, **kw):
     """The ideal loads of a slide of ``duration_s`` under the step ``options``."""
     proto = Protocol(duration_s=duration_s)
     return simulate(plate, sensor, protocol=proto, ideal=True, options=options, **kw).recording
-
-
-def test_the_taxel_readout_is_the_plain_loops_bit_for_bit():
-    """The held step's taxel loads, four taxels at a time: each equals the plain loop's sum
-    over the nodes in their order, in Python's floats, byte for byte, for every count of
-    taxels (the blocks of four and the rest)."""
-    from sim_tactile.sim.step.held import _readout
-
-    rng = np.random.default_rng(5)
-    f = rng.random(37) * 1e4
-    area = 0.37e-6
-    for taxels in range(1, 10):
-        W = rng.random((taxels, 37))
-        out = np.empty(taxels)
-        _readout(W, f, area, out)
-        want = []
-        for t in range(taxels):
-            acc = 0.0
-            for i in range(37):
-                acc += float(W[t, i]) * (float(f[i]) * area)
-            want.append(acc)
-        assert out.tobytes() == np.array(want).tobytes(), taxels

@@ -49,7 +49,7 @@ from ..collide.choose import probe_depths
 from ..collide.height import SurfaceCollider
 from ..collide.primitive import PrimitiveCollider
 from ..skin import contact
-from ..skin.contact.kernels import NO_K, force_loop, force_same_set
+from ..skin.contact.kernels import NO_K, force_loop, force_same_set, ordered_product
 from ..skin.models import CoupledSkin, SkinModel, SpectralSkin
 
 #: Collision queries one step may take before it gives up (the pad falling through).
@@ -388,43 +388,15 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     force = 0.0
     for i in range(n):
         force += f[i] * area
-    _readout(W, f, area, taxel_out)
+    load = np.empty(n)
+    for i in range(n):
+        load[i] = f[i] * area
+    taxel_out[:] = ordered_product(W, np.arange(W.shape[0]), np.arange(n), load)
     top = -np.inf
     for i in range(n):
         if pen[i] > top:
             top = pen[i]
     return 0, force, top, M, S, updates, rebuilds, rowsum
-
-
-@njit
-def _readout(W, f, area, out):
-    """``out[t] = sum_i W[t, i] (f[i] area)``, each taxel's sum over the nodes in their order
-    (bit for bit the plain loop's), four taxels at once: their chains of additions overlap
-    instead of each waiting on the last."""
-    n = f.shape[0]
-    taxels = W.shape[0]
-    t = 0
-    while t + 4 <= taxels:
-        a = 0.0
-        b = 0.0
-        c = 0.0
-        d = 0.0
-        for i in range(n):
-            load = f[i] * area
-            a += W[t, i] * load
-            b += W[t + 1, i] * load
-            c += W[t + 2, i] * load
-            d += W[t + 3, i] * load
-        out[t] = a
-        out[t + 1] = b
-        out[t + 2] = c
-        out[t + 3] = d
-        t += 4
-    for r in range(t, taxels):
-        acc = 0.0
-        for i in range(n):
-            acc += W[r, i] * (f[i] * area)
-        out[r] = acc
 
 
 @njit

@@ -39,7 +39,7 @@ def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
             rows[cnt] = j
             cnt += 1
     rows = rows[:cnt]
-    u = loads_on(C, S, pS, rows)
+    u = ordered_product(C, rows, S, pS)
     for r in range(cnt):
         if pen[rows[r]] - u[r] > tol:
             return False
@@ -51,12 +51,12 @@ def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
 
 
 @njit
-def loads_on(C, S, pS, rows):
-    """``u[r] = sum_k C[rows[r], S[k]] pS[k]``: the displacement that the set's pressures
-    make at each of ``rows``. Each row's sum runs over k in order, as a plain loop sums it
-    (bit for bit); four rows go at once, so that their sums' additions overlap instead of
-    each waiting for the last (an O(|rows| |S|) gather, the same-set checks' largest cost)."""
-    m = S.size
+def ordered_product(X, rows, cols, v):
+    """``X[rows][:, cols] @ v``, each row's sum over ``cols`` in their order, as a plain loop
+    sums it (bit for bit), four rows at once: their chains of additions overlap instead of
+    each waiting on the last. The same-set checks' displacements at the nodes outside the set
+    (``C``, the set ``S``, its pressures), their largest cost; the held step's taxel loads."""
+    m = cols.size
     nr = rows.size
     u = np.empty(nr)
     r = 0
@@ -67,12 +67,12 @@ def loads_on(C, S, pS, rows):
         uc = 0.0
         ud = 0.0
         for k in range(m):
-            col = S[k]
-            q = pS[k]
-            ua += C[a, col] * q
-            ub += C[b, col] * q
-            uc += C[c, col] * q
-            ud += C[d, col] * q
+            col = cols[k]
+            q = v[k]
+            ua += X[a, col] * q
+            ub += X[b, col] * q
+            uc += X[c, col] * q
+            ud += X[d, col] * q
         u[r] = ua
         u[r + 1] = ub
         u[r + 2] = uc
@@ -82,7 +82,7 @@ def loads_on(C, S, pS, rows):
         j = rows[t]
         acc = 0.0
         for k in range(m):
-            acc += C[j, S[k]] * pS[k]
+            acc += X[j, cols[k]] * v[k]
         u[t] = acc
     return u
 
@@ -283,7 +283,7 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
             A = np.flatnonzero(overlap)
         else:
             rest = np.flatnonzero(touching & ~in_set)
-            u = loads_on(C, S, pS, rest)
+            u = ordered_product(C, rest, S, pS)
             cnt = 0
             A = np.empty(rest.size, np.int64)
             for r in range(rest.size):
@@ -450,7 +450,7 @@ def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b, floor=0.0) -> flo
             rows[cnt] = j
             cnt += 1
     rows = rows[:cnt]
-    u = loads_on(C, S, pS, rows)
+    u = ordered_product(C, rows, S, pS)
     for r in range(cnt):
         if pen[rows[r]] + dz - u[r] > tol:
             return np.nan
