@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ....errors import PhysicsError
-from .kernels import NO_K, force_loop, force_same_set, kkt_same_set, solve_loop
+from .kernels import NO_K, NO_P, force_loop, force_same_set, same_set_product, solve_loop
 from .reference import MAX_ITER, TOL_REL
 
 
@@ -66,10 +66,13 @@ class ActiveSet:
         """Pressures [Pa] for node penetrations ``pen_m``, warm-started from the last set.
         Returns ``(p, active)`` as :func:`halfspace` does."""
         p = np.empty_like(pen_m)
-        if self.S.size and kkt_same_set(
-            self.M, self.S, pen_m, self.C, self._in, TOL_REL, p, self.floor
-        ):
-            return p, self._in.copy()  # the common case: the set holds, one product
+        pS0 = NO_P
+        if self.S.size:
+            held, pS0 = same_set_product(
+                self.M, self.S, pen_m, self.C, self._in, TOL_REL, p, self.floor
+            )
+            if held:
+                return p, self._in.copy()  # the common case: the set holds, one product
         K = self.K if self.K is not None else NO_K
         status, M, S, updates, rebuilds = solve_loop(
             self.M,
@@ -86,6 +89,7 @@ class ActiveSet:
             self.floor,
             self.symmetric,
             self._cu,
+            pS0,
         )
         self._take(M, S, updates, rebuilds)
         if status:

@@ -8,13 +8,18 @@ import numpy as np
 
 from ...._jit import njit
 
+#: No product at hand (:func:`solve_loop`'s ``pS0``).
+NO_P = np.zeros(0)
+
 
 @njit
-def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
-    """Whether the contact set S still solves the problem for ``pen``; if so, write the
-    pressures to ``p``. Checks the three conditions :meth:`ActiveSet.solve` would: every node
-    of S can touch and carries compression, and no other node that can touch is left inside
-    the plate. ``floor``: the depth above which a node can touch (``ActiveSet.floor``)."""
+def same_set_product(M, S, pen, C, in_set, tol_rel, p, floor):
+    """Whether the contact set S still solves the problem for ``pen``, and the product
+    ``M pen_S`` it made (empty where it stopped before it: where the set does not hold,
+    :func:`solve_loop` starts from it). If it holds, the pressures go to ``p``. Checks the
+    three conditions :meth:`ActiveSet.solve` would: every node of S can touch and carries
+    compression, and no other node that can touch is left inside the plate. ``floor``: the
+    depth above which a node can touch (``ActiveSet.floor``)."""
     n = pen.shape[0]
     m = S.shape[0]
     big = 0.0
@@ -23,7 +28,7 @@ def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
             big = pen[j]
     for k in range(m):
         if pen[S[k]] <= floor:
-            return False
+            return False, np.empty(0)
     tol = tol_rel * big
     pen_S = np.empty(m)
     for k in range(m):
@@ -31,7 +36,7 @@ def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
     pS = M @ pen_S  # BLAS
     for i in range(m):
         if pS[i] < 0.0:
-            return False
+            return False, pS
     rows = np.empty(n, np.int64)
     cnt = 0
     for j in range(n):
@@ -42,12 +47,12 @@ def kkt_same_set(M, S, pen, C, in_set, tol_rel, p, floor=0.0) -> bool:
     u = ordered_product(C, rows, S, pS)
     for r in range(cnt):
         if pen[rows[r]] - u[r] > tol:
-            return False
+            return False, pS
     for j in range(n):
         p[j] = 0.0
     for k in range(m):
         p[S[k]] = pS[k]
-    return True
+    return True, pS
 
 
 @njit
@@ -216,7 +221,9 @@ def inverse_subset(C, K, S, sym=True):
 
 
 @njit
-def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor, sym, cu):
+def solve_loop(
+    M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, floor, sym, cu, pS0
+):
     """The active-set iteration of :meth:`ActiveSet.solve` from the current set: nodes that
     can no longer touch or carry tension leave, nodes left inside the plate join; the
     inverse ``M`` follows by block updates, rebuilt every ``refresh`` updates. A node can
@@ -226,8 +233,10 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
     compliance that is not (friction coupled in) takes the general formulas. ``cu``: the
     running sums of the drift check (:func:`set_sums`, kept in step with S; :data:`NO_SUMS`:
     none kept; passed, not defaulted: numba keeps no compiled kernel whose omitted argument
-    defaults to an array, and would compile it again in every process). Returns ``(converged, M, S, updates, rebuilds)`` and writes the pressures to
-    ``p``."""
+    defaults to an array, and would compile it again in every process). ``pS0``: the product
+    ``M pen_S`` that a same-set check made of this M, S and ``pen`` (:func:`same_set_product`;
+    :data:`NO_P`: none), the loop's first product while the set stands, not made again.
+    Returns ``(converged, M, S, updates, rebuilds)`` and writes the pressures to ``p``."""
     n = pen.shape[0]
     rebuilds = 0
     for j in range(n):
@@ -247,6 +256,7 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
         if overlap[j] and pen[j] > big:
             big = pen[j]
     tol = tol_rel * big
+    first = S.size > 0 and pS0.shape[0] == S.size  # the check's product, while S stands
     for it in range(max_iter + 2):
         if it == 0:  # nodes that no longer touch leave
             drop = np.empty(S.size, np.bool_)
@@ -255,9 +265,13 @@ def solve_loop(M, S, in_set, C, K, pen, tol_rel, updates, refresh, max_iter, p, 
         elif S.size == 0:  # start from every node that overlaps the plate
             drop = np.zeros(0, np.bool_)
         else:
-            pS = M @ np.ascontiguousarray(pen[S])
+            if it == 1 and first:
+                pS = pS0
+            else:
+                pS = M @ np.ascontiguousarray(pen[S])
             drop = pS < 0.0
         if drop.any():
+            first = False
             keep = ~drop
             if not keep.any() or updates >= refresh:
                 S = np.sort(S[keep])
@@ -372,7 +386,10 @@ def force_loop(
         for sink in range(2):
             for j in range(n):
                 shifted[j] = pen[j] + dz
-            if not (S.size and kkt_same_set(M, S, shifted, C, in_set, tol_rel, p, floor)):
+            held, pS0 = False, np.empty(0)
+            if S.size:
+                held, pS0 = same_set_product(M, S, shifted, C, in_set, tol_rel, p, floor)
+            if not held:
                 ok, M, S, updates, rb = solve_loop(
                     M,
                     S,
@@ -388,6 +405,7 @@ def force_loop(
                     floor,
                     sym,
                     cu,
+                    pS0,
                 )
                 rebuilds += rb
                 if not ok:
@@ -412,7 +430,7 @@ def force_loop(
 def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b, floor=0.0) -> float:
     """:meth:`ActiveSet.solve_force` on the set S alone: the shift ``dz`` at which the set's
     pressures sum to ``total``, and the pressures (into ``p``) if S still solves the contact
-    problem at ``pen + dz`` (the checks of :func:`kkt_same_set`); NaN if it does not. ``b``:
+    problem at ``pen + dz`` (the checks of :func:`same_set_product`); NaN if it does not. ``b``:
     the row sums of M."""
     n = pen.shape[0]
     m = S.shape[0]
