@@ -293,7 +293,7 @@ def test_the_drift_checks_running_sums_follow_the_set():
     updates keep by node; while the set grows, shrinks and is rebuilt, they stay the sums a
     fresh pass over C gives, to rounding, and every set's inverse passes the check."""
     from sim_tactile.sim.skin.contact import ActiveSet
-    from sim_tactile.sim.skin.contact.kernels import DRIFT_TOL
+    from sim_tactile.sim.skin.contact.inverse import DRIFT_TOL
 
     xs = (np.arange(40) - 19.5) * 0.25e-3
     ys = (np.arange(6) - 2.5) * 1e-3
@@ -333,7 +333,7 @@ def test_each_block_update_checks_the_inverse_it_writes(sym):
     from sim_tactile.scene.layered import layered_compliance_matrix
     from sim_tactile.scene.tractions import shear_normal_compliance
     from sim_tactile.sensors.stack import Layer, Stack
-    from sim_tactile.sim.skin.contact.kernels import (
+    from sim_tactile.sim.skin.contact.inverse import (
         NO_SUMS,
         check_vectors,
         inverse_with,

@@ -56,7 +56,8 @@ from ...plates.define.surface import surface_of
 from ..plan.lattices import PAD_SHAPE_CODES, check_anchorable, period_lines, row_lines
 from .clipped import rect_entry
 from .contact import MAX_ITER, REFRESH, TOL_REL
-from .contact.kernels import NO_K, NO_SUMS, force_loop, force_same_set
+from .contact.inverse import NO_K, NO_SUMS
+from .contact.kernels import force_loop, force_same_set
 
 
 @njit

@@ -49,7 +49,8 @@ from ..collide.choose import probe_depths
 from ..collide.height import SurfaceCollider
 from ..collide.primitive import PrimitiveCollider
 from ..skin import contact
-from ..skin.contact.kernels import NO_K, force_loop, force_same_set, ordered_product
+from ..skin.contact.inverse import NO_K
+from ..skin.contact.kernels import force_loop, force_same_set, ordered_product
 from ..skin.models import CoupledSkin, SkinModel, SpectralSkin
 
 #: Collision queries one step may take before it gives up (the pad falling through).

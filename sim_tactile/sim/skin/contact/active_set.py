@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ....errors import PhysicsError
-from .kernels import NO_K, NO_P, force_loop, force_same_set, same_set_product, solve_loop
+from .inverse import NO_K
+from .kernels import NO_P, force_loop, force_same_set, same_set_product, solve_loop
 from .reference import MAX_ITER, TOL_REL
 
 
@@ -56,7 +57,7 @@ class ActiveSet:
         self.updates = 0
         self.rebuilds = 0
         self._in = np.zeros(C.shape[0], bool)
-        #: the drift check's running sums ``C_SS v`` by node (:func:`~.kernels.set_sums`),
+        #: the drift check's running sums ``C_SS v`` by node (:func:`~.inverse.set_sums`),
         #: kept in step with S by the kernels
         self._cu = np.zeros((C.shape[0], 2))
         self._rowsum, self._rowsum_of = np.zeros(0), None
