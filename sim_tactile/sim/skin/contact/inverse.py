@@ -44,11 +44,11 @@ def _sign(node) -> float:
 @njit
 def set_sums(C, S, cu):
     """``cu[j] = ((C_SS 1)_j, (C_SS s)_j)`` for every node j of S, afresh (s: :func:`_sign`)."""
-    _sums(C, S, S, cu, 0.0)
+    running_sums(C, S, S, cu, 0.0)
 
 
 @njit
-def _sums(C, rows, cols, cu, sign):
+def running_sums(C, rows, cols, cu, sign):
     """The running sums of the nodes ``rows`` over the columns ``cols`` (T): set to
     ``((C_jT 1), (C_jT s))`` afresh (``sign`` 0), or moved by those columns joining (1) or
     leaving (-1) the set, O(|rows| |cols|)."""
@@ -98,7 +98,7 @@ def _row_off(row, u, sign, tol) -> bool:
 
 
 @njit
-def _rebuilt(C, K, S, sym, cu):
+def rebuilt(C, K, S, sym, cu):
     """inv(C[S, S]) afresh (:func:`inverse_subset`), and the running sums with it."""
     if cu.shape[0]:
         set_sums(C, S, cu)
@@ -106,12 +106,12 @@ def _rebuilt(C, K, S, sym, cu):
 
 
 @njit
-def _checked(M, C, K, S, sym, updates, rebuilds, cu, off):
+def checked(M, C, K, S, sym, updates, rebuilds, cu, off):
     """After a block update: M rebuilt from C (S sorted) if it has drifted (``off``: the
     update's own drift check, :func:`_row_off` of each row)."""
     if off:
         S = np.sort(S)
-        return _rebuilt(C, K, S, sym, cu), S, 0, rebuilds + 1
+        return rebuilt(C, K, S, sym, cu), S, 0, rebuilds + 1
     return M, S, updates, rebuilds
 
 

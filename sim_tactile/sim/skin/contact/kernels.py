@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...._jit import njit
-from .inverse import _checked, _rebuilt, _sums, check_vectors, inverse_with, inverse_without
+from .inverse import check_vectors, checked, inverse_with, inverse_without, rebuilt, running_sums
 
 #: No product at hand (:func:`solve_loop`'s ``pS0``).
 NO_P = np.zeros(0)
@@ -95,10 +95,10 @@ def ordered_product(X, rows, cols, v):
 
 @njit
 def _reset(C, K, S, sym, cu, in_set, rebuilds):
-    """The set S (sorted) with its inverse rebuilt (:func:`~.inverse._rebuilt`; none for an
+    """The set S (sorted) with its inverse rebuilt (:func:`~.inverse.rebuilt`; none for an
     empty set) and its count of updates restarted: ``(M, S, 0, rebuilds + 1)``."""
     S = np.sort(S)
-    M = _rebuilt(C, K, S, sym, cu) if S.size else np.zeros((0, 0))
+    M = rebuilt(C, K, S, sym, cu) if S.size else np.zeros((0, 0))
     in_set[:] = False
     in_set[S] = True
     return M, S, 0, rebuilds + 1
@@ -161,12 +161,12 @@ def solve_loop(
                 M, S, updates, rebuilds = _reset(C, K, S[keep], sym, cu, in_set, rebuilds)
             else:
                 if cu.shape[0]:
-                    _sums(C, S[keep], S[drop], cu, -1.0)
+                    running_sums(C, S[keep], S[drop], cu, -1.0)
                 u = check_vectors(C, S[keep], cu)
                 M, off = inverse_without(M, np.flatnonzero(keep), np.flatnonzero(drop), sym, S, u)
                 in_set[S[drop]] = False
                 S = S[keep]
-                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds, cu, off)
+                M, S, updates, rebuilds = checked(M, C, K, S, sym, updates + 1, rebuilds, cu, off)
             if S.size == 0 and it > 0:
                 return True, M, S, updates, rebuilds  # everything left: no load
             continue
@@ -193,12 +193,12 @@ def solve_loop(
             else:
                 T = np.concatenate((S, A))
                 if cu.shape[0]:
-                    _sums(C, S, A, cu, 1.0)  # the set's nodes gain A's columns
-                    _sums(C, A, T, cu, 0.0)  # and A's own, afresh
+                    running_sums(C, S, A, cu, 1.0)  # the set's nodes gain A's columns
+                    running_sums(C, A, T, cu, 0.0)  # and A's own, afresh
                 M, off = inverse_with(M, C, S, A, sym, check_vectors(C, T, cu))
                 S = T
                 in_set[A] = True
-                M, S, updates, rebuilds = _checked(M, C, K, S, sym, updates + 1, rebuilds, cu, off)
+                M, S, updates, rebuilds = checked(M, C, K, S, sym, updates + 1, rebuilds, cu, off)
             continue
         for k in range(S.size):
             p[S[k]] = pS[k]
