@@ -249,6 +249,54 @@ def test_a_cycling_iteration_converges_when_few_nodes_join_at_a_time(share, monk
     assert dz == pytest.approx(float(g[on].mean()), rel=1e-6)  # the pad's shift
 
 
+def test_a_slide_stepped_gives_up_a_cycling_warm_start_sooner_to_the_same_answer(monkeypatch):
+    """The recorded iCub step whose warm start cycles: a solver that steps a slide
+    (:meth:`Spectral.stepwise`) gives that start up after STEP_CYCLE_ITER iterations, not
+    CYCLE_ITER, and the fresh starts after it find the same answer, bit for bit."""
+    with np.load(Path(__file__).parent / "data" / "spectral_joins.npz") as z:
+        pen, total, warm = z["pen"], float(z["total"]), z["warm"]
+    table = compliance_table(93, 67, 0.3854496446637726e-3, E)
+    out = {}
+    for stepped in (False, True):
+        sp = Spectral(table)
+        if stepped:
+            sp.stepwise()
+        sp.p = warm.copy()
+        tries = []
+        cg = sp._cg
+
+        def counted(*a, _cg=cg, _tries=tries, **k):
+            r = _cg(*a, **k)
+            _tries.append((r[0] is not None, r[1]))
+            return r
+
+        monkeypatch.setattr(sp, "_cg", counted)
+        out[stepped] = sp.solve_force(pen, total), tries
+    (p0, dz0), tries0 = out[False]
+    (p1, dz1), tries1 = out[True]
+    # the warm start given up after the same first iterations and its patience's large changes
+    assert not tries0[0][0] and not tries1[0][0]
+    assert tries0[0][1] - spectral.CYCLE_ITER == tries1[0][1] - spectral.STEP_CYCLE_ITER >= 0
+    assert tries0[1:] == tries1[1:] and tries1[-1][0]
+    np.testing.assert_array_equal(p1, p0)
+    assert dz1 == dz0
+
+
+def test_a_slide_solved_step_by_step_steps_its_spectral_solver(cache, monkeypatch):
+    """A per-step slide on the spectral skin sets its solver to step (and its blocks)."""
+    seen = []
+    judge = Spectral._judge
+
+    def spy(self, change, stuck, patience=spectral.CYCLE_ITER):
+        seen.append(self.warm_cycle_iter)
+        return judge(self, change, stuck, patience)
+
+    monkeypatch.setattr(Spectral, "_judge", spy)
+    opts = StepOptions(skin_solver="spectral", path="per-step")
+    simulate("finger7/bumps-3x3", "grid3x3", ideal=True, pitch_m=0.8e-3, cache=cache, options=opts)
+    assert seen and seen[-1] == spectral.STEP_CYCLE_ITER
+
+
 def test_the_cycling_case_converges_with_single_products_as_with_double():
     """The recorded step above at auto's tolerance: the single-precision products take the
     same path through the cycle (its last start) as the double ones, to the tolerance."""

@@ -206,6 +206,7 @@ def _run(slide: Slide, cache) -> SimResult:
     else:
         pressed = _press(slide, proto, fid, window, cache)
         runner, warnings = pressed.runner, pressed.warnings
+        runner.stepwise()
         path = "per-step"
         held = runner.hold is not None and proto.force_control != "position"
         compiled = held_slide(runner, window, proto, fid.steps_per_sample, every) if held else None

@@ -24,7 +24,7 @@ from ...scene.model import Scene
 from ...sensors.pad import Finger
 from ..plan.fidelity import MAX_OMEGA_DT, Fidelity
 from ..plan.options import StepOptions  # noqa: F401  (its old home, for one release)
-from ..skin.models import SkinModel
+from ..skin.models import SkinModel, SpectralSkin
 from .held import HeldStep
 from .sampling import check_mujoco
 
@@ -143,6 +143,13 @@ class Runner:
     @property
     def z_speed_m_s(self) -> float:
         return float(self._qvel[self._jz])
+
+    def stepwise(self) -> None:
+        """This runner steps a whole slide, each solve started from the last step's (not a
+        phase table's phases): a spectral skin's warm start that cycles gives way sooner
+        (:meth:`~sim_tactile.sim.skin.contact.spectral.Spectral.stepwise`)."""
+        if isinstance(self.skin, SpectralSkin):
+            self.skin.solver.stepwise()
 
     def describe(self) -> str:
         """Which skin problem the held step solves (``full problem`` without one)."""
