@@ -119,15 +119,18 @@ def test_the_probe_rigs_slide_is_left_as_it_is():
 def test_a_flat_pads_full_dense_problem_is_solved_spectrally_and_keyed_so():
     """The iCub's flat pad on bumps: the dense solve's contact set starts as the whole face
     and pays |S|^2 for each node that leaves it, so ``auto`` solves the same problem
-    spectrally, to its loosened tolerance, at every step; its key says so. Problems that
-    reduce by column (gratings), a curved pad (the BioTac) and the per-step reference stay
-    dense."""
+    spectrally, to its loosened tolerance: at every 2nd step on smooth caps, at every step
+    on bumps with walls; its key says so. Problems that reduce by column (gratings), a
+    curved pad (the BioTac) and the per-step reference stay dense."""
     icub = task_slide("textures20-icub60-v1", "textures20/hemispheres-6.0mm", None)
     assert not icub.spectral  # the dense solve by the node count
     how = icub.how
-    assert (how.path, how.skin_solver, how.solve_every) == ("per-step", "spectral", 1)
+    assert (how.path, how.skin_solver, how.solve_every) == ("per-step", "spectral", 2)
     assert how.solve_tol == AUTO_SOLVE_TOL
     assert icub.describe()["skin_solver"] == "spectral"
+    walls = task_slide("textures20-icub60-v1", "textures20/cylinders-4.5mm", None)
+    assert not walls.spectral
+    assert (walls.how.skin_solver, walls.how.solve_every) == ("spectral", 1)
     step = replace(icub, options=STEP)
     assert step.how.skin_solver == "auto" and step.describe() != icub.describe()
     grating = task_slide("textures20-icub60-v1", "textures20/grating-3.0mm", None)

@@ -29,7 +29,7 @@ from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, check_forced
 from .phase import PhasePlan, depths_by_column, table_pays, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
-from .solver import dense_is_dear, dense_step_is_dear
+from .solver import dense_is_dear, dense_step_is_dear, smooth_relief
 from .span import span_pays, table_plan
 from .vibration import reports_vibration, vibration_warning
 
@@ -167,7 +167,9 @@ class Slide:
         step where the force is held (their errors measured within 2% on the task scenes);
         where the force is held on a flat pad whose dense problem would be full and large
         (:func:`~.solver.dense_is_dear`), spectrally to :data:`~.options.AUTO_SOLVE_TOL`
-        at every step instead (the same problem, within 0.005% of the dense solve); where
+        instead (the same problem, within 0.005% of the dense solve), at every step, or at
+        every :data:`~.options.AUTO_SOLVE_EVERY`-th on a texture of smooth caps
+        (:func:`~.solver.smooth_relief`); where
         it is held on a dense skin solved as a full problem (:func:`~.solver.dense_step_is_dear`),
         at every :data:`~.options.AUTO_SOLVE_EVERY`-th step;
         ``per-step`` is the reference, the knobs as given. A sensor that reports the load's
@@ -208,17 +210,26 @@ class Slide:
             return plan, replace(opts, path="phase-table", solve_tol=tol)
         held = proto.force_control == "quasi-static"
         if auto and held and self._dense_is_dear():
+            smooth = smooth_relief(self.plate)
+            every = AUTO_SOLVE_EVERY if smooth and self._every_fits else 1
             return None, replace(
-                opts, path="per-step", skin_solver="spectral", solve_tol=AUTO_SOLVE_TOL
+                opts,
+                path="per-step",
+                skin_solver="spectral",
+                solve_tol=AUTO_SOLVE_TOL,
+                solve_every=every,
             )
         if auto and held and self._dense_step_is_dear():
             return None, replace(opts, path="per-step", solve_every=AUTO_SOLVE_EVERY)
         if not (auto and self.spectral):
             return None, replace(opts, path="per-step")
-        every = (
-            AUTO_SOLVE_EVERY if held and self.resolved.steps_per_sample >= AUTO_SOLVE_EVERY else 1
-        )
+        every = AUTO_SOLVE_EVERY if held and self._every_fits else 1
         return None, replace(opts, path="per-step", solve_every=every, solve_tol=AUTO_SOLVE_TOL)
+
+    @property
+    def _every_fits(self) -> bool:
+        """Whether a sample spans at least :data:`~.options.AUTO_SOLVE_EVERY` steps."""
+        return self.resolved.steps_per_sample >= AUTO_SOLVE_EVERY
 
     def _span_pays(self, plan: PhasePlan) -> bool:
         """Whether ``auto`` takes a table along the slide (:func:`~.span.span_pays`) for the
