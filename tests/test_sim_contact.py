@@ -390,3 +390,23 @@ def test_the_ordered_product_is_the_plain_loops_bit_for_bit():
                 acc += float(C[j, S[k]]) * float(pS[k])
             want.append(acc)
         assert got.tobytes() == np.array(want, dtype=np.float64).tobytes(), count
+
+
+def test_a_read_only_compliance_has_its_floor_read_once():
+    """A skin's kept matrix is read-only: its floor is read once per process (the entry holds
+    the array, so its id is not reused); a writeable matrix is read each time, so a change
+    to it is seen."""
+    from sim_tactile.sim.skin.contact import active_set
+
+    C = np.eye(5) + 0.1
+    assert active_set.skin_floor(C) == 0.0
+    C[0, 1] = -1e-3  # writeable: read again
+    assert active_set.skin_floor(C) == -np.inf
+    kept = np.eye(5) + 0.1
+    kept.flags.writeable = False
+    assert active_set.skin_floor(kept) == 0.0
+    assert active_set._FLOORS[id(kept)][0] is kept
+    bulging = -np.ones((3, 3))
+    bulging.flags.writeable = False
+    assert active_set.skin_floor(bulging) == -np.inf
+    assert len(active_set._FLOORS) <= active_set.FLOORS_KEPT
