@@ -178,3 +178,21 @@ def test_the_old_facade_warns_and_answers_as_the_surface():
         assert facade.features(ridges) == list(surface_of(ridges).features)
     with pytest.warns(DeprecationWarning, match=r"surface_of\(plate\)\.profile"):
         assert facade.roughness_profile(rough) is surface_of(rough).profile
+
+
+@pytest.mark.parametrize(
+    ("plate", "caps"),
+    [
+        ("textures20/hemispheres-6.0mm", True),
+        ("multilayer3/hemispheres-6x6", True),
+        ("textures20/cylinders-4.5mm", False),
+        ("textures20/boxes-4.5mm", False),
+        ("textures20/grating-4.0mm", False),
+        ("textures20/flat", False),
+        ("textures20/rough-ra25", False),
+    ],
+)
+def test_a_plate_of_hemispheres_says_its_relief_is_caps_alone(plate, caps):
+    """``all_caps``: every feature a spherical cap, no vertical wall (what ``auto`` reads to
+    solve a flat pad's dear problem at every 2nd step)."""
+    assert surface_of(get_plate(plate)).all_caps is caps

@@ -139,6 +139,12 @@ class Surface:
         """(n, 5) the boxes' ``(x, half x, y, half y, height)`` [m]."""
         return np.zeros((0, 5))
 
+    @property
+    def all_caps(self) -> bool:
+        """Whether the plate has features and every one is a spherical cap (a hemisphere's
+        bumps): a relief without vertical walls where a pad rests on it."""
+        return False
+
     def y_invariant(self, y: np.ndarray) -> bool:
         """Whether the height at points ``y`` [m] across the slide is independent of their y
         (bit for bit): then nodes with equal x share one depth."""
@@ -163,6 +169,7 @@ class FeatureSurface(Surface):
         self._period = scales.feature_period_m(fs)
         self._walls = scales.box_walls(fs)
         self._all_boxes = bool(fs) and all(f.kind == "box" for f in fs)
+        self._all_caps = bool(fs) and all(f.kind == "cap" for f in fs)
         self._boxes = np.array(
             [[f.x, f.hx, f.y, f.hy, f.height_m] for f in fs if f.kind == "box"]
         ).reshape(-1, 5)
@@ -196,6 +203,10 @@ class FeatureSurface(Surface):
     @property
     def boxes(self) -> np.ndarray:
         return self._boxes
+
+    @property
+    def all_caps(self) -> bool:
+        return self._all_caps
 
 
 class ProfileSurface(Surface):

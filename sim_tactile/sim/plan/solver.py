@@ -12,6 +12,7 @@ count does not see. This module loads neither MuJoCo nor numba.
 
 from __future__ import annotations
 
+from ...plates.define.surface import surface_of
 from .fidelity import Fidelity, solved_spectrally
 from .measured_errors import node_count
 from .options import AUTO_SOLVE_EVERY
@@ -54,8 +55,7 @@ def smooth_relief(plate) -> bool:
     1-3), and at every 2nd step on the caps of 3.0 and 4.5 mm 0.64-0.67% and 0.38%; where
     the bumps are cylinders, with walls, 1.08-2.02% on cylinders-4.5mm, past the 2% that
     ``auto`` allows: those keep every step."""
-    texture = getattr(plate, "texture", None)
-    return getattr(texture, "kind", None) == "bumps" and texture.shape == "hemisphere"
+    return surface_of(plate).all_caps
 
 
 def dense_step_is_dear(fid: Fidelity, finger, by_column: bool, spectral: bool) -> bool:
