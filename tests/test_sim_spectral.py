@@ -426,3 +426,44 @@ def test_a_loose_solve_takes_single_products_within_its_tolerance_of_the_double_
         assert dza == pytest.approx(dzb, rel=10 * tol)
         assert pa.sum() == pytest.approx(total, rel=1e-12)
         assert abs(single.iterations - double.iterations) <= max(3, double.iterations // 4)
+
+
+def test_a_loose_held_solve_starts_from_the_last_answers_product(monkeypatch):
+    """A solve of single products (``auto``'s tolerance) held at a force starts from the
+    last answer with that answer's product, taken for its shift, instead of taking it
+    again: one FFT product fewer a solve, the answers within the tolerance of a solver that
+    takes its own. The reference's solves (double products) take their own."""
+    nx, ny, px = 24, 15, 0.4e-3
+    xy = _lattice(nx, ny, px, px)
+    table = compliance_table(nx, ny, px, E)
+    total = 0.5 / px**2
+    out = {}
+    for carried in (True, False):
+        sp = Spectral(table, tol=1e-4)
+        assert sp.single
+        if not carried:
+            monkeypatch.setattr(sp, "_warm_product", lambda ok, total: None)
+        products = []
+        apply = sp.apply
+
+        def counted(p, _apply=apply, _n=products):
+            _n[-1] += 1
+            return _apply(p)
+
+        monkeypatch.setattr(sp, "apply", counted)
+        answers = []
+        for k in range(6):  # the bumps move under the pad (no node beyond the margin)
+            pen = _bumps(xy, k * 0.1e-3, np.random.default_rng(k))
+            pen[7] = 0.0
+            products.append(0)
+            answers.append(sp.solve_force(pen, total))
+        out[carried] = answers, products
+    (with_, n_with), (without, n_without) = out[True], out[False]
+    assert n_with[0] == n_without[0]  # the first solve has no answer before it
+    assert n_with[1:] == [n - 1 for n in n_without[1:]]
+    for (p1, dz1), (p0, dz0) in zip(with_, without, strict=True):
+        assert np.abs(p1 - p0).max() < 1e-3 * p0.max()
+        assert dz1 == pytest.approx(dz0, rel=1e-3)
+    ref = Spectral(table)  # the reference: double products
+    ref.solve_force(_bumps(xy, 0.0, np.random.default_rng(0)), total)
+    assert ref._warm_product(np.ones(nx * ny, bool), total) is None

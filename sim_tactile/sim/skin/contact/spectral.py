@@ -19,8 +19,9 @@ step's pressures, which on a sliding pad are close.
 
 An iteration takes one FFT product: the deflection ``C p`` is carried from the last one
 through the search direction's product, and the nodes the projection moves are added by
-direct sums (:data:`DIRECT_MAX`). The iteration ends where the gaps on the set agree to the
-deflections' rounding (:data:`ROUNDING`). Where it cycles (:data:`CYCLE_ITER`), as it can
+direct sums (:data:`DIRECT_MAX`); a loosened held solve starts from the last answer with the
+product its shift took (:meth:`Spectral._warm_product`). The iteration ends where the gaps on
+the set agree to the deflections' rounding (:data:`ROUNDING`). Where it cycles (:data:`CYCLE_ITER`), as it can
 when thousands of nodes join and leave at once, a last start lets few join at a time
 (:data:`JOIN_SHARE`).
 
@@ -193,6 +194,9 @@ class Spectral:
         self._last = (None, None, None)  # (pen, total, answer) of the last solve
         #: iterations a cycling warm start runs before it gives way (:meth:`stepwise`)
         self.warm_cycle_iter = CYCLE_ITER
+        #: ``(p, C p)`` of the last held solve's answer, its product taken for the pad's
+        #: shift: the next solve's warm start where it is that answer (:meth:`_warm_product`)
+        self._answered: tuple[np.ndarray, np.ndarray] | None = None
         self._blocks: dict[tuple[int, int], Spectral] = {}  # solvers of blocks, by shape
 
     def stepwise(self) -> None:
@@ -262,7 +266,11 @@ class Spectral:
         box = self._box(np.isfinite(pen))
         if box is None:
             p = self._solve(pen, total)
-            dz = 0.0 if total is None else _mean_gap(self.apply(p), pen, p > 0)
+            dz = 0.0
+            if total is not None:
+                u = self.apply(p)
+                dz = _mean_gap(u, pen, p > 0)
+                self._answered = (self.p, u)
         else:
             p, dz = self._solve_block(pen, total, box)
         self._last = (pen.copy(), total, (p.copy(), dz))
@@ -301,7 +309,11 @@ class Spectral:
         p = np.zeros(self.n)
         p.reshape(self.ny, self.nx)[y0:y1, x0:x1] = p_b.reshape(shape)
         self.p = p
-        dz = 0.0 if total is None else _mean_gap(sub.apply(p_b), pen_b, p_b > 0)
+        dz = 0.0
+        if total is not None:
+            u_b = sub.apply(p_b)
+            dz = _mean_gap(u_b, pen_b, p_b > 0)
+            sub._answered = (sub.p, u_b)
         return p.copy(), dz
 
     def _starts(self, ok: np.ndarray, pen: np.ndarray, total: float | None):
@@ -330,8 +342,10 @@ class Spectral:
             self.p = np.zeros(self.n)  # nothing touches: no load is the solution
             return self.p.copy()
         pen_ok = np.where(ok, pen, 0.0)
+        u0 = self._warm_product(ok, total)
         for start, budget, join, patience in self._starts(ok, pen_ok, total):
-            p, it, change = self._cg(start, pen_ok, ok, total, budget, join, patience)
+            p, it, change = self._cg(start, pen_ok, ok, total, budget, join, patience, u0)
+            u0 = None  # the warm start's alone
             if p is not None:
                 self.p, self.iterations = p, it
                 return p.copy()
@@ -340,17 +354,37 @@ class Spectral:
             f"({int(ok.sum())} nodes within reach; last change {change:.3g})"
         )
 
-    def _cg(self, p, pen_ok, ok, total, budget, join_share=None, patience=CYCLE_ITER):
+    def _warm_product(self, ok: np.ndarray, total: float | None) -> np.ndarray | None:
+        """``C p`` of the warm start where it is the last held solve's answer, whose product
+        was taken for its shift (:meth:`_answer`): a solve of single products
+        (:attr:`single`) then takes it, scaled, instead of taking it again (one FFT product of
+        the 10-11 a held iCub solve takes at ``auto``'s tolerance); None elsewhere. The
+        reference's solves take their own."""
+        kept, self._answered = self._answered, None
+        if kept is None or total is None or not self.single:
+            return None
+        p, u = kept
+        if p is not self.p and not np.array_equal(p, self.p):  # another start
+            return None
+        if not ok[p > 0].all():  # loaded nodes out of reach: the warm start is not ``p``
+            return None
+        return u
+
+    def _cg(self, p, pen_ok, ok, total, budget, join_share=None, patience=CYCLE_ITER, u0=None):
         """Iterate from ``p``: ``(p, iterations, change)``, ``p`` None if ``budget``
         iterations did not converge or the iteration cycles (``patience`` large changes
         running); ``join_share``: at most that
         share of the set's nodes join in one iteration. The vector work in compiled calls
         (:mod:`.cg_kernels`); with ``join_share``, and as the reference, :meth:`_cg_numpy`."""
         if join_share is not None or not self.compiled:
-            return self._cg_numpy(p, pen_ok, ok, total, budget, join_share, patience)
+            return self._cg_numpy(p, pen_ok, ok, total, budget, join_share, patience, u0)
         held = total is not None
+        u = None  # C p, carried between iterations
         if held:
-            p = p * (total / p.sum())
+            f = total / p.sum()
+            p = p * f
+            if u0 is not None:  # the warm start's product, scaled as it is
+                u = u0 * f
         else:
             p = p.copy()
         new = np.empty(self.n)
@@ -361,7 +395,6 @@ class Spectral:
         total_f = float(total) if held else 0.0
         change = np.inf
         gap_tol = 1e-9 * max(float(np.abs(pen_ok).max()), 1e-12)
-        u = None  # C p, carried between iterations
         stuck = 0
         for it in range(1, budget + 1):
             if not p.max() > 0.0:  # every node let go (the pad at its place above the plate)
@@ -425,17 +458,22 @@ class Spectral:
         stuck = stuck + 1 if change > CYCLE_CHANGE else 0
         return (2 if stuck >= patience else 0), stuck
 
-    def _cg_numpy(self, p, pen_ok, ok, total, budget, join_share=None, patience=CYCLE_ITER):
+    def _cg_numpy(
+        self, p, pen_ok, ok, total, budget, join_share=None, patience=CYCLE_ITER, u0=None
+    ):
         """:meth:`_cg` in numpy: the reference of the compiled iteration, and the path of
         the start that lets few nodes join at a time."""
+        u = None  # C p, carried between iterations
         if total is not None:
-            p = p * (total / p.sum())
+            f = total / p.sum()
+            p = p * f
+            if u0 is not None:  # the warm start's product, scaled as it is
+                u = u0 * f
         t = np.zeros(self.n)
         g_old, delta = 1.0, 0.0
         scale = total if total is not None else None
         change = np.inf
         gap_tol = 1e-9 * max(float(np.abs(pen_ok).max()), 1e-12)
-        u = None  # C p, carried between iterations
         stuck = 0  # iterations running whose change was above CYCLE_CHANGE
         for it in range(1, budget + 1):
             on = p > 0
