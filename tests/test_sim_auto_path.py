@@ -18,7 +18,7 @@ import pytest
 from _scenes import task_slide
 
 from sim_tactile.sim import Slide, StepOptions, run
-from sim_tactile.sim.plan.options import AUTO_SOLVE_TOL
+from sim_tactile.sim.plan.options import AUTO_SOLVE_TOL, AUTO_TABLE_TOL
 from sim_tactile.tasks import get_task, task_ids
 
 #: The default's error target against the per-step solve (relative L2 over a slide).
@@ -178,3 +178,14 @@ def test_the_planners_reading_of_the_column_reduction_is_the_held_steps(task, pl
     collider = make_collider(scene, True)
     columns = collider.y_invariant(float(collider.bone0[1]))
     assert depths_by_column(slide.plate, slide.pad.patch_m, proto.offset_y_m) == columns
+
+
+def test_a_spectral_table_keeps_the_tighter_tolerance_and_a_stepped_slide_the_looser():
+    """``auto`` solves a spectral skin's phase tables to AUTO_TABLE_TOL and a slide it steps
+    to AUTO_SOLVE_TOL (the iCub on a v2 strip, and on a v1 plate)."""
+    table = task_slide("textures20-icub60-v2", "textures20-long/boxes-4.5mm", None)
+    assert table.spectral and table.how.path == "phase-table"
+    assert table.how.solve_tol == AUTO_TABLE_TOL
+    stepped = task_slide("textures20-icub60-v1", "textures20/boxes-4.5mm", None)
+    assert stepped.spectral and stepped.how.path == "per-step"
+    assert stepped.how.solve_tol == AUTO_SOLVE_TOL != AUTO_TABLE_TOL

@@ -25,7 +25,14 @@ from ...plates.define.spec import Plate
 from ...plates.define.surface import Surface, surface_of
 from ...sensors import Finger, Layout, Sensor, resolve_sensor
 from .fidelity import Fidelity, choose_fidelity, solved_spectrally
-from .options import AUTO_SOLVE_EVERY, AUTO_SOLVE_TOL, StepOptions, check_forced, keyed
+from .options import (
+    AUTO_SOLVE_EVERY,
+    AUTO_SOLVE_TOL,
+    AUTO_TABLE_TOL,
+    StepOptions,
+    check_forced,
+    keyed,
+)
 from .phase import PhasePlan, depths_by_column, table_pays, travel
 from .protocol import Protocol, SlideWindow
 from .rig import ProbeRig
@@ -161,7 +168,8 @@ class Slide:
         stretch's table is one solve, and tables the set's slides share cost a few a plate)
         or each step's solve is dear (a spectral skin: a table costs tens of solves, the
         stretch it replaces hundreds; a cheap dense or plate-anchored step of a slide's own
-        table is as quick solved as read). Elsewhere the slide is solved step
+        table is as quick solved as read; a spectral table's solves run to
+        :data:`~.options.AUTO_TABLE_TOL`). Elsewhere the slide is solved step
         by step; under ``auto`` with a spectral skin, to
         :data:`~.options.AUTO_SOLVE_TOL` and at every :data:`~.options.AUTO_SOLVE_EVERY`-th
         step where the force is held (their errors measured within 2% on the task scenes);
@@ -206,7 +214,7 @@ class Slide:
             ):
                 plan = None
         if plan is not None:
-            tol = AUTO_SOLVE_TOL if auto and self.spectral else opts.solve_tol
+            tol = AUTO_TABLE_TOL if auto and self.spectral else opts.solve_tol
             return plan, replace(opts, path="phase-table", solve_tol=tol)
         held = proto.force_control == "quasi-static"
         if auto and held and self._dense_is_dear():
