@@ -19,11 +19,11 @@ step's pressures, which on a sliding pad are close.
 
 An iteration takes one FFT product: the deflection ``C p`` is carried from the last one
 through the search direction's product, and the nodes the projection moves are added by
-direct sums (:data:`DIRECT_MAX`); a loosened held solve starts from the last answer with the
-product its shift took (:meth:`Spectral._warm_product`). The iteration ends where the gaps on
-the set agree to the deflections' rounding (:data:`ROUNDING`). Where it cycles (:data:`CYCLE_ITER`), as it can
-when thousands of nodes join and leave at once, a last start lets few join at a time
-(:data:`JOIN_SHARE`).
+direct sums (:data:`DIRECT_MAX`); a loosened held solve starts from the last answer with
+the product its shift took (:meth:`Spectral._warm_product`). The iteration ends where the
+gaps on the set agree to the deflections' rounding (:data:`ROUNDING`). Where it cycles
+(:data:`CYCLE_ITER`), as it can when thousands of nodes join and leave at once, a last start
+lets few join at a time (:data:`JOIN_SHARE`).
 
 Where the nodes within the collider's reach fill a small block of the lattice (a curved
 pad), the solve runs on that block alone (:data:`BLOCK_SHARE`): the nodes outside it cannot
@@ -373,9 +373,10 @@ class Spectral:
     def _cg(self, p, pen_ok, ok, total, budget, join_share=None, patience=CYCLE_ITER, u0=None):
         """Iterate from ``p``: ``(p, iterations, change)``, ``p`` None if ``budget``
         iterations did not converge or the iteration cycles (``patience`` large changes
-        running); ``join_share``: at most that
-        share of the set's nodes join in one iteration. The vector work in compiled calls
-        (:mod:`.cg_kernels`); with ``join_share``, and as the reference, :meth:`_cg_numpy`."""
+        running); ``join_share``: at most that share of the set's nodes join in one
+        iteration; ``u0``: ``C p`` of the start (None: taken by FFT). The vector work in
+        compiled calls (:mod:`.cg_kernels`); with ``join_share``, and as the reference,
+        :meth:`_cg_numpy`."""
         if join_share is not None or not self.compiled:
             return self._cg_numpy(p, pen_ok, ok, total, budget, join_share, patience, u0)
         held = total is not None
