@@ -25,6 +25,12 @@ plain runs): the fixed cost then holds the tables the set's slides share (made o
 and force level, whatever the set's size), and a slide's own cost holds its own table where
 it has one (a slide whose table depends on its offset): the cost a large set pays a slide.
 
+``--build-kernels`` runs ``sim-tactile kernels build`` in each side after its warm-up run:
+the kernels' code version follows every module a kernel module imports, so a side whose
+modules were edited since its kernels were built would otherwise run on numba, whose start
+(about 0.6 s a command) its every run would pay (an A/B of an edit in ``sim/`` read 0.99x
+so where it was a gain). It adds a build (a minute or two) a side and configuration.
+
 ``--against PATH`` runs each configuration alternately with this checkout and the one at
 PATH (another commit, ``git worktree add``), ``--rounds`` times each, A B A B, after one
 warm-up run of each side (which fills that side's artefact cache and compiles its
@@ -163,9 +169,12 @@ def _slides_in(config: Path) -> int:
     return len(data["plates"]) * int(data["slides_per_plate"])
 
 
-def seed(checkout: Path, config: Path, keep_tables: bool = False) -> Path:
+def seed(
+    checkout: Path, config: Path, keep_tables: bool = False, build_kernels: bool = False
+) -> Path:
     """A warm-up run's cache with its results removed (its slides; its phase tables too
-    unless ``keep_tables``): the artefacts a counted run reuses."""
+    unless ``keep_tables``): the artefacts a counted run reuses; ``build_kernels``: the
+    kernels it compiled then built ahead of time."""
     work = Path(tempfile.mkdtemp(prefix="bench-dataset-seed-"))
     env = _env(checkout, work / "cache")
     subprocess.run(
@@ -177,6 +186,15 @@ def seed(checkout: Path, config: Path, keep_tables: bool = False) -> Path:
         check=True,
     )
     shutil.rmtree(work / "set.zarr", ignore_errors=True)
+    if build_kernels:  # what the warm-up compiled, ahead of time (see the module docstring)
+        subprocess.run(
+            [*CLI, "kernels", "build"],
+            env=env,
+            capture_output=True,
+            text=True,
+            cwd=str(work),
+            check=True,
+        )
     _strip_results(work / "cache", RESULTS[:1] if keep_tables else RESULTS)
     return work / "cache"
 
@@ -191,6 +209,11 @@ def main() -> int:
     ap.add_argument(
         "--cold-tables", action="store_true", help="--fixed: each run makes its phase tables"
     )
+    ap.add_argument(
+        "--build-kernels",
+        action="store_true",
+        help="build each side's kernels ahead of time after its warm-up run (see above)",
+    )
     args = ap.parse_args()
     sides = [("A", ROOT)] + ([("B", args.against.resolve())] if args.against else [])
     if args.fixed:
@@ -198,7 +221,7 @@ def main() -> int:
     rows = []
     for config in args.configs:
         config = config.resolve()
-        seeds = {name: seed(path, config) for name, path in sides}
+        seeds = {name: seed(path, config, build_kernels=args.build_kernels) for name, path in sides}
         runs = {name: [] for name, _ in sides}
         for _ in range(args.rounds):
             for name, path in sides:
@@ -244,7 +267,10 @@ def fixed_costs(args, sides) -> int:
         both = {"N": config, "2N": doubled(config, tmp)}
         # one warm cache a side, from the double: its tables and artefacts serve both sets
         keep = not args.cold_tables
-        seeds = {name: seed(path, both["2N"], keep_tables=keep) for name, path in sides}
+        seeds = {
+            name: seed(path, both["2N"], keep_tables=keep, build_kernels=args.build_kernels)
+            for name, path in sides
+        }
         runs = {(name, k): [] for name, _ in sides for k in both}
         for _ in range(args.rounds):
             for name, path in sides:
