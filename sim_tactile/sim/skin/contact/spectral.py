@@ -144,6 +144,15 @@ def _mean_gap(u: np.ndarray, pen: np.ndarray, on: np.ndarray) -> float:
     return float(np.mean(u[on] - pen[on]))
 
 
+def _held_start(p: np.ndarray, total: float | None, u0: np.ndarray | None):
+    """``(p, u)``: a start (a copy), its pressures scaled to sum to ``total`` where it is
+    held, and its product ``u0`` scaled alike (None where not given)."""
+    if total is None:
+        return p.copy(), (None if u0 is None else u0.copy())
+    f = total / p.sum()
+    return p * f, (None if u0 is None else u0 * f)
+
+
 class Spectral:
     """The contact problem of the ``(ny, nx)`` compliance kernel ``table`` [m/Pa] (entry
     ``[j, i]``: nodes ``i`` pitches apart along x and ``j`` along y; even in each axis) on a
@@ -266,11 +275,7 @@ class Spectral:
         box = self._box(np.isfinite(pen))
         if box is None:
             p = self._solve(pen, total)
-            dz = 0.0
-            if total is not None:
-                u = self.apply(p)
-                dz = _mean_gap(u, pen, p > 0)
-                self._answered = (self.p, u)
+            dz = 0.0 if total is None else self._shift(p, pen)
         else:
             p, dz = self._solve_block(pen, total, box)
         self._last = (pen.copy(), total, (p.copy(), dz))
@@ -309,12 +314,16 @@ class Spectral:
         p = np.zeros(self.n)
         p.reshape(self.ny, self.nx)[y0:y1, x0:x1] = p_b.reshape(shape)
         self.p = p
-        dz = 0.0
-        if total is not None:
-            u_b = sub.apply(p_b)
-            dz = _mean_gap(u_b, pen_b, p_b > 0)
-            sub._answered = (sub.p, u_b)
+        dz = 0.0 if total is None else sub._shift(p_b, pen_b)
         return p.copy(), dz
+
+    def _shift(self, p: np.ndarray, pen: np.ndarray) -> float:
+        """The pad's shift ``dz`` at which the held answer ``p`` (this solver's last, equal
+        to :attr:`p`) holds its total; its product ``C p`` is kept for the next solve's warm
+        start (:meth:`_warm_product`)."""
+        u = self.apply(p)
+        self._answered = (self.p, u)
+        return _mean_gap(u, pen, p > 0)
 
     def _starts(self, ok: np.ndarray, pen: np.ndarray, total: float | None):
         """The first iterates, in the order they are tried: the last solve's pressures where
@@ -380,14 +389,7 @@ class Spectral:
         if join_share is not None or not self.compiled:
             return self._cg_numpy(p, pen_ok, ok, total, budget, join_share, patience, u0)
         held = total is not None
-        u = None  # C p, carried between iterations
-        if held:
-            f = total / p.sum()
-            p = p * f
-            if u0 is not None:  # the warm start's product, scaled as it is
-                u = u0 * f
-        else:
-            p = p.copy()
+        p, u = _held_start(p, total, u0)  # u: C p, carried between iterations
         new = np.empty(self.n)
         g = np.empty(self.n)
         t = np.zeros(self.n)
@@ -464,12 +466,7 @@ class Spectral:
     ):
         """:meth:`_cg` in numpy: the reference of the compiled iteration, and the path of
         the start that lets few nodes join at a time."""
-        u = None  # C p, carried between iterations
-        if total is not None:
-            f = total / p.sum()
-            p = p * f
-            if u0 is not None:  # the warm start's product, scaled as it is
-                u = u0 * f
+        p, u = _held_start(p, total, u0)  # u: C p, carried between iterations
         t = np.zeros(self.n)
         g_old, delta = 1.0, 0.0
         scale = total if total is not None else None
