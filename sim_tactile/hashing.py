@@ -187,13 +187,16 @@ def _library_version(dist: str) -> str:
 
 @lru_cache(maxsize=1)
 def blas_controller():
-    """threadpoolctl's view of this process's thread pools, taken once (a fresh look scans
-    the loaded libraries, 2-3 ms: a slide of roughness8 took two), after numpy's and scipy's
-    BLAS libraries are loaded."""
+    """threadpoolctl's view of this process's BLAS thread pools, numpy's and scipy's, taken
+    once (a fresh look scans the loaded libraries, 2-3 ms: a slide of roughness8 took two).
+    scipy's library is loaded for it without importing scipy.linalg
+    (:func:`_load_scipy_blas`; that import took 0.14-0.16 s of every command's start-up,
+    where most slides never call it): scipy.linalg, imported later, runs on that library,
+    under the same limits."""
     import numpy  # noqa: F401
-    import scipy.linalg  # noqa: F401
     from threadpoolctl import ThreadpoolController
 
+    _load_scipy_blas()
     return ThreadpoolController()
 
 
@@ -205,13 +208,43 @@ def one_blas_thread():
 
 @lru_cache(maxsize=1)
 def blas_kernel() -> str:
-    """The BLAS library's kernel in this process (OpenBLAS picks one by CPU: ``Haswell``,
-    ``SkylakeX``, ...; ``"unknown"`` when threadpoolctl cannot tell). Arrays a BLAS call
-    makes on one kernel differ from another's in their last bits, so what is cached on disk
-    from them is keyed by it."""
+    """The BLAS kernel of numpy's and scipy's libraries (OpenBLAS picks one by CPU:
+    ``Haswell``, ``SkylakeX``, ...; ``"unknown"`` when threadpoolctl cannot tell). Arrays a
+    BLAS call makes on one kernel differ from another's in their last bits, so what is
+    cached on disk from them is keyed by it. The same whatever this process has imported
+    (:func:`blas_controller` loads scipy's library)."""
     found = {i.get("architecture") for i in blas_controller().info() if i.get("user_api") == "blas"}
     found.discard(None)
     return "+".join(sorted(found)) or "unknown"
+
+
+def _load_scipy_blas() -> None:
+    """Load scipy's BLAS library (without scipy.linalg's import): the one a wheel bundles
+    (``scipy.libs`` beside the package on Linux, ``scipy/.dylibs`` on macOS), else import
+    scipy.linalg, which loads whichever it links to."""
+    import ctypes
+    import importlib.util
+    import sys
+
+    if "scipy.linalg" in sys.modules:
+        return
+    spec = importlib.util.find_spec("scipy")
+    where = [Path(p) for p in (spec.submodule_search_locations or [])] if spec else []
+    libs = [
+        lib
+        for w in where
+        for folder in (w.parent / "scipy.libs", w / ".dylibs")
+        for lib in sorted(folder.glob("*openblas*"))
+    ]
+    loaded = 0
+    for lib in libs:
+        try:
+            ctypes.CDLL(str(lib))
+            loaded += 1
+        except OSError:
+            continue
+    if not loaded:
+        import scipy.linalg  # noqa: F401
 
 
 def array_digest(*arrays, header: bool = True) -> str:

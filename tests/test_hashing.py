@@ -75,3 +75,48 @@ def test_code_version_follows_the_source_and_the_libraries():
     assert v != code_version(f"{PACKAGE}.sim.slide")
     with pytest.raises(ConfigError, match="not a module"):
         code_version(f"{PACKAGE}.no_such_module")
+
+
+_BLAS_PROBE = """
+import json, sys
+from threadpoolctl import ThreadpoolController
+from sim_tactile.hashing import blas_kernel, one_blas_thread
+first = sys.argv[1]
+if first == "scipy":
+    import scipy.linalg
+kernel = blas_kernel()
+before = "scipy.linalg" in sys.modules
+with one_blas_thread():
+    import scipy.linalg
+    inside = [(i["filepath"], i["num_threads"]) for i in ThreadpoolController().info()
+              if i["user_api"] == "blas"]
+print(json.dumps({"kernel": kernel, "before": before, "inside": inside}))
+"""
+
+
+@pytest.mark.parametrize("first", ["scipy", "package"])
+def test_scipys_blas_runs_on_one_thread_and_keys_alike_whatever_was_imported_first(first):
+    """The BLAS limit and kernel no longer import scipy.linalg (0.15 s of a command's
+    start-up): scipy's library is loaded alone, so scipy.linalg imported inside a slide
+    still runs on one thread, and the kernel in cache keys is the same either way."""
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-c", _BLAS_PROBE, first], capture_output=True, text=True, check=True
+    )
+    got = json.loads(out.stdout)
+    assert got["before"] is (first == "scipy")  # the package's own look imports no scipy.linalg
+    libs = {path: n for path, n in got["inside"]}
+    bundled = ("scipy.libs", "scipy/.dylibs")  # where a wheel keeps scipy's own library
+    import importlib.util
+    from pathlib import Path
+
+    here = Path(importlib.util.find_spec("scipy").submodule_search_locations[0])
+    if any((here.parent / "scipy.libs").glob("*openblas*")):
+        assert any(b in p for p in libs for b in bundled), libs
+    assert set(libs.values()) == {1}, libs  # every BLAS library, scipy's too, on one thread
+    from sim_tactile.hashing import blas_kernel
+
+    assert got["kernel"] == blas_kernel()
