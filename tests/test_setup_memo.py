@@ -180,6 +180,37 @@ def test_a_slide_places_a_copy_of_the_kept_models_never_them(fresh_memo, cache):
     assert len(model_module.SCENES) == 3
 
 
+@pytest.mark.parametrize(
+    ("plate", "sensor", "kw"),
+    [
+        ("finger7/ridges-4", "grid3x3", dict(pitch_m=0.5e-3)),  # a dense skin
+        ("textures20/boxes-4.5mm", "icub60", {}),  # a spectral one, on a primitive collider
+    ],
+)
+def test_a_slide_on_the_models_a_finished_slide_gave_back_is_the_slide_on_fresh_copies(
+    plate, sensor, kw, cache
+):
+    """A finished slide gives its placed models and MjData back (:data:`SPARE`); the next
+    slide of the scene places them again, at its own start, offset and time step, and
+    resets the data: bit for bit the slide on fresh copies."""
+    second = Protocol(duration_s=0.2, offset_y_m=4e-4, speed_m_s=0.05)
+
+    def run(p):
+        return simulate(plate, sensor, protocol=p, ideal=True, cache=cache, **kw).recording
+
+    run(Protocol(duration_s=0.2))
+    (spare,) = model_module.SPARE.values()
+    reused = run(second)
+    (again,) = model_module.SPARE.values()
+    assert again[0] is spare[0] and again[2] is spare[2]  # placed again, not copied
+    forget_process_memos()
+    assert not model_module.SPARE
+    fresh = run(second)
+    assert fresh.data.max() > 0
+    assert reused.data.tobytes() == fresh.data.tobytes()
+    assert reused.meta["normal_force_n"] == fresh.meta["normal_force_n"]
+
+
 def test_one_call_forgets_every_memo_of_the_process():
     """Whatever the package keeps in the process (the set-up arrays, the compiled models,
     the measured-errors table, roughness profiles, a height map's scales, ...) is empty after

@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import ConfigError, PhysicsError
 from ..plates import Plate, get_plate
 from ..records import Recording
+from ..scene.model import give_back
 from ..sensors import Finger, Layout, Sensor, check_pad
 from .micro import micro_loads
 from .plan.fidelity import Fidelity
@@ -263,6 +264,8 @@ def _run(slide: Slide, cache) -> SimResult:
         "steps": window.n_samples * fid.steps_per_sample,
     }
     rec = Recording(out.astype(np.float32), times, layout.positions, units=units, meta=meta)
+    if plan is None:  # its runner steps no more: the next slide of its scene places its models
+        give_back(runner.s, runner.d_dyn)
     return SimResult(rec, fid, sim_s, wall, warnings)
 
 

@@ -94,7 +94,7 @@ class Runner:
         self.s, self.skin, self.fid, self.finger = scene, skin, fid, finger
         self.quasi_static = quasi_static
         self.dt = dt
-        self.d_dyn = mujoco.MjData(scene.m_dyn)
+        self.d_dyn = scene.dynamics_data()
         self.d_dyn.qpos[:] = 0.0
         self.collider = collider
         self._area = scene.grid.area_m2
