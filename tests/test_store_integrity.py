@@ -376,18 +376,24 @@ def test_a_complete_read_only_store_reads_and_is_not_written(store, ref_back, mo
 def test_writing_a_store_on_a_full_disk_keeps_what_was_written(
     store, ref_back, tmp_path, monkeypatch
 ):
+    from sim_tactile.datasets.chunks import ChunkFile
+
     out = tmp_path / "full.zarr"
     calls = {"n": 0}
-    real = zarr.Array.__setitem__
+    real, real_chunk = zarr.Array.__setitem__, ChunkFile.write
 
-    def setitem(self, key, value):
-        calls["n"] += 1
-        if calls["n"] > 5 + 2 * 3:  # the 5 index arrays, and data + checksum of 3 slides
-            raise OSError(errno.ENOSPC, "No space left on device")
-        return real(self, key, value)
+    def counted(write):
+        def call(self, key, value):
+            calls["n"] += 1
+            if calls["n"] > 5 + 2 * 3:  # the 5 index arrays, and data + checksum of 3 slides
+                raise OSError(errno.ENOSPC, "No space left on device")
+            return write(self, key, value)
 
-    with monkeypatch.context() as mp:
-        mp.setattr(zarr.Array, "__setitem__", setitem)
+        return call
+
+    with monkeypatch.context() as mp:  # through Zarr, or the slides' own chunk files
+        mp.setattr(zarr.Array, "__setitem__", counted(real))
+        mp.setattr(ChunkFile, "write", counted(real_chunk))
         with pytest.raises(StoreError) as e:
             quiet_generate(tmp_path / "tiny.json", out)
     msg = _one_line(e)

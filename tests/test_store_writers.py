@@ -18,7 +18,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _stores import TINY, fake_slide, quiet_generate, read_back, write_config
+from _stores import (
+    TINY,
+    assert_same,
+    fake_slide,
+    make_store,
+    quiet_generate,
+    read_back,
+    store_files,
+    write_config,
+)
 
 from sim_tactile import datasets
 from sim_tactile.datasets import store as store_mod
@@ -256,3 +265,50 @@ def test_a_store_that_appears_while_one_is_made_is_left_alone(tmp_path, monkeypa
         quiet_generate(write_config(tmp_path), out)
     assert [p.name for p in out.iterdir()] == ["theirs"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["tiny.json", "x.zarr"]
+
+
+def test_the_writer_puts_zarrs_own_chunk_files_without_its_write_path(tmp_path, monkeypatch):
+    """The slides' chunks are written without Zarr's asynchronous path (:mod:`.chunks`: 1 ms
+    a slide of the small sets): the files are the ones Zarr writes, byte for byte, under the
+    same names, and every reader reads them back; arrays in another layout go through Zarr."""
+    import zarr
+
+    from sim_tactile.datasets.chunks import ChunkFile
+
+    fast = make_store(tmp_path, "fast.zarr")
+    for name in ("data", "checksum"):  # the store's arrays take the writer's own path
+        assert ChunkFile.for_array(zarr.open_array(str(fast / name), mode="r")) is not None
+    monkeypatch.setattr(ChunkFile, "for_array", classmethod(lambda cls, arr: None))
+    plain = make_store(tmp_path, "plain.zarr")
+    files = store_files(fast)
+    chunks = [f for f in files if f.parts[0] in ("data", "checksum") and f.parts[1] == "c"]
+    assert len(chunks) == 2 * 6  # each slide's samples and its mark
+    assert chunks == [f for f in store_files(plain) if f in chunks]
+    for f in chunks:
+        assert (fast / f).read_bytes() == (plain / f).read_bytes(), f
+    assert_same(read_back(fast), read_back(plain))
+
+
+def test_the_chunk_writer_takes_only_the_layout_it_writes(tmp_path):
+    """Row chunks encoded by ``bytes`` little endian and optionally ``zstd``, on a local
+    store: anything else (another compressor, other chunks) is left to Zarr."""
+    import zarr
+
+    from sim_tactile.datasets.chunks import ChunkFile
+
+    g = zarr.open_group(str(tmp_path / "g.zarr"), mode="w")
+    kw = dict(dtype="float32", fill_value=np.nan)
+    row = g.create_array("row", shape=(3, 4, 2), chunks=(1, 4, 2), **kw)
+    bare = g.create_array("bare", shape=(3,), chunks=(1,), dtype="uint64", compressors=None)
+    other = g.create_array(
+        "other", shape=(3, 4, 2), chunks=(1, 4, 2), compressors=zarr.codecs.GzipCodec(), **kw
+    )
+    tiles = g.create_array("tiles", shape=(3, 4, 2), chunks=(1, 2, 2), **kw)
+    assert ChunkFile.for_array(row) is not None and ChunkFile.for_array(bare) is not None
+    assert ChunkFile.for_array(other) is None and ChunkFile.for_array(tiles) is None
+    x = np.arange(8, dtype=np.float32).reshape(4, 2)
+    ChunkFile.for_array(row).write(1, x)
+    ChunkFile.for_array(bare).write(2, np.uint64(2**63 + 5))
+    np.testing.assert_array_equal(row[1], x)
+    assert np.isnan(row[0]).all() and int(bare[2]) == 2**63 + 5 and int(bare[0]) == 0
+    assert not list((tmp_path / "g.zarr").rglob("*.partial"))

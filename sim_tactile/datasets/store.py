@@ -52,6 +52,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import ConfigError, MissingDependencyError, StoreError
+from .chunks import ChunkFile
 from .fs import fs_errors, take, temp_name
 from .integrity import (
     FORMAT,
@@ -360,6 +361,8 @@ class SlideWriter:
         self.checksum = group["checksum"]
         self.lengths = group["lengths"][:] if lengths is None else lengths
         self.n_time, self.n_channels = self.data.shape[1:]
+        #: the chunks' files as Zarr writes them, without its asynchronous path (:mod:`.chunks`)
+        self._files = (ChunkFile.for_array(self.data), ChunkFile.for_array(self.checksum))
 
     def write(self, i: int, x: np.ndarray) -> None:
         x = np.asarray(x)
@@ -376,9 +379,17 @@ class SlideWriter:
             row[: want[0]] = x
         if self.guard is not None:
             self.guard()
+        mark = np.uint64(slide_digest(x, i, self.key))
+        data_file, mark_file = self._files
         with fs_errors(self.where, self.hint):
-            self.data[i] = row  # the data chunk first...
-            self.checksum[i] = np.uint64(slide_digest(x, i, self.key))  # ...then its mark
+            if data_file is None or want[0] == 0:  # (a row of the fill value alone: Zarr's)
+                self.data[i] = row
+            else:
+                data_file.write(i, row)  # the data chunk first...
+            if mark_file is None or mark == 0:
+                self.checksum[i] = mark
+            else:
+                mark_file.write(i, mark)  # ...then its mark
 
     def clear(self, i: int) -> None:
         """Mark slide ``i`` absent (before it is written again)."""
