@@ -212,9 +212,10 @@ def _table(grid: SkinGrid, finger: Finger) -> np.ndarray:
     return layered_compliance_table(nx, ny, grid.pitch_m, finger.stack, grid.pitch_y_m)
 
 
-#: Fewest nodes whose dense arrays go through the cache (600 nodes: 6 MB and 0.2 s to
-#: compute; a read costs about as much).
-CACHE_MIN_NODES = 1000
+#: Fewest nodes whose dense arrays go through the cache: a process computes a smaller skin's
+#: (361 nodes: 8 ms; 729 nodes, pvdf2's: 60 ms, 0.2 s the first time in a process, where a
+#: read of its 8.5 MB took 8 ms).
+CACHE_MIN_NODES = 400
 #: What the dense compliance and its inverse are computed by: their cache key holds the
 #: source of these modules (and what they import) and the libraries' versions.
 SKIN_MODULES = (__name__,)
@@ -279,7 +280,7 @@ def _memo_dense(grid, finger, slide_dir, inverse) -> CoupledSkin:
     """:class:`CoupledSkin` of the finger on ``grid``, its arrays kept in this process
     (:data:`~sim_tactile.cache.SETUP`, by the disk cache's key) and not on disk: a small
     skin's (below
-    :data:`CACHE_MIN_NODES`, whose arrays are as quick to compute as to read)."""
+    :data:`CACHE_MIN_NODES`, whose arrays are about as quick to compute as to read)."""
     key = _dense_key(grid, finger, slide_dir, inverse)
     kept = SETUP.get(key)
     if kept is None:
