@@ -26,7 +26,7 @@ call, and exports to one stacked ``.npy``. Every slide of a configuration has th
 layout valid for data sets whose slides differ.
 
 A slide is complete when its ``checksum`` chunk exists: the writer writes the data chunk and
-then the checksum (each chunk file is written atomically by Zarr's local store), so a run
+then the checksum (each chunk file written atomically, as :mod:`.chunks` says), so a run
 killed at any point leaves every slide either whole or absent. The checksum (the first 8
 bytes of the SHA-256 of the slide's samples, its index and the configuration's hash) also
 finds a chunk that was later truncated, altered or moved: every read verifies it.
