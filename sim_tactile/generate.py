@@ -34,6 +34,7 @@ import numpy as np
 
 from . import _validate as v
 from .cache import default_root
+from .datasets.chunks import remove_partial_chunks
 from .datasets.export import spec_from_tactile
 from .datasets.fs import FolderHold, fs_errors, no_empty_folders_left
 from .datasets.integrity import (
@@ -53,7 +54,6 @@ from .datasets.store import (
     open_data,
     open_root,
     read_checksums,
-    remove_partial_chunks,
     set_attrs,
     versions,
 )

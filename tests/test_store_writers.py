@@ -312,3 +312,35 @@ def test_the_chunk_writer_takes_only_the_layout_it_writes(tmp_path):
     np.testing.assert_array_equal(row[1], x)
     assert np.isnan(row[0]).all() and int(bare[2]) == 2**63 + 5 and int(bare[0]) == 0
     assert not list((tmp_path / "g.zarr").rglob("*.partial"))
+
+
+def test_a_chunk_write_stopped_before_its_rename_leaves_nothing_or_what_the_cleanup_removes(
+    tmp_path, monkeypatch
+):
+    """Stopped between the temporary file and its rename, the writer removes the temporary
+    file; killed there (no clean-up runs), the file it leaves is one that
+    :func:`remove_partial_chunks` removes (Zarr's own temporary name)."""
+    import os
+
+    import zarr
+
+    from sim_tactile.datasets import chunks
+    from sim_tactile.datasets.chunks import ChunkFile, remove_partial_chunks
+
+    g = zarr.open_group(str(tmp_path / "g.zarr"), mode="w")
+    arr = g.create_array("row", shape=(3, 4, 2), chunks=(1, 4, 2), dtype="float32")
+    names = []
+
+    def stop(src, dst):
+        names.append(Path(src))
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as mp:
+        mp.setattr(chunks.os, "replace", stop)
+        with pytest.raises(KeyboardInterrupt):
+            ChunkFile.for_array(arr).write(1, np.ones((4, 2), np.float32))
+    (tmp,) = names
+    assert not tmp.exists() and not (tmp.parent / "0").exists()
+    tmp.write_bytes(b"half")  # as a killed writer leaves it
+    assert remove_partial_chunks(tmp_path / "g.zarr") == 1 and not tmp.exists()
+    assert os.listdir(tmp.parent) == []

@@ -1,5 +1,6 @@
 """Writing one chunk of a Zarr array as Zarr's local store writes it, without Zarr's
-asynchronous write path (:class:`ChunkFile`).
+asynchronous write path (:class:`ChunkFile`), and removing the temporary files a killed
+writer left (:func:`remove_partial_chunks`).
 
 A data set's writer puts two chunks a slide (its samples and its checksum). Through Zarr's
 ``array[i] = x`` each took about 0.45 ms of CPU beyond the file's own write (its event
@@ -8,7 +9,7 @@ loop's thread, the codec pipeline's tasks), about 1 ms of a 9 ms slide of the sm
 ``bytes`` (little endian) and, for the samples, ``zstd`` through numcodecs (the library
 Zarr's codec calls), under the chunk's key, written to a temporary name beside it and
 renamed, as Zarr does (a run killed between the two leaves a ``.partial`` file that
-:func:`~.store.remove_partial_chunks` removes). Only arrays in that layout on a local store
+:func:`remove_partial_chunks` removes). Only arrays in that layout on a local store
 take this path; any other, and a chunk that holds the fill value (Zarr removes its file),
 go through Zarr. Tested: the files are Zarr's own, byte for byte.
 """
@@ -16,10 +17,14 @@ go through Zarr. Tested: the files are Zarr's own, byte for byte.
 from __future__ import annotations
 
 import os
+import re
+import stat
 import uuid
 from pathlib import Path
 
 import numpy as np
+
+from .fs import fs_errors
 
 
 class ChunkFile:
@@ -80,3 +85,27 @@ class ChunkFile:
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
+
+
+#: the temporary name Zarr's local store writes a file under before renaming it
+#: (``<name>.<hex digits>.partial``, 32 of them; ``zarr.json`` becomes ``zarr.<hex>.partial``)
+_ZARR_PARTIAL = re.compile(r".+\.[0-9a-f]+\.partial")
+
+
+def remove_partial_chunks(path: str | Path) -> int:
+    """Remove the files a killed writer left half written (Zarr, and :class:`ChunkFile`,
+    write each chunk to ``<chunk>.<hex>.partial`` and rename it; ``kill -9`` between the two leaves the
+    temporary file, which no read uses). Only files of that name, in the store's own
+    folders: never a folder (a killed export's temporary folder inside the store is not
+    the store's), nothing in a hidden folder. The caller holds the store's lock, so no
+    writer is between the two now. Returns how many were removed."""
+    n = 0
+    with fs_errors(Path(path)):
+        for folder, dirs, files in os.walk(path):
+            dirs[:] = [d for d in dirs if not d.startswith(".")]  # the store's are never hidden
+            for name in files:
+                f = Path(folder) / name
+                if _ZARR_PARTIAL.fullmatch(name) and stat.S_ISREG(f.lstat().st_mode):
+                    f.unlink(missing_ok=True)
+                    n += 1
+    return n

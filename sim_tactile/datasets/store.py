@@ -37,11 +37,8 @@ holding the store's lock (:class:`~.lock.StoreLock`).
 
 from __future__ import annotations
 
-import os
 import platform
-import re
 import shutil
-import stat
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -218,30 +215,6 @@ def _create_group(root, folder: Path, path: str, spec: StoreSpec) -> None:
         files.update(chunk_files(here, k))
     integrity = {"files": files, "values": {k: values_digest(x) for k, x in values.items()}}
     g.attrs.put(sealed({**spec.attrs(), "integrity": integrity}))
-
-
-#: the temporary name Zarr's local store writes a file under before renaming it
-#: (``<name>.<hex digits>.partial``, 32 of them; ``zarr.json`` becomes ``zarr.<hex>.partial``)
-_ZARR_PARTIAL = re.compile(r".+\.[0-9a-f]+\.partial")
-
-
-def remove_partial_chunks(path: str | Path) -> int:
-    """Remove the files a killed writer left half written (Zarr writes each chunk to
-    ``<chunk>.<hex>.partial`` and renames it; ``kill -9`` between the two leaves the
-    temporary file, which no read uses). Only files of that name, in the store's own
-    folders: never a folder (a killed export's temporary folder inside the store is not
-    the store's), nothing in a hidden folder. The caller holds the store's lock, so no
-    writer is between the two now. Returns how many were removed."""
-    n = 0
-    with fs_errors(Path(path)):
-        for folder, dirs, files in os.walk(path):
-            dirs[:] = [d for d in dirs if not d.startswith(".")]  # the store's are never hidden
-            for name in files:
-                f = Path(folder) / name
-                if _ZARR_PARTIAL.fullmatch(name) and stat.S_ISREG(f.lstat().st_mode):
-                    f.unlink(missing_ok=True)
-                    n += 1
-    return n
 
 
 def check_fits(spec: StoreSpec, where: str) -> None:
