@@ -94,8 +94,8 @@ _ZARR_PARTIAL = re.compile(r".+\.[0-9a-f]+\.partial")
 
 def remove_partial_chunks(path: str | Path) -> int:
     """Remove the files a killed writer left half written (Zarr, and :class:`ChunkFile`,
-    write each chunk to ``<chunk>.<hex>.partial`` and rename it; ``kill -9`` between the two leaves the
-    temporary file, which no read uses). Only files of that name, in the store's own
+    write each chunk to ``<chunk>.<hex>.partial`` and rename it; ``kill -9`` between the two
+    leaves the temporary file, which no read uses). Only files of that name, in the store's own
     folders: never a folder (a killed export's temporary folder inside the store is not
     the store's), nothing in a hidden folder. The caller holds the store's lock, so no
     writer is between the two now. Returns how many were removed."""
