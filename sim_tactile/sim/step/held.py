@@ -50,7 +50,7 @@ from ..collide.height import SurfaceCollider
 from ..collide.primitive import PrimitiveCollider
 from ..skin import contact
 from ..skin.contact.inverse import NO_K
-from ..skin.contact.kernels import force_loop, force_same_set, ordered_product
+from ..skin.contact.kernels import force_loop, force_same_set, joint_loop, ordered_product
 from ..skin.models import CoupledSkin, SkinModel, SpectralSkin
 
 #: Collision queries one step may take before it gives up (the pad falling through).
@@ -206,7 +206,11 @@ class CompiledHeldStep:
         self.f = np.zeros(self.n)
         self._small = np.empty(self.n_probes)
         self._reduced = (self._small, self.group, self.mult)
-        self._limits = (contact.TOL_REL, contact.MAX_ITER, QS_COLLISIONS, self.margin)
+        self._limits = (contact.TOL_REL, contact.MAX_ITER, QS_COLLISIONS, self.margin, False)
+
+    #: :meth:`step` solves a set that does not hold together with its shift (the loosened
+    #: slides' Python loop sets it while it runs: :func:`~sim_tactile.sim.slide._slide_sampled`)
+    joint = False
 
     def describe(self) -> str:
         how = []
@@ -222,21 +226,24 @@ class CompiledHeldStep:
         np.take(self._small, self.group, out=self.pen)
         return near
 
-    def kernel_args(self) -> tuple:
+    def kernel_args(self, joint: bool = False) -> tuple:
         """``(probe, reduced, skin, state, limits)``: the arguments of :func:`_held_kernel`
         this step keeps, the contact set's state as it stands (:meth:`step`, and the
-        compiled slide's :func:`~.held_run.held_steps`)."""
+        compiled slide's :func:`~.held_run.held_steps`); ``joint``: a set that does not hold
+        is solved with its shift (:func:`~sim_tactile.sim.skin.contact.kernels.joint_loop`)
+        before the reference's Newton iteration (:func:`~sim_tactile.sim.skin.contact.kernels.force_loop`)."""
         s = self.solver
         M, S, in_set, C, rowsum = s.same_set_state()
         K = s.K if s.K is not None else NO_K
         skin = (self.winkler_k, C, K, s.floor, s.symmetric)
         state = (M, S, in_set, s.sums, rowsum, s.updates, s.refresh)
-        return self.probes.probe, self._reduced, skin, state, self._limits
+        limits = self._limits[:4] + (joint,) if joint else self._limits
+        return self.probes.probe, self._reduced, skin, state, limits
 
     def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
         """:meth:`PlainHeldStep.step` in one call on the reduced problem; the contact set is
         updated when it changes."""
-        probe, reduced, skin, state, limits = self.kernel_args()
+        probe, reduced, skin, state, limits = self.kernel_args(self.joint)
         st, force, top, M2, S2, updates, rebuilds, rowsum2 = _held_kernel(
             (self.bone0, qpos, self.jx, jz),
             probe,
@@ -321,7 +328,10 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
       whether the compliance is symmetric;
     - ``state``: ``(M, S, in_set, cu, rowsum, updates, refresh)``: the contact set's state
       (``cu``: the drift check's running sums, updated in place);
-    - ``limits``: ``(tol_rel, max_iter, n_collisions, qs_margin)``;
+    - ``limits``: ``(tol_rel, max_iter, n_collisions, qs_margin, joint)``; ``joint``: a set
+      that does not hold is first solved together with its shift (:func:`joint_loop`; the
+      loosened slides), else by the reference's Newton iteration on the shift
+      (:func:`force_loop`), which also takes over where the joint loop stops;
     - ``out``: ``(pen, f, W, area, taxel_out)``: the depths and pressures it writes, and the
       taxel readout.
 
@@ -332,7 +342,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     small, group, mult = reduced
     winkler_k, C, K, floor, sym = skin
     M, S, in_set, cu, rowsum, updates, refresh = state
-    tol_rel, max_iter, n_collisions, qs_margin = limits
+    tol_rel, max_iter, n_collisions, qs_margin, joint = limits
     pen, f, W, area, taxel_out = out
     n = pen.shape[0]
     bone = np.empty(3)
@@ -355,27 +365,14 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
                 return 3, 0.0, 0.0, M, S, updates, rebuilds, rowsum
         elif S.size:  # the common case: the set holds at the shift it implies
             dz = force_same_set(M, S, pen, C, in_set, tol_rel, total, f, rowsum, floor)
-        if dz != dz:
-            st, dz, M, S, updates, rb = force_loop(
-                M,
-                S,
-                in_set,
-                C,
-                K,
-                pen,
-                tol_rel,
-                total,
-                updates,
-                refresh,
-                max_iter,
-                f,
-                False,
-                floor,
-                sym,
-                cu,
+        if dz != dz:  # the set changes: solved with the shift, then M 1 for the new M
+            st, dz, M, S, updates, rb = _changed_set(
+                (M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, f),
+                (floor, sym, cu),
+                joint,
             )
             rebuilds += rb
-            rowsum = M @ np.ones(S.size)  # M 1 for the new M (BLAS, as _force_loop forms it)
+            rowsum = M @ np.ones(S.size)  # BLAS, as _force_loop forms it
             if st != 1:
                 return 3 if st == 2 else 2, 0.0, 0.0, M, S, updates, rebuilds, rowsum
         qpos[jz] -= dz
@@ -398,6 +395,25 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
         if pen[i] > top:
             top = pen[i]
     return 0, force, top, M, S, updates, rebuilds, rowsum
+
+
+@njit
+def _changed_set(problem, how, joint):
+    """The held solve of a step whose contact set does not hold: ``problem`` is ``(M, S,
+    in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p)`` and ``how`` is
+    ``(floor, sym, cu)``, as :func:`force_loop` takes them. Where ``joint``, the set and
+    the shift are solved together first (:func:`joint_loop`), and the Newton iteration on
+    the shift goes on from where that stops; else the Newton iteration alone (the
+    reference). Returns force_loop's ``(status, dz, M, S, updates, rebuilds)``."""
+    M, S, updates = problem[0], problem[1], problem[8]
+    rebuilds = 0
+    if joint and S.size:
+        st, dz, M, S, updates, rebuilds = joint_loop(*problem, *how)
+        if st == 1:
+            return st, dz, M, S, updates, rebuilds
+    rest = (M, S) + problem[2:8] + (updates,) + problem[9:]  # from the state it left
+    st, dz, M, S, updates, rb = force_loop(*rest, False, *how)
+    return st, dz, M, S, updates, rebuilds + rb
 
 
 @njit

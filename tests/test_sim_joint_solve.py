@@ -1,0 +1,172 @@
+"""The held force solved with its contact set (``joint_loop``, the loosened slides' held
+solve) against the reference's Newton iteration on the shift (``force_loop``) and a
+non-negative least-squares solve of the contact problem at the shift it found."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import nnls
+
+from sim_tactile.scene.elastic import compliance_matrix
+from sim_tactile.sim.skin.contact import ActiveSet
+from sim_tactile.sim.skin.contact.inverse import NO_K
+from sim_tactile.sim.skin.contact.kernels import force_loop, force_same_set, joint_loop
+from sim_tactile.sim.skin.contact.reference import MAX_ITER, TOL_REL
+
+PITCH = 0.5e-3
+
+
+def _grid():
+    xs = (np.arange(25) - 12) * PITCH
+    ys = (np.arange(9) - 4) * PITCH
+    X, Y = np.meshgrid(xs, ys)
+    return np.column_stack([X.ravel(), Y.ravel()])
+
+
+def _skin(kind: str, xy: np.ndarray) -> np.ndarray:
+    if kind == "half-space":
+        return compliance_matrix(xy, PITCH, 0.3e6, pitch_y_m=PITCH)
+    from sim_tactile.scene.layered import layered_compliance_matrix
+    from sim_tactile.sensors.stack import Layer, Stack
+
+    # a 1 mm layer on the bone: it bulges around a load (C < 0 off the diagonal's band)
+    return layered_compliance_matrix(xy, PITCH, Stack((Layer(1e-3, 0.3e6, 0.5),)), pitch_y_m=PITCH)
+
+
+def _depths(xy: np.ndarray, x0: float) -> np.ndarray:
+    """Hemispherical caps of 1.5 mm radius, 4 mm apart, on a base 0.3 mm below their tops,
+    under a flat pad whose level the caps' tops reach 50 um into: the pad slides ``x0``
+    along them."""
+    cx = np.round((xy[:, 0] + x0) / 4e-3) * 4e-3 - x0
+    cy = np.round(xy[:, 1] / 4e-3) * 4e-3
+    r2 = (xy[:, 0] - cx) ** 2 + (xy[:, 1] - cy) ** 2
+    cap = np.sqrt(np.maximum(1.5e-3**2 - r2, 0.0)) - 1.2e-3
+    return np.maximum(cap, 0.0) - 0.25e-3
+
+
+def _total(C: np.ndarray, xy: np.ndarray) -> float:
+    """The summed pressure of the pad pressed to the caps' level at the slide's start."""
+    p, _ = ActiveSet(C).solve(_depths(xy, 0.0))
+    return float(p.sum())
+
+
+class _Joint(ActiveSet):
+    """The held step's order (:func:`~sim_tactile.sim.step.held._held_kernel`): the set
+    that holds, else the joint loop, else the Newton iteration from where it stopped."""
+
+    def __init__(self, C, max_iter=MAX_ITER):
+        super().__init__(C, np.linalg.inv(C))
+        self.max_iter, self.joined, self.stopped = max_iter, 0, 0
+
+    def solve_force(self, pen, total, max_iter=MAX_ITER):
+        p = np.empty_like(pen)
+        if self.S.size:
+            M, S, in_set, C, rowsum = self.same_set_state()
+            dz = force_same_set(M, S, pen, C, in_set, TOL_REL, total, p, rowsum, self.floor)
+            if dz == dz:
+                return p, dz
+            st, dz, M, S, updates, rb = joint_loop(
+                *(self.M, self.S, self._in, self.C, self.K, pen, TOL_REL, float(total)),
+                *(self.updates, self.refresh, self.max_iter, p, self.floor, True, self._cu),
+            )
+            self._take(M, S, updates, rb)
+            if st == 1:
+                self.joined += 1
+                return p, dz
+            self.stopped += 1
+        return super().solve_force(pen, total, max_iter)
+
+
+def _reference(C: np.ndarray, pen: np.ndarray) -> np.ndarray:
+    """min 1/2 p'Cp - pen'p, p >= 0 (whose KKT conditions are the contact problem), as an
+    NNLS problem through the Cholesky factor C = L L': another solver of the same problem."""
+    L = np.linalg.cholesky(C)
+    p, _ = nnls(L.T, np.linalg.solve(L, pen), maxiter=10_000)
+    return p
+
+
+@pytest.mark.parametrize("kind", ["half-space", "layered"])
+def test_the_joint_loop_holds_the_force_as_the_newton_iteration_does(kind):
+    xy = _grid()
+    C = _skin(kind, xy)
+    total = _total(C, xy)
+    ref, joint = ActiveSet(C, np.linalg.inv(C)), _Joint(C)
+    for k in range(120):
+        pen = _depths(xy, k * 0.13e-3)  # 65 mm/s, a solve every 2 ms
+        p_ref, dz_ref = ref.solve_force(pen.copy(), total)
+        p, dz = joint.solve_force(pen.copy(), total)
+        assert p.sum() == pytest.approx(total, rel=1e-12)
+        np.testing.assert_allclose(p, p_ref, rtol=0, atol=1e-9 * p_ref.max())
+        assert dz == pytest.approx(dz_ref, rel=0, abs=1e-12)
+        if k % 30 == 0:  # the same problem, by another solver
+            want = _reference(C, pen + dz)
+            np.testing.assert_allclose(p, want, rtol=0, atol=1e-7 * want.max())
+    assert joint.joined > 40, "the sliding caps must change the set at many steps"
+    assert joint.stopped == 0
+
+
+def test_a_joint_loop_that_stops_leaves_a_state_the_newton_iteration_goes_on_from():
+    """Allowed one set change, the joint loop stops short at most steps; the Newton
+    iteration then goes on from the set it left, to the same answer."""
+    xy = _grid()
+    C = _skin("half-space", xy)
+    total = _total(C, xy)
+    ref, short = ActiveSet(C, np.linalg.inv(C)), _Joint(C, max_iter=1)
+    for k in range(60):
+        pen = _depths(xy, k * 0.13e-3)
+        p_ref, _ = ref.solve_force(pen.copy(), total)
+        p, _ = short.solve_force(pen.copy(), total)
+        np.testing.assert_allclose(p, p_ref, rtol=0, atol=1e-9 * p_ref.max())
+        S = short.S  # the inverse it keeps is the inverse of its set
+        np.testing.assert_allclose(short.M @ C[np.ix_(S, S)], np.eye(S.size), atol=1e-8)
+    assert short.stopped > 10
+
+
+def test_the_joint_loop_refuses_a_set_it_cannot_start_from():
+    """An empty set, and a set with a node out of reach: status 0, nothing changed."""
+    xy = _grid()
+    C = _skin("half-space", xy)
+    pen = _depths(xy, 0.0)
+    p = np.zeros(len(pen))
+    empty = (np.zeros((0, 0)), np.zeros(0, np.int64))
+    common = (np.zeros(len(pen), bool), C, NO_K)
+    st, *_ = joint_loop(
+        *empty, *common, pen, TOL_REL, 1.0, 0, 100, 50, p, 0.0, True, np.zeros((0, 2))
+    )
+    assert st == 0
+    S = np.flatnonzero(pen > 0)
+    M = np.linalg.inv(C[np.ix_(S, S)])
+    far = pen.copy()
+    far[S[0]] = -np.inf
+    in_set = np.zeros(len(pen), bool)
+    in_set[S] = True
+    st, _, M2, S2, *_ = joint_loop(
+        M, S, in_set, C, NO_K, far, TOL_REL, 1.0, 0, 100, 50, p, 0.0, True, np.zeros((0, 2))
+    )
+    assert st == 0 and M2 is M and S2 is S
+
+
+def test_the_newton_iteration_is_unchanged_where_the_joint_loop_is_not_asked_for():
+    """The reference's held solve does not go through the joint loop: its answer is
+    force_loop's own, bit for bit, at every step of the slide."""
+    xy = _grid()
+    C = _skin("layered", xy)
+    total = _total(C, xy)
+    a, b = ActiveSet(C, np.linalg.inv(C)), ActiveSet(C, np.linalg.inv(C))
+    for k in range(40):
+        pen = _depths(xy, k * 0.13e-3)
+        p_a, dz_a = a.solve_force(pen.copy(), total)
+        p_b = np.empty_like(pen)
+        if b.S.size:
+            M, S, in_set, Cb, rowsum = b.same_set_state()
+            dz_b = force_same_set(M, S, pen, Cb, in_set, TOL_REL, total, p_b, rowsum, b.floor)
+            if dz_b == dz_b:
+                assert np.array_equal(p_a, p_b) and dz_a == dz_b
+                continue
+        st, dz_b, M, S, up, rb = force_loop(
+            *(b.M, b.S, b._in, b.C, b.K, pen, TOL_REL, float(total), b.updates, b.refresh),
+            *(MAX_ITER, p_b, False, b.floor, b.symmetric, b._cu),
+        )
+        b._take(M, S, up, rb)
+        assert st == 1 and np.array_equal(p_a, p_b) and dz_a == dz_b
