@@ -170,3 +170,47 @@ def test_the_newton_iteration_is_unchanged_where_the_joint_loop_is_not_asked_for
         )
         b._take(M, S, up, rb)
         assert st == 1 and np.array_equal(p_a, p_b) and dz_a == dz_b
+
+
+def _quick_slide(task: str, k: int = 0):
+    from sim_tactile.tasks import get_task
+
+    return get_task(task).get_data.jobs(seed=0, quick=True)[k]
+
+
+def test_auto_takes_the_joint_solve_where_the_compiled_dense_step_runs():
+    """``auto`` solves a dense skin's held step jointly (a rough plate under the PVDF film,
+    the multilayer's dense full problem at every 2nd step); the reference by name, a
+    spectral skin, position control and the probe rig keep the Newton iteration. The knob
+    enters the key where it is set, so nothing either made is served for the other."""
+    from dataclasses import replace
+
+    for task in ("roughness8-v1", "multilayer3-v1", "textures20-biotac19-v1"):
+        for job in (_quick_slide(task, k) for k in (0, 1)):
+            if job.table_plan() is None:
+                assert job.how.held_solve == "joint", (task, job.label)
+            ref = replace(job, options=replace(job.options, path="per-step"))
+            assert ref.how.held_solve == "newton"
+            assert job.describe() != ref.describe()
+    icub = [_quick_slide("textures20-icub60-v1", k) for k in range(12)]
+    spectral = [j for j in icub if j.spectral or j.how.skin_solver == "spectral"]
+    assert spectral and all(j.how.held_solve == "newton" for j in spectral)
+    for task in ("finger7-v2", "multilayer3-v2"):  # position control; the probe rig
+        assert _quick_slide(task).how.held_solve == "newton"
+
+
+def test_a_jointly_solved_slide_records_what_the_reference_records(cache):
+    """A PVDF slide on a rough plate (``auto``: every step, the joint solve) against the
+    same slide by the reference (``path = per-step``): the runner's held step says which it
+    solves, and the recordings agree to float32's rounding."""
+    from dataclasses import replace
+
+    from sim_tactile.sim.slide import prepare, run
+
+    job = replace(_quick_slide("roughness8-v1"), ideal=True)
+    ref = replace(job, options=replace(job.options, path="per-step"))
+    assert prepare(job, cache=cache).runner.hold.joint
+    assert not prepare(ref, cache=cache).runner.hold.joint
+    a, b = run(job, cache).recording, run(ref, cache).recording
+    np.testing.assert_allclose(a.data, b.data, rtol=1e-5, atol=1e-6 * np.abs(b.data).max())
+    np.testing.assert_allclose(a.meta["normal_force_n"], b.meta["normal_force_n"], rtol=1e-9)

@@ -291,8 +291,8 @@ def test_every_tasks_slides_keep_their_descriptions():
     on every simulated task's quick and full slides. The default path (``auto``) differs from
     it only by the keys it adds: ``path`` exactly where the slide is read off a phase table,
     ``press`` exactly where it presses once under a held force, and the knobs it chose
-    (``solve_tol``, ``solve_every``, ``skin_solver``), so nothing either path made is served
-    for the other."""
+    (``solve_tol``, ``solve_every``, ``skin_solver``, ``held_solve``), so nothing either path
+    made is served for the other."""
     import json
     from dataclasses import replace
     from pathlib import Path
@@ -301,7 +301,7 @@ def test_every_tasks_slides_keep_their_descriptions():
     from sim_tactile.tasks import get_task, task_ids
 
     released = json.loads((Path(__file__).parent / "data" / "slide_descriptions.json").read_text())
-    chosen = {"path", "press", "solve_tol", "solve_every", "skin_solver"}
+    chosen = {"path", "press", "solve_tol", "solve_every", "skin_solver", "held_solve"}
     for t, runs in released.items():
         ss = get_task(t).get_data
         for run, digest in runs.items():

@@ -32,7 +32,6 @@ from .plan.protocol import (
 )
 from .plan.slide import Slide
 from .step.build import runner_for
-from .step.held import CompiledHeldStep
 from .step.held_run import held_slide
 from .step.phase_table import SETTLE_M, SETTLE_STEPS
 from .step.runner import Runner, drag_factor, drag_warning
@@ -378,23 +377,16 @@ def _slide_sampled(
     t0 = time.perf_counter()
     solved = solved_steps(total, every)
     g = -1  # the last step solved
-    joint = isinstance(runner.hold, CompiledHeldStep) and every > 1  # as held_slide solves
-    if joint:
-        runner.hold.joint = True
-    try:
-        for j in solved.tolist():
-            for i in range(g + 1, j):  # the dynamics alone
-                runner.coast(strokes.command(x0 + runner.x_m))
-                x_after[i], v_after[i] = x0 + runner.x_m, strokes.v
-            forces[j] = runner.step(
-                force_cmd=F, slide_v=strokes.command(x0 + runner.x_m), taxel_out=loads[j]
-            )
-            x_after[j], v_after[j] = x0 + runner.x_m, strokes.v
-            runner.check_warnings()
-            g = j
-    finally:
-        if joint:
-            runner.hold.joint = False
+    for j in solved.tolist():
+        for i in range(g + 1, j):  # the dynamics alone
+            runner.coast(strokes.command(x0 + runner.x_m))
+            x_after[i], v_after[i] = x0 + runner.x_m, strokes.v
+        forces[j] = runner.step(
+            force_cmd=F, slide_v=strokes.command(x0 + runner.x_m), taxel_out=loads[j]
+        )
+        x_after[j], v_after[j] = x0 + runner.x_m, strokes.v
+        runner.check_warnings()
+        g = j
     fill_between(loads, forces, solved)  # the steps between on the line between solves
     means, mean_forces = sample_means(loads, forces, n, n_sub)  # as _slide averages them
     x_pad = sample_x(x_after, v_after, n, n_sub, proto.rate_hz)

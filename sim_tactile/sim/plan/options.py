@@ -76,6 +76,12 @@ AUTO_SOLVE_EVERY = 2
 PATHS = ("auto", "per-step", "phase-table")
 #: Where the batched solves run (``StepOptions.device``): the CPU, or a GPU through torch.
 DEVICES = ("cpu", "cuda")
+#: How a dense skin's held step finds the height that carries the force where its contact
+#: set changes (``StepOptions.held_solve``): ``newton``, Newton's iteration on the height
+#: with the set solved to convergence at each trial height (the reference), or ``joint``,
+#: the set and the height solved together (the same solution, in fewer block updates of the
+#: set's inverse; what ``auto`` takes on a dense skin).
+HELD_SOLVES = ("newton", "joint")
 
 
 @dataclass(frozen=True)
@@ -158,6 +164,14 @@ KNOBS: tuple[Knob, ...] = (
         choices=("auto", "dense", "spectral"),
     ),
     Knob(
+        "held_solve",
+        "a dense skin's held step where its contact set changes: newton (Newton's iteration "
+        "on the height, the reference) or joint (the set and the height solved together, "
+        "the same solution in fewer updates; auto takes it)",
+        "choice",
+        choices=HELD_SOLVES,
+    ),
+    Knob(
         "solve_every",
         "the skin solved at every n-th step of a slide held at its force, the taxel loads "
         "between read off the line between two solves (1: every step, the reference)",
@@ -209,6 +223,8 @@ class StepOptions:
 
     primitive_collider, compiled_hold, reduce_skin, skin_solver: which implementation of
         each part of a step runs (each against its plain reference, tested equal);
+    held_solve: ``newton`` or ``joint`` (:data:`HELD_SOLVES`): how the compiled held step
+        solves a contact set that changes (``newton``: the reference);
     solve_every: under quasi-static force control, the skin solved at every n-th step, the
         taxel loads between on the line between two solves (1: every step, the reference);
     solve_tol: the spectral contact solve's tolerance (None: the reference, 1e-10);
@@ -220,6 +236,7 @@ class StepOptions:
     compiled_hold: bool = True
     reduce_skin: bool = True
     skin_solver: str = "auto"
+    held_solve: str = "newton"
     solve_every: int = 1
     solve_tol: float | None = None
     path: str = "auto"

@@ -190,8 +190,10 @@ class Slide:
         # where the batched solves run, not what they give)
         default = replace(opts, device="cpu") == StepOptions()
         vibration = opts.path == "auto" and reports_vibration(self.sensor_def.transducers)
-        if self.rig is not None or vibration or (opts.path == "auto" and not default):
+        if self.rig is not None or (opts.path == "auto" and not default):
             return None, replace(opts, path="per-step")
+        if vibration:
+            return None, self._joint(replace(opts, path="per-step"))
         proto = self.drawn()
         auto = opts.path == "auto"
         plan = table_plan(
@@ -215,7 +217,8 @@ class Slide:
                 plan = None
         if plan is not None:
             tol = AUTO_TABLE_TOL if auto and self.spectral else opts.solve_tol
-            return plan, replace(opts, path="phase-table", solve_tol=tol)
+            tabled = replace(opts, path="phase-table", solve_tol=tol)
+            return plan, self._joint(tabled) if auto else tabled
         held = proto.force_control == "quasi-static"
         if auto and held and self._dense_is_dear():
             smooth = smooth_relief(self.plate)
@@ -228,11 +231,28 @@ class Slide:
                 solve_every=every,
             )
         if auto and held and self._dense_step_is_dear():
-            return None, replace(opts, path="per-step", solve_every=AUTO_SOLVE_EVERY)
+            return None, self._joint(replace(opts, path="per-step", solve_every=AUTO_SOLVE_EVERY))
         if not (auto and self.spectral):
-            return None, replace(opts, path="per-step")
+            stepped = replace(opts, path="per-step")
+            return None, self._joint(stepped) if auto else stepped
         every = AUTO_SOLVE_EVERY if held and self._every_fits else 1
         return None, replace(opts, path="per-step", solve_every=every, solve_tol=AUTO_SOLVE_TOL)
+
+    def _joint(self, opts: StepOptions) -> StepOptions:
+        """``opts`` with ``held_solve = "joint"`` where ``auto`` takes it: where the held step
+        is the compiled dense one (a coupled skin solved densely under quasi-static force
+        control, neither anchored to the plate's walls nor clipped); elsewhere the knob would
+        not act, and is left out of the slide's key."""
+        fid = self.resolved
+        compiled = (
+            opts.compiled_hold
+            and self.drawn().force_control == "quasi-static"
+            and fid.level != "L0"
+            and fid.wall_m is None
+            and not fid.clipped
+            and not self.spectral
+        )
+        return replace(opts, held_solve="joint") if compiled else opts
 
     @property
     def _every_fits(self) -> bool:

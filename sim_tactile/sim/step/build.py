@@ -87,6 +87,7 @@ def runner_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache)
         z0_m=z0,
         compiled=options.compiled_hold,
         reduce=options.reduce_skin,
+        joint=options.held_solve == "joint",
     )
     return Runner(
         scene,

@@ -35,6 +35,7 @@ def make_held_step(
     z0_m: float,
     compiled: bool = True,
     reduce: bool = True,
+    joint: bool = False,
 ) -> HeldStep | None:
     """The held step of a slide, chosen in this one place: None unless the force is held
     quasi-statically (``quasi_static``), else
@@ -43,7 +44,7 @@ def make_held_step(
     - else patches clipped at the walls and the taxels' edges where it says so (``clipped``);
     - else the whole step in one compiled call where the collider is compiled, ``compiled``
       is set and the skin is dense (:class:`CompiledHeldStep`, on the reduced problem where
-      ``reduce``);
+      ``reduce``, a changed contact set solved together with the height where ``joint``);
     - else the plain loop over the collider and the skin (:class:`PlainHeldStep`).
 
     A fidelity whose grid the scene does not serve is refused (ConfigError), under any
@@ -70,5 +71,5 @@ def make_held_step(
         return hold
     dense = not isinstance(skin, SpectralSkin)  # the compiled step is dense
     if collider.compiled and compiled and dense:
-        return CompiledHeldStep(collider, skin, scene.W, area, margin, reduce)
+        return CompiledHeldStep(collider, skin, scene.W, area, margin, reduce, joint=joint)
     return PlainHeldStep(collider, skin, scene.W, area, margin)

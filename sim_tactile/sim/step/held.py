@@ -148,7 +148,10 @@ class CompiledHeldStep:
 
     ``pen`` and ``f`` live on the reduced nodes ``nodes`` (all nodes when no reduction
     applies, or ``reduce`` is False); ``f`` sums each mirror pair's pressures, so
-    ``area * f.sum()`` is the normal force and ``W @ (area * f)`` the taxel loads."""
+    ``area * f.sum()`` is the normal force and ``W @ (area * f)`` the taxel loads. ``joint``:
+    a contact set that does not hold is solved together with the pad's shift
+    (:func:`~sim_tactile.sim.skin.contact.kernels.joint_loop`, ``StepOptions.held_solve =
+    "joint"``), else by the reference's Newton iteration on the shift alone."""
 
     def __init__(
         self,
@@ -158,8 +161,10 @@ class CompiledHeldStep:
         area_m2: float,
         margin: float,
         reduce: bool = True,
+        joint: bool = False,
     ):
         n = W.shape[1]
+        self.joint = joint
         self.area = area_m2
         self.margin = margin
         self.bone0, self.jx = collider.bone0, collider.jx
@@ -208,10 +213,6 @@ class CompiledHeldStep:
         self._reduced = (self._small, self.group, self.mult)
         self._limits = (contact.TOL_REL, contact.MAX_ITER, QS_COLLISIONS, self.margin, False)
 
-    #: :meth:`step` solves a set that does not hold together with its shift (the loosened
-    #: slides' Python loop sets it while it runs: :func:`~sim_tactile.sim.slide._slide_sampled`)
-    joint = False
-
     def describe(self) -> str:
         how = []
         if self.columns:
@@ -226,24 +227,23 @@ class CompiledHeldStep:
         np.take(self._small, self.group, out=self.pen)
         return near
 
-    def kernel_args(self, joint: bool = False) -> tuple:
+    def kernel_args(self) -> tuple:
         """``(probe, reduced, skin, state, limits)``: the arguments of :func:`_held_kernel`
         this step keeps, the contact set's state as it stands (:meth:`step`, and the
-        compiled slide's :func:`~.held_run.held_steps`); ``joint``: a set that does not hold
-        is solved with its shift (:func:`~sim_tactile.sim.skin.contact.kernels.joint_loop`)
-        before the reference's Newton iteration (:func:`~sim_tactile.sim.skin.contact.kernels.force_loop`)."""
+        compiled slide's :func:`~.held_run.held_steps`); the limits say whether a set that
+        does not hold is solved with its shift (:attr:`joint`)."""
         s = self.solver
         M, S, in_set, C, rowsum = s.same_set_state()
         K = s.K if s.K is not None else NO_K
         skin = (self.winkler_k, C, K, s.floor, s.symmetric)
         state = (M, S, in_set, s.sums, rowsum, s.updates, s.refresh)
-        limits = self._limits[:4] + (joint,) if joint else self._limits
+        limits = self._limits[:4] + (True,) if self.joint else self._limits
         return self.probes.probe, self._reduced, skin, state, limits
 
     def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
         """:meth:`PlainHeldStep.step` in one call on the reduced problem; the contact set is
         updated when it changes."""
-        probe, reduced, skin, state, limits = self.kernel_args(self.joint)
+        probe, reduced, skin, state, limits = self.kernel_args()
         st, force, top, M2, S2, updates, rebuilds, rowsum2 = _held_kernel(
             (self.bone0, qpos, self.jx, jz),
             probe,

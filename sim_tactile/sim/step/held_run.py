@@ -59,7 +59,7 @@ def held_slide(runner: Runner, window, proto, n_sub: int, every: int):
     solved = solved_steps(total, every)
     loads = np.empty((total, runner.s.layout.n))
     forces = np.empty(total)
-    held_steps(runner, path, solved, proto.force_n, loads, forces, joint=every > 1)
+    held_steps(runner, path, solved, proto.force_n, loads, forces)
     fill_between(loads, forces, solved)
     out_loads, out_forces = sample_means(loads, forces, n, n_sub)
     x_pad = path.x_pad(n, n_sub, proto.rate_hz)
@@ -189,29 +189,18 @@ def _rolled(d, m, jx, jz, strokes: Strokes, out, x0: float) -> int:
     return k
 
 
-def held_steps(
-    runner: Runner,
-    path: Path,
-    steps: np.ndarray,
-    force_n: float,
-    loads,
-    forces,
-    joint: bool = False,
-):
+def held_steps(runner: Runner, path: Path, steps: np.ndarray, force_n: float, loads, forces):
     """The runner's held steps ``steps`` (increasing indices of ``path``) in one compiled
     call, each from the height the one before it found (the first from the runner's), their
     loads and forces written at those indices; the runner's drag sums and height updated as
-    its own steps update them, and its errors raised at the first step that fails.
-    ``joint``: a contact set that does not hold is solved together with the pad's shift
-    (:meth:`~.held.CompiledHeldStep.kernel_args`), as the loosened slides (``solve_every`` >
-    1) solve it; the per-step reference takes the Newton iteration."""
+    its own steps update them, and its errors raised at the first step that fails."""
     hold = runner.hold
     tops = np.empty(loads.shape[0])
     zs = np.empty(loads.shape[0])
     qpos = runner._qpos.copy()
     total_pa = force_n / runner._area
     bounds = (runner.max_pen_allowed, runner.z0, runner.max_depth)
-    args = hold.kernel_args(joint)
+    args = hold.kernel_args()
     st, j, M2, S2, updates, rebuilds, rowsum2 = _held_steps(
         path.x_joint[steps],
         qpos,
