@@ -231,7 +231,7 @@ class CompiledHeldStep:
         """``(probe, reduced, skin, state, limits)``: the arguments of :func:`_held_kernel`
         this step keeps, the contact set's state as it stands (:meth:`step`, and the
         compiled slide's :func:`~.held_run.held_steps`); the limits say whether a set that
-        does not hold is solved with its shift (:attr:`joint`)."""
+        does not hold is solved with its shift (``joint``)."""
         s = self.solver
         M, S, in_set, C, rowsum = s.same_set_state()
         K = s.K if s.K is not None else NO_K
