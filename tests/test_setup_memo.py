@@ -211,6 +211,38 @@ def test_a_slide_on_the_models_a_finished_slide_gave_back_is_the_slide_on_fresh_
     assert reused.meta["normal_force_n"] == fresh.meta["normal_force_n"]
 
 
+def test_a_tabled_slide_gives_its_runner_back_and_the_next_one_is_the_same(cache):
+    """A slide read off its phase table that leaves it (its runner pressed for the steps off
+    the table) gives its runner's models back too; the next slide of the scene, placed on
+    them, is bit for bit the slide on fresh copies."""
+    from dataclasses import replace
+
+    from sim_tactile.plates import get_plate
+    from sim_tactile.sim import Slide
+    from sim_tactile.sim.slide import run
+
+    first = Slide(
+        get_plate("finger7/ridges-4"),
+        "grid3x3",
+        Protocol(speed_m_s=0.06, force_jitter=0.1, duration_s=0.94),
+        4,
+        "L0",
+        True,
+        plate_slides=25,
+    )
+    assert first.table_plan() is not None
+    second = replace(first, seed=5)
+    rec = run(first, cache).recording
+    assert "phase table" in rec.meta["skin_problem"] and "the rest:" in rec.meta["skin_problem"]
+    (spare,) = model_module.SPARE.values()
+    reused = run(second, cache).recording
+    assert model_module.SPARE[next(iter(model_module.SPARE))][0] is spare[0]  # placed again
+    forget_process_memos()
+    fresh = run(second, cache).recording
+    assert reused.data.tobytes() == fresh.data.tobytes()
+    assert reused.meta["normal_force_n"] == fresh.meta["normal_force_n"]
+
+
 def test_one_call_forgets_every_memo_of_the_process():
     """Whatever the package keeps in the process (the set-up arrays, the compiled models,
     the measured-errors table, roughness profiles, a height map's scales, ...) is empty after

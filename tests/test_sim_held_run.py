@@ -167,6 +167,7 @@ def test_a_tabled_slide_records_what_its_step_by_step_loop_records(slide, monkey
     cache = ArtefactCache(tmp_path)
     fast = run(slide, cache).recording
     monkeypatch.setattr(tabled, "glide", lambda *a, **k: None)  # the loop step by step
+    monkeypatch.setattr(tabled, "glide_runner", lambda *a, **k: None)
     slow = run(slide, cache).recording
     steps = [r.meta["skin_problem"].split("; ")[-1] for r in (fast, slow)]  # steps off it
     assert steps[0] == steps[1], steps

@@ -264,7 +264,7 @@ def _run(slide: Slide, cache) -> SimResult:
         "steps": window.n_samples * fid.steps_per_sample,
     }
     rec = Recording(out.astype(np.float32), times, layout.positions, units=units, meta=meta)
-    if plan is None:  # its runner steps no more: the next slide of its scene places its models
+    if runner is not None:  # it steps no more: the next slide of its scene places its models
         give_back(runner.s, runner.d_dyn)
     return SimResult(rec, fid, sim_s, wall, warnings)
 

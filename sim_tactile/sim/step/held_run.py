@@ -48,12 +48,7 @@ def held_slide(runner: Runner, window, proto, n_sub: int, every: int):
     t0 = time.perf_counter()
     n = window.n_samples
     total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
-    r = runner
-    kept = _kept(r._m_dyn, r.d_dyn)
-    try:
-        path = glide(r.d_dyn, r._m_dyn, r._jx, r._jz, window, proto.speed_m_s, r.dt, total, n_sub)
-    finally:
-        _restore(r._m_dyn, r.d_dyn, kept)
+    path = glide_runner(runner, window, proto.speed_m_s, runner.dt, total, n_sub)
     if path is None:
         return None
     solved = solved_steps(total, every)
@@ -64,6 +59,16 @@ def held_slide(runner: Runner, window, proto, n_sub: int, every: int):
     out_loads, out_forces = sample_means(loads, forces, n, n_sub)
     x_pad = path.x_pad(n, n_sub, proto.rate_hz)
     return out_loads, out_forces, x_pad, path.strokes.stopped_at_s, time.perf_counter() - t0
+
+
+def glide_runner(r: Runner, window, speed_m_s, dt, total: int, n_sub: int) -> Path | None:
+    """:func:`glide` on a pressed runner's own MuJoCo state, which is put back afterwards
+    (:data:`_KEPT_STATE`): the runner goes on from the press as from an untouched copy."""
+    kept = _kept(r._m_dyn, r.d_dyn)
+    try:
+        return glide(r.d_dyn, r._m_dyn, r._jx, r._jz, window, speed_m_s, dt, total, n_sub)
+    finally:
+        _restore(r._m_dyn, r.d_dyn, kept)
 
 
 #: What :func:`held_slide` keeps of the runner's MuJoCo state while the path is glided on it:

@@ -13,7 +13,6 @@ them (:func:`~.sampling.sample_means`, as :class:`~.sampling.SampleAverager` doe
 
 from __future__ import annotations
 
-import copy
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -32,7 +31,7 @@ from ..plan.span import span_fraction
 from .batched_held import batched_held
 from .build import dynamics_for, runner_for
 from .held import CompiledHeldStep
-from .held_run import glide, held_steps
+from .held_run import glide, glide_runner, held_steps
 from .mirror import mirrored_loads
 from .phase_table import PhaseTable, tabulate
 from .runner import V_STICK, Runner, coast
@@ -84,8 +83,8 @@ def slide_tabled(
     Returns ``(loads (T, N), forces (T,), x_pad (T,), stopped_at_s, wall_s, drag_sum,
     n_slide_steps, tabled_steps)``, as the per-step slide records them.
 
-    The pad's path is stepped first (:func:`~.held_run.glide`, on a copy of a runner's
-    MuJoCo state); the steps off the table, where the runner's held step is the compiled
+    The pad's path is stepped first (:func:`~.held_run.glide`; on a runner's own MuJoCo
+    state, put back afterwards: :func:`~.held_run.glide_runner`); the steps off the table, where the runner's held step is the compiled
     one, then run in one compiled call a stretch (:func:`~.held_run.held_steps`), each
     stretch from the table's height where it starts; elsewhere (another held step, a press
     joint that moves under the dynamics alone) step by step (:func:`_stepped`). Both record
@@ -103,10 +102,9 @@ def slide_tabled(
     n = window.n_samples
     total = n * n_sub + 1  # the steps the samples read (the last one closes the last sample)
     if held is None:
-        d, m, jx, jz = dyn.d, dyn.m, dyn.jx, dyn.jz
-    else:  # a copy: the runner's own state stays where the press left it
-        d, m, jx, jz = copy.copy(held.d_dyn), held._m_dyn, held._jx, held._jz
-    path = glide(d, m, jx, jz, window, proto.speed_m_s, dt, total, n_sub)
+        path = glide(dyn.d, dyn.m, dyn.jx, dyn.jz, window, proto.speed_m_s, dt, total, n_sub)
+    else:  # on the runner's own state, put back: it stays where the press left it
+        path = glide_runner(held, window, proto.speed_m_s, dt, total, n_sub)
     if path is None:
         return _stepped(*args)
     plan = table.plan
