@@ -60,3 +60,13 @@ def task_slide(task: str, plate: str, duration_s: float | None, **proto):
         job.pitch_m,
         rig=job.rig,
     )
+
+
+def ridges_on_shared_tables():
+    """An L0 slide of grid3x3 over finger7's ridges, one of 25 of its plate: read off tables
+    shared by force level, crossed from flat ground (its runner solves the steps off them)."""
+    from sim_tactile.sim import Slide
+    from sim_tactile.sim.plan.protocol import Protocol
+
+    proto = Protocol(speed_m_s=0.06, force_jitter=0.1, duration_s=0.94)
+    return Slide(get_plate("finger7/ridges-4"), "grid3x3", proto, 4, "L0", True, plate_slides=25)

@@ -217,19 +217,11 @@ def test_a_tabled_slide_gives_its_runner_back_and_the_next_one_is_the_same(cache
     them, is bit for bit the slide on fresh copies."""
     from dataclasses import replace
 
-    from sim_tactile.plates import get_plate
-    from sim_tactile.sim import Slide
+    from _scenes import ridges_on_shared_tables
+
     from sim_tactile.sim.slide import run
 
-    first = Slide(
-        get_plate("finger7/ridges-4"),
-        "grid3x3",
-        Protocol(speed_m_s=0.06, force_jitter=0.1, duration_s=0.94),
-        4,
-        "L0",
-        True,
-        plate_slides=25,
-    )
+    first = ridges_on_shared_tables()
     assert first.table_plan() is not None
     second = replace(first, seed=5)
     rec = run(first, cache).recording

@@ -9,6 +9,7 @@ import copy
 
 import numpy as np
 import pytest
+from _scenes import ridges_on_shared_tables
 
 from sim_tactile.cache import ArtefactCache
 from sim_tactile.errors import PhysicsError
@@ -142,15 +143,7 @@ def test_a_skin_pressed_to_the_bottom_fails_as_the_per_step_slide_does():
 
 TABLED = [
     # shared tables by force level, crossed from flat ground: the runner's stretches off them
-    Slide(
-        get_plate("finger7/ridges-4"),
-        "grid3x3",
-        Protocol(speed_m_s=0.06, force_jitter=0.1, duration_s=0.94),
-        4,
-        "L0",
-        True,
-        plate_slides=25,
-    ),
+    ridges_on_shared_tables(),
     # a uniform stretch: every step read off its one phase, the path glided
     Slide(
         get_plate("multilayer3/flat"),
