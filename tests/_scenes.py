@@ -70,13 +70,3 @@ def ridges_on_shared_tables():
 
     proto = Protocol(speed_m_s=0.06, force_jitter=0.1, duration_s=0.94)
     return Slide(get_plate("finger7/ridges-4"), "grid3x3", proto, 4, "L0", True, plate_slides=25)
-
-
-def flat_glided():
-    """A multilayer slide on its flat plate: a uniform stretch, every step read off its one
-    phase, the pad's path glided alone."""
-    from sim_tactile.sim import Slide
-    from sim_tactile.sim.plan.protocol import Protocol
-
-    proto = Protocol(speed_m_s=0.065, force_n=5.0, duration_s=0.3)
-    return Slide(get_plate("multilayer3/flat"), "multilayer3x3x2", proto, 7, ideal=True)

@@ -9,7 +9,7 @@ import copy
 
 import numpy as np
 import pytest
-from _scenes import flat_glided, ridges_on_shared_tables
+from _scenes import ridges_on_shared_tables
 
 from sim_tactile.cache import ArtefactCache
 from sim_tactile.errors import PhysicsError
@@ -145,7 +145,13 @@ TABLED = [
     # shared tables by force level, crossed from flat ground: the runner's stretches off them
     ridges_on_shared_tables(),
     # a uniform stretch: every step read off its one phase, the path glided
-    flat_glided(),
+    Slide(
+        get_plate("multilayer3/flat"),
+        "multilayer3x3x2",
+        Protocol(speed_m_s=0.065, force_n=5.0, duration_s=0.3),
+        7,
+        ideal=True,
+    ),
 ]
 
 
@@ -162,3 +168,24 @@ def test_a_tabled_slide_records_what_its_step_by_step_loop_records(slide, monkey
     assert fast.data.tobytes() == slow.data.tobytes()
     for key in ("x_pad_m", "normal_force_n", "mean_drag_n"):
         assert fast.meta[key] == slow.meta[key], key
+
+
+def test_a_glided_slide_takes_its_scenes_own_dynamics_model(tmp_path):
+    """The dynamics model alone (``dynamics_for``) is the scene's, byte for byte."""
+    import mujoco
+
+    from sim_tactile.sim.step.build import dynamics_for, scene_for
+
+    cache = ArtefactCache(tmp_path)
+    slide = TABLED[1]
+    proto, fid, x0 = slide.drawn(), slide.resolved, slide.window.x_start_m
+    scene, _ = scene_for(slide, proto, fid, x0, cache)
+    m, jx, jz = dynamics_for(slide, proto, fid, x0, cache)
+
+    def saved(model) -> bytes:
+        buf = np.empty(mujoco.mj_sizeModel(model), dtype=np.uint8)
+        mujoco.mj_saveModel(model, None, buf)
+        return buf.tobytes()
+
+    assert (jx, jz) == (scene.jx, scene.jz)
+    assert saved(m) == saved(scene.m_dyn)

@@ -341,6 +341,26 @@ def build_scene(
     )
 
 
+def dynamics_model(
+    plate: Plate,
+    finger: Finger,
+    grid: SkinGrid,
+    *,
+    dt_s: float,
+    x0_m: float,
+    z0_m: float,
+    z_damping: float,
+    y0_m: float = 0.0,
+    node_margin_m: float = 0.0,
+    cache=None,
+) -> tuple:
+    """``(m_dyn, jx, jz)``: the dynamics model of :func:`build_scene`'s scene (the same
+    model, bit for bit) without the collision model and the taxels' weights: all a slide
+    read wholly off its phase table steps."""
+    _, m_dyn, _, jx, jz, _ = _models(plate, finger, grid, z_damping, node_margin_m, cache)
+    return _place(copy.copy(m_dyn), dt_s, x0_m, y0_m, z0_m), int(jx), int(jz)
+
+
 def _place(m, dt_s: float, x0_m: float, y0_m: float, z0_m: float):
     """A copy ``m`` of a kept model set to a slide's time step, its bone at the slide's start
     and offset across the slide (what the compiler would have copied in): the only fields in

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from ...plates import Plate, surface_of
-from ...scene.model import build_scene
+from ...scene.model import build_scene, dynamics_model
 from ...scene.nodes import SkinGrid, skin_grid
 from ..collide.choose import make_collider
 from ..plan.fidelity import Fidelity, flat_stiffness
@@ -26,6 +26,12 @@ def scene_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache):
     plate's highest point under it."""
     args, kw, z0 = _scene_args(slide, proto, fid, x0_m, cache)
     return build_scene(*args, slide.layout, **kw), z0
+
+
+def dynamics_for(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache):
+    """``(m_dyn, jx, jz)``: the dynamics model of :func:`scene_for`'s scene, alone."""
+    args, kw, _ = _scene_args(slide, proto, fid, x0_m, cache)
+    return dynamics_model(*args, **kw)
 
 
 def _scene_args(slide: Slide, proto: Protocol, fid: Fidelity, x0_m: float, cache):

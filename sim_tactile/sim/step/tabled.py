@@ -17,11 +17,11 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
+import mujoco
 import numpy as np
 
 from ...errors import PhysicsError
 from ...hashing import blas_kernel, code_version, content_hash
-from ...scene.model import give_back
 from ..plan.fidelity import Fidelity, solved_spectrally
 from ..plan.options import keyed
 from ..plan.phase import PhasePlan, force_levels, mirror_centre, tables_shared, travel
@@ -29,7 +29,7 @@ from ..plan.protocol import Protocol, SlideWindow
 from ..plan.slide import Slide
 from ..plan.span import span_fraction
 from .batched_held import batched_held
-from .build import runner_for, scene_for
+from .build import dynamics_for, runner_for
 from .held import CompiledHeldStep
 from .held_run import glide, glide_runner, held_steps
 from .mirror import mirrored_loads
@@ -41,15 +41,14 @@ from .strokes import Strokes
 
 
 class Glide:
-    """The finger's slide joint alone, for a slide read wholly off its table: a MuJoCo state
-    of the scene's dynamics model in its initial state (:meth:`~sim_tactile.scene.model.Scene.dynamics_data`),
-    at rest (the pad where the held press leaves it: no travel, no speed), stepped with the
-    servo's command and the press joint held, as :meth:`~.runner.Runner.coast` steps a
-    pressed runner."""
+    """The finger's slide joint alone, for a slide read wholly off its table: a fresh
+    MuJoCo state of the scene's dynamics model ``m_dyn`` at rest (the pad where the held
+    press leaves it: no travel, no speed), stepped with the servo's command and the press
+    joint held, as :meth:`~.runner.Runner.coast` steps a pressed runner."""
 
-    def __init__(self, scene) -> None:
-        self.m, self.jx, self.jz = scene.m_dyn, scene.jx, scene.jz
-        self.d = scene.dynamics_data()
+    def __init__(self, m_dyn, jx: int, jz: int) -> None:
+        self.m, self.jx, self.jz = m_dyn, jx, jz
+        self.d = mujoco.MjData(m_dyn)
         self.d.qpos[:] = 0.0
 
     @property
@@ -249,11 +248,9 @@ def slide_on_table(
     table, made = table_for(slide, proto, fid, plan, cache)
     lo, hi = travel(window, proto)
     over = 2 * proto.speed_m_s * fid.dt_s  # a stroke stops on the step past its limit
-    scene = None
     if plan.covers(lo - over) and plan.covers(hi + over):
         runner, warnings = None, list(fid.warnings)
-        scene = scene_for(slide, proto, fid, window.x_start_m, cache)[0]
-        dyn = Glide(scene)
+        dyn = Glide(*dynamics_for(slide, proto, fid, window.x_start_m, cache))
     else:
         pressed = press()
         runner = dyn = pressed.runner
@@ -268,8 +265,6 @@ def slide_on_table(
         slide.pad.friction,
         slide.pad.thickness_m,
     )
-    if scene is not None:  # the glide steps no more: the next slide of its scene places it
-        give_back(scene, dyn.d)
     steps = window.n_samples * fid.steps_per_sample + 1
     return OnTable(table, runner, warnings, record[:7], record[7], steps, made)
 
