@@ -279,8 +279,8 @@ def _store(cache, key, C, K, what, symmetric) -> None:
 def _memo_dense(grid, finger, slide_dir, inverse) -> CoupledSkin:
     """:class:`CoupledSkin` of the finger on ``grid``, its arrays kept in this process
     (:data:`~sim_tactile.cache.SETUP`, by the disk cache's key) and not on disk: a small
-    skin's (below
-    :data:`CACHE_MIN_NODES`, whose arrays are about as quick to compute as to read)."""
+    skin's (below :data:`CACHE_MIN_NODES`, whose arrays are about as quick to compute as to
+    read)."""
     key = _dense_key(grid, finger, slide_dir, inverse)
     kept = SETUP.get(key)
     if kept is None:
