@@ -164,7 +164,6 @@ class CompiledHeldStep:
         joint: bool = False,
     ):
         n = W.shape[1]
-        self.joint = joint
         self.area = area_m2
         self.margin = margin
         self.bone0, self.jx = collider.bone0, collider.jx
@@ -211,7 +210,13 @@ class CompiledHeldStep:
         self.f = np.zeros(self.n)
         self._small = np.empty(self.n_probes)
         self._reduced = (self._small, self.group, self.mult)
-        self._limits = (contact.TOL_REL, contact.MAX_ITER, QS_COLLISIONS, self.margin, False)
+        self._limits = (contact.TOL_REL, contact.MAX_ITER, QS_COLLISIONS, self.margin, joint)
+
+    @property
+    def joint(self) -> bool:
+        """Whether a contact set that does not hold is solved with the pad's shift (the
+        kernel's ``limits``, as :meth:`kernel_args` passes them)."""
+        return self._limits[4]
 
     def describe(self) -> str:
         how = []
@@ -237,8 +242,7 @@ class CompiledHeldStep:
         K = s.K if s.K is not None else NO_K
         skin = (self.winkler_k, C, K, s.floor, s.symmetric)
         state = (M, S, in_set, s.sums, rowsum, s.updates, s.refresh)
-        limits = self._limits[:4] + (True,) if self.joint else self._limits
-        return self.probes.probe, self._reduced, skin, state, limits
+        return self.probes.probe, self._reduced, skin, state, self._limits
 
     def step(self, qpos, jz, total, taxel_out) -> tuple[float, float]:
         """:meth:`PlainHeldStep.step` in one call on the reduced problem; the contact set is
@@ -329,9 +333,10 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
     - ``state``: ``(M, S, in_set, cu, rowsum, updates, refresh)``: the contact set's state
       (``cu``: the drift check's running sums, updated in place);
     - ``limits``: ``(tol_rel, max_iter, n_collisions, qs_margin, joint)``; ``joint``: a set
-      that does not hold is first solved together with its shift (:func:`joint_loop`; the
-      loosened slides), else by the reference's Newton iteration on the shift
-      (:func:`force_loop`), which also takes over where the joint loop stops;
+      that does not hold is first solved together with its shift (:func:`joint_loop`;
+      ``held_solve = "joint"``, as ``auto`` takes it), else by the reference's Newton
+      iteration on the shift (:func:`force_loop`), which also takes over where the joint
+      loop stops;
     - ``out``: ``(pen, f, W, area, taxel_out)``: the depths and pressures it writes, and the
       taxel readout.
 

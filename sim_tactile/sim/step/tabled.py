@@ -84,11 +84,11 @@ def slide_tabled(
     n_slide_steps, tabled_steps)``, as the per-step slide records them.
 
     The pad's path is stepped first (:func:`~.held_run.glide`; on a runner's own MuJoCo
-    state, put back afterwards: :func:`~.held_run.glide_runner`); the steps off the table, where the runner's held step is the compiled
-    one, then run in one compiled call a stretch (:func:`~.held_run.held_steps`), each
-    stretch from the table's height where it starts; elsewhere (another held step, a press
-    joint that moves under the dynamics alone) step by step (:func:`_stepped`). Both record
-    the same numbers bit for bit."""
+    state, put back afterwards: :func:`~.held_run.glide_runner`); the steps off the table,
+    where the runner's held step is the compiled one, then run in one compiled call a
+    stretch (:func:`~.held_run.held_steps`), each stretch from the table's height where it
+    starts; elsewhere (another held step, a press joint that moves under the dynamics
+    alone) step by step (:func:`_stepped`). Both record the same numbers bit for bit."""
     if float(np.max(table.top)) > max_pen_m:
         raise PhysicsError(
             f"skin pressed to the bottom: a node is {table.top.max() * 1e3:.3g} mm deep, beyond "
