@@ -58,6 +58,19 @@ def store_files(path: Path) -> list[Path]:
     return sorted(p.relative_to(path) for p in path.rglob("*") if p.is_file())
 
 
+def chunk_file(group: Path, array: str, *index: int) -> Path:
+    """The file of the chunk at ``index`` of ``array`` in the store folder ``group``, by the
+    chunk key encoding the array's own metadata gives (its separator), as Zarr keys it."""
+    meta = json.loads((group / array / "zarr.json").read_text())
+    sep = meta["chunk_key_encoding"].get("configuration", {}).get("separator", "/")
+    return group / array / sep.join(["c", *map(str, index)])
+
+
+def sample_chunk(group: Path, slide: int) -> Path:
+    """The file of slide ``slide``'s samples (``data``'s chunk ``(slide, 0, 0)``)."""
+    return chunk_file(group, "data", slide, 0, 0)
+
+
 def flip_bit(path: Path, bit: int) -> None:
     b = bytearray(path.read_bytes())
     b[bit // 8] ^= 1 << (bit % 8)

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _stores import sample_chunk
 from conftest import EXE  # noqa: E402  (the console script, for processes killed mid-run)
 
 from sim_tactile import datasets
@@ -252,12 +253,11 @@ def test_corrupted_chunks_are_found_and_written_again(tiny, tmp_path):
     cfg, ref = tiny
     out = tmp_path / "bad.zarr"
     shutil.copytree(ref, out)
-    chunk = out / "data" / "c"
-    truncated = chunk / "1" / "0" / "0"
+    truncated = sample_chunk(out, 1)
     truncated.write_bytes(truncated.read_bytes()[:20])
     # a valid chunk with other samples (slide 3's): decodes, fails the checksum
-    (chunk / "4" / "0" / "0").write_bytes((chunk / "3" / "0" / "0").read_bytes())
-    (chunk / "5" / "0" / "0").unlink()  # lost: reads as NaN fill
+    sample_chunk(out, 4).write_bytes(sample_chunk(out, 3).read_bytes())
+    sample_chunk(out, 5).unlink()  # lost: reads as NaN fill
     st = datasets.open(out)
     with pytest.raises(StoreError, match="slide 1 .*(unreadable|checksum)"):
         st[1]
@@ -535,7 +535,7 @@ def test_a_suite_gets_one_group_per_part(tmp_path):
     labels.write_bytes(labels.read_bytes()[:-1])
     with pytest.raises(StoreError, match="textures20-icub60-v1'.*'labels'"):
         datasets.open(out, part="textures20-icub60-v1")
-    (icub / "data" / "c" / "2" / "0" / "0").unlink()
+    sample_chunk(icub, 2).unlink()
     res = _quiet("textures20-v1", out, quick=True, resume=True, _worker=_fake_slide)
     assert res["repaired"] == ["textures20-icub60-v1/labels"] and res["written"] == 1
     assert [c["slide"] for c in res["corrupt"]] == [2]

@@ -171,8 +171,8 @@ def _stop_generate(cfg: Path, out: Path, env: dict, signum: int, delay_s: float)
     reader = threading.Thread(target=lambda: err.extend(p.stderr), daemon=True)
     reader.start()
     t0 = time.monotonic()
-    chunks = out / "data" / "c"
-    while not (chunks.is_dir() and any(chunks.rglob("*"))):  # the slides run now
+    chunks = out / "data"
+    while not (chunks.is_dir() and any(chunks.glob("c*"))):  # the slides run now
         assert p.poll() is None and time.monotonic() - t0 < FIRST_SLIDE_S, "".join(err)[-2000:]
         time.sleep(0.01)
     time.sleep(delay_s)

@@ -18,6 +18,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import _stores
 import pytest
 from _stores import TINY, assert_same, fake_slide, make_store, quiet_generate, read_back
 from _stores import write_config as _config
@@ -174,7 +175,7 @@ def test_resume_removes_zarrs_half_written_files_only(tmp_path):
     """The clean-up takes the files Zarr writes before its rename, and nothing else: never a
     folder, nothing in a hidden folder, no other file that ends in .partial."""
     store = make_store(tmp_path)
-    zarrs = store / "data" / "c" / "0" / "0" / "0.0123456789abcdef0123456789abcdef.partial"
+    zarrs = _stores.sample_chunk(store, 0).with_suffix(".0123456789abcdef0123456789abcdef.partial")
     zarrs.write_bytes(b"a killed writer's chunk")
     theirs = [store / "notes.partial", store / "folder.0123456789abcdef0123456789abcdef.partial"]
     theirs[0].write_text("a user's file")

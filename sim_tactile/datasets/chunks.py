@@ -39,6 +39,8 @@ class ChunkFile:
         self.dtype = dtype
         self.row_shape = row_shape
         self.zstd = zstd
+        #: the folders this writer has made or found (a chunk's folder is looked for once)
+        self._folders: set[Path] = set()
 
     @classmethod
     def for_array(cls, arr) -> ChunkFile | None:
@@ -76,7 +78,9 @@ class ChunkFile:
         if self.zstd is not None:
             data = self.zstd.encode(data)
         path = self.folder / self.key_of((i,) + (0,) * len(self.row_shape))
-        path.parent.mkdir(parents=True, exist_ok=True)
+        if path.parent not in self._folders:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._folders.add(path.parent)
         tmp = path.with_suffix(f".{uuid.uuid4().hex}.partial")
         try:
             with open(tmp, "wb") as f:
