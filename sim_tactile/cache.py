@@ -237,14 +237,20 @@ class ArrayMemo:
         return item
 
     def put(self, key: str, item: tuple) -> tuple:
-        """Keep ``item`` (a tuple of arrays and plain values), its arrays made read-only."""
+        """Keep ``item`` (a tuple of arrays and plain values), its arrays made read-only, and
+        the arrays they are views of (an array read from a cache entry is a view of the
+        buffer it was read into): no reference left elsewhere can change what is kept, so
+        what is read once from a kept array holds for it
+        (:func:`~sim_tactile.sim.skin.contact.active_set.skin_floor`)."""
         import numpy as np
 
         size = 0
         for a in item:
             if isinstance(a, np.ndarray):
-                a.flags.writeable = False
                 size += a.nbytes
+                while isinstance(a, np.ndarray):
+                    a.flags.writeable = False
+                    a = a.base
         if size > self.max_bytes:
             return item
         self._items.pop(key, None)

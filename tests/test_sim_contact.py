@@ -410,3 +410,23 @@ def test_a_read_only_compliance_has_its_floor_read_once():
     bulging.flags.writeable = False
     assert active_set.skin_floor(bulging) == -np.inf
     assert len(active_set._FLOORS) <= active_set.FLOORS_KEPT
+
+
+def test_a_kept_matrix_read_from_the_cache_has_its_floor_read_once(tmp_path):
+    """A matrix read from a cache entry is a view of the buffer it was read into; the
+    set-up memo makes that buffer read-only too, so the floor is read once for it. A
+    read-only view of a writeable array is read each time: a change through the array is
+    seen."""
+    from sim_tactile.cache import ArrayMemo
+    from sim_tactile.sim.skin.contact import active_set
+
+    buf = np.ones(36)
+    view = buf.reshape(6, 6)
+    view.flags.writeable = False
+    assert active_set.skin_floor(view) == 0.0 and id(view) not in active_set._FLOORS
+    buf[3] = -1.0  # through the writeable array it views
+    assert active_set.skin_floor(view) == -np.inf
+    buf[3] = 1.0
+    (kept,) = ArrayMemo(1 << 20).put("k", (view,))
+    assert not buf.flags.writeable  # the memo's arrays are read-only through and through
+    assert active_set.skin_floor(kept) == 0.0 and active_set._FLOORS[id(kept)][0] is kept

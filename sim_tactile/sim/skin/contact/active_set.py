@@ -15,8 +15,10 @@ def skin_floor(C: np.ndarray) -> float:
     >= 0 (a load only pushes the skin away from the plate), else -inf. A read-only ``C``
     (the skins' matrices, kept by content: :data:`~sim_tactile.cache.SETUP`) is read
     once in this process (:data:`_FLOORS`): each slide's two solvers of a 700-node skin read
-    its 490 000 entries, 0.28 ms of a 12 ms PVDF slide."""
-    kept = not C.flags.writeable and C.base is None
+    its 490 000 entries, 0.28 ms of a 12 ms PVDF slide. Read-only means read-only through
+    and through: ``C`` and every array it is a view of (a matrix read from the disk cache is
+    a view of the buffer it was read into, which the set-up memo makes read-only too)."""
+    kept = read_only(C)
     if kept:
         hit = _FLOORS.get(id(C))
         if hit is not None and hit[0] is C:  # the entry holds C: its id is not reused
@@ -27,6 +29,17 @@ def skin_floor(C: np.ndarray) -> float:
         while len(_FLOORS) > FLOORS_KEPT:
             del _FLOORS[next(iter(_FLOORS))]
     return floor
+
+
+def read_only(a: np.ndarray) -> bool:
+    """Whether ``a`` and every array it is a view of are read-only (a view of a writeable
+    array changes with it), and the chain ends in an array that owns its data."""
+    while True:
+        if a.flags.writeable:
+            return False
+        if not isinstance(a.base, np.ndarray):
+            return a.base is None
+        a = a.base
 
 
 #: The floors of read-only compliances, by the array's id (the entry holds the array).
