@@ -189,3 +189,31 @@ def test_a_glided_slide_takes_its_scenes_own_dynamics_model(tmp_path):
 
     assert (jx, jz) == (scene.jx, scene.jz)
     assert saved(m) == saved(scene.m_dyn)
+
+
+def test_the_glide_puts_back_the_runners_integration_state_and_warning_counters():
+    """What the glide on a runner's own state keeps (held_run._kept) is put back whole: its
+    integration state and every warning counter, number and last info."""
+    import mujoco
+
+    from sim_tactile.sim.step import held_run
+
+    m = mujoco.MjModel.from_xml_string(
+        "<mujoco><worldbody><body><joint type='slide'/><geom size='.1'/></body></worldbody>"
+        "</mujoco>"
+    )
+    d = mujoco.MjData(m)
+    d.qpos[0], d.qvel[0] = 0.25, -1.5
+    d.warning.number[:] = np.arange(len(d.warning.number)) % 3
+    d.warning.lastinfo[:] = 7 * np.arange(len(d.warning.lastinfo))
+    want = (d.qpos.copy(), d.qvel.copy(), d.warning.number.copy(), d.warning.lastinfo.copy())
+    kept = held_run._kept(m, d)
+    for _ in range(5):
+        mujoco.mj_step(m, d)
+    d.warning.number[1] += 4
+    d.warning.lastinfo[2] = 99
+    assert d.qpos[0] != want[0][0]
+    held_run._restore(m, d, kept)
+    got = (d.qpos, d.qvel, d.warning.number, d.warning.lastinfo)
+    for a, b in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)

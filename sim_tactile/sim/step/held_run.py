@@ -79,18 +79,20 @@ _KEPT_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 
 
 def _kept(m, d) -> tuple:
-    """``d``'s integration state and its warning counters (:data:`_KEPT_STATE`)."""
+    """``d``'s integration state and its warning counters (:data:`_KEPT_STATE`), the
+    counters read as the bindings' arrays over ``mjData.warning`` (a loop over its items
+    took 84 us, a tenth of an L0 slide's set-up, for what is two short copies)."""
     state = np.empty(mujoco.mj_stateSize(m, _KEPT_STATE))
     mujoco.mj_getState(m, d, state, _KEPT_STATE)
-    return state, [(w.number, w.lastinfo) for w in d.warning]
+    return state, d.warning.number.copy(), d.warning.lastinfo.copy()
 
 
 def _restore(m, d, kept: tuple) -> None:
     """Put back what :func:`_kept` kept."""
-    state, warned = kept
+    state, number, lastinfo = kept
     mujoco.mj_setState(m, d, state, _KEPT_STATE)
-    for w, (number, lastinfo) in zip(d.warning, warned, strict=True):
-        w.number, w.lastinfo = number, lastinfo
+    d.warning.number[:] = number
+    d.warning.lastinfo[:] = lastinfo
 
 
 @dataclass
