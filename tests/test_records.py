@@ -39,7 +39,7 @@ def _same(a, b) -> bool:
     return a == b
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(_json)
 def test_the_kept_metadata_is_what_a_json_round_trip_gives(obj):
     want = json.loads(json.dumps(obj))
