@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..cache import ArtefactCache
+from ..cache import ArtefactCache, memoized
 from ..errors import CacheWarning, SimTactileError
 from ..hashing import code_version, content_hash, file_digest
 from ..records import Recording
@@ -37,11 +37,18 @@ SLIDE_DATA = (measured_errors.TABLE,)
 def slide_code_version() -> str:
     """The version of the code that makes a slide (:func:`~sim_tactile.hashing.code_version`
     of :data:`SLIDE_MODULES`): the source of every module they import, the libraries, and
-    the data files of :data:`SLIDE_DATA`."""
+    the data files of :data:`SLIDE_DATA`, each read once a process, as the code reads them
+    (the measured errors are a process's memo too: both are read again after
+    :func:`~sim_tactile.cache.forget_process_memos`)."""
+    return _code_version(tuple(SLIDE_DATA))
+
+
+@memoized("slide code version", maxsize=8)
+def _code_version(data: tuple) -> str:
     return content_hash(
         {
             "code": code_version(*SLIDE_MODULES, libraries=SLIDE_LIBRARIES),
-            "data": [file_digest(p) for p in SLIDE_DATA],
+            "data": [file_digest(p) for p in data],
         }
     )[:16]
 
