@@ -195,14 +195,12 @@ class CompiledHeldStep:
             else contact.ActiveSet(np.zeros((0, 0)))
         )
         self.W = np.ascontiguousarray(W, dtype=np.float64)
-        sub = collider.subset(nodes)
-        if self.columns:  # one probe per distinct (x, z, radius, margin)
-            key = np.column_stack([sub.local[:, 0], sub.local[:, 2], sub.radius, sub.margin])
-            _, first, group = np.unique(key, axis=0, return_index=True, return_inverse=True)
-            sub = sub.subset(first)
-            self.group = group.ravel().astype(np.int64)
-        else:
-            self.group = np.arange(self.n, dtype=np.int64)
+        columns = self.columns
+        probes = lambda: _probes(collider, nodes, columns)  # noqa: E731
+        kept = getattr(collider, "kept", None)  # shared by the slides of a kept scene model
+        sub, self.group = (
+            kept(("held probes", columns, nodes.tobytes()), probes) if kept else probes()
+        )
         #: the collider of the reduced problem's probes
         self.probes = sub
         self.n_probes = len(sub.radius)
@@ -274,6 +272,18 @@ class CompiledHeldStep:
             f"the force-holding contact solve did not converge in {contact.MAX_ITER} iterations "
             f"(target {total:.4g} Pa summed over the nodes)"
         )
+
+
+def _probes(collider, nodes: np.ndarray, columns: bool) -> tuple:
+    """``(probes, group)``: the collider of the nodes ``nodes``, reduced to one probe per
+    distinct (x, z, radius, margin) where the depths are ``columns`` (constant along y),
+    and each node's probe."""
+    sub = collider.subset(nodes)
+    if not columns:
+        return sub, np.arange(len(nodes), dtype=np.int64)
+    key = np.column_stack([sub.local[:, 0], sub.local[:, 2], sub.radius, sub.margin])
+    _, first, group = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    return sub.subset(first), group.ravel().astype(np.int64)
 
 
 def _mirror_of(c: PrimitiveCollider | SurfaceCollider) -> np.ndarray | None:
