@@ -219,17 +219,27 @@ def test_the_glide_puts_back_the_runners_integration_state_and_warning_counters(
         np.testing.assert_array_equal(a, b)
 
 
-def test_slides_of_one_kept_scene_share_their_held_steps_reduced_probes(monkeypatch, tmp_path):
+@pytest.mark.parametrize(
+    "plate, sensor, fidelity",
+    [("finger7/bumps-4x4", "grid3x3", "L0"), ("roughness8/ra-50", "pvdf2", "auto")],
+)
+def test_slides_of_one_scene_share_their_held_steps_reduced_probes(
+    plate, sensor, fidelity, monkeypatch, tmp_path
+):
     """The held step's reduced probes (their broad phase, their grouping by column) are
-    computed from the collider's nodes and geoms alone, so the slides placed from one kept
-    scene model share them (PrimitiveCollider.kept); each slide is the same bit for bit as
-    with its probes computed afresh."""
+    computed from the collider's nodes and the plate alone, so the slides of one scene share
+    them (``kept``: the primitive collider of a kept scene model, a rough plate's surface
+    and the nodes); each slide is the same bit for bit as with its probes computed
+    afresh."""
+    from sim_tactile.sim.collide.height import SurfaceCollider
     from sim_tactile.sim.collide.primitive import PrimitiveCollider
     from sim_tactile.sim.step import build
 
-    plate = get_plate("finger7/bumps-4x4")
     proto = Protocol(duration_s=0.2, offset_jitter_m=0.5e-3, force_jitter=0.1)
-    slides = [Slide(plate, "grid3x3", proto, seed, fidelity="L0", ideal=True) for seed in (3, 4)]
+    slides = [
+        Slide(get_plate(plate), sensor, proto, seed, fidelity=fidelity, ideal=True)
+        for seed in (3, 4)
+    ]
     holds = []
     made = build.make_held_step
 
@@ -242,7 +252,8 @@ def test_slides_of_one_kept_scene_share_their_held_steps_reduced_probes(monkeypa
     shared = [run(s, cache).recording.data for s in slides]
     a, b = holds[-2:]
     assert a.probes is b.probes and a.group is b.group
-    monkeypatch.setattr(PrimitiveCollider, "kept", lambda self, key, make: make())
+    for kind in (PrimitiveCollider, SurfaceCollider):
+        monkeypatch.setattr(kind, "kept", lambda self, key, make: make())
     holds.clear()
     fresh = [run(s, cache).recording.data for s in slides]
     assert holds[-2].probes is not holds[-1].probes

@@ -22,12 +22,23 @@ copy of it. :mod:`~sim_tactile.sim.collide.choose` chooses the collider.
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from typing import NamedTuple
 
 import numpy as np
 
 from ..._jit import njit, when_numba
+from ...cache import register_memo
+from ...hashing import array_digest
 from ...plates.define.surface import MapArrays, ProfileArrays, Surface, surface_of
+
+#: What :meth:`SurfaceCollider.kept` keeps, by the surface (its id: each entry holds the
+#: surface itself, so the id is not reused while it is kept) and the digest of the nodes:
+#: ``(surface, {key: value})``, the most recently used last.
+KEPT: OrderedDict[tuple, tuple] = OrderedDict()
+#: Most surfaces and node sets :data:`KEPT` holds, and most values each holds.
+KEPT_MAX, KEPT_VALUES = 8, 16
+register_memo("surface colliders' kept values", KEPT.clear)
 
 
 class SurfaceProbe(NamedTuple):
@@ -99,6 +110,28 @@ class SurfaceCollider:
         self.bone0 = np.array(bone0, dtype=np.float64)
         self.jx, self.jz = int(jx), int(jz)
         self._bone = self.bone0.copy()
+
+    def kept(self, key, build):
+        """``build()``, kept under ``key`` for every collider of this surface and these
+        nodes (by their content: each slide's scene makes a collider of its own): what is
+        computed from the nodes and the surface alone, never from a pose (a held step's
+        reduced probes, 0.5 ms of each PVDF slide on a rough plate). ``key`` holds whatever
+        else ``build`` reads."""
+        ident = (id(self.surface), array_digest(self.local, self.radius, self.margin))
+        entry = KEPT.get(ident)
+        if entry is None or entry[0] is not self.surface:
+            entry = KEPT[ident] = (self.surface, {})
+            while len(KEPT) > KEPT_MAX:
+                KEPT.popitem(last=False)
+        else:
+            KEPT.move_to_end(ident)
+        values = entry[1]
+        hit = values.get(key)
+        if hit is None:
+            hit = build()
+            if len(values) < KEPT_VALUES:
+                values[key] = hit
+        return hit
 
     def subset(self, nodes: np.ndarray) -> SurfaceCollider:
         """The same collider for the nodes ``nodes`` only (their order), bound alike."""

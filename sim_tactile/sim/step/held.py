@@ -197,7 +197,7 @@ class CompiledHeldStep:
         self.W = np.ascontiguousarray(W, dtype=np.float64)
         columns = self.columns
         probes = lambda: _probes(collider, nodes, columns)  # noqa: E731
-        kept = getattr(collider, "kept", None)  # shared by the slides of a kept scene model
+        kept = getattr(collider, "kept", None)  # shared by the slides of one model or surface
         sub, self.group = (
             kept(("held probes", columns, nodes.tobytes()), probes) if kept else probes()
         )
@@ -277,7 +277,9 @@ class CompiledHeldStep:
 def _probes(collider, nodes: np.ndarray, columns: bool) -> tuple:
     """``(probes, group)``: the collider of the nodes ``nodes``, reduced to one probe per
     distinct (x, z, radius, margin) where the depths are ``columns`` (constant along y),
-    and each node's probe."""
+    and each node's probe. The step reads the probes' arrays (``probe``) and passes the
+    bone's position itself: the slides that share them (``collider.kept``) never read a
+    pose from them."""
     sub = collider.subset(nodes)
     if not columns:
         return sub, np.arange(len(nodes), dtype=np.int64)
