@@ -248,9 +248,10 @@ class ArrayMemo:
         for a in item:
             if isinstance(a, np.ndarray):
                 size += a.nbytes
-                while isinstance(a, np.ndarray):
-                    a.flags.writeable = False
-                    a = a.base
+                view = a
+                while isinstance(view, np.ndarray):  # a and every array it is a view of
+                    view.flags.writeable = False
+                    view = view.base
         if size > self.max_bytes:
             return item
         self._items.pop(key, None)

@@ -36,9 +36,21 @@ from ...plates.define.surface import MapArrays, ProfileArrays, Surface, surface_
 #: surface itself, so the id is not reused while it is kept) and the digest of the nodes:
 #: ``(surface, {key: value})``, the most recently used last.
 KEPT: OrderedDict[tuple, tuple] = OrderedDict()
-#: Most surfaces and node sets :data:`KEPT` holds, and most values each holds.
+#: Most surfaces and node sets :data:`KEPT` holds, and most values each holds (as a primitive
+#: collider holds: :func:`kept_value`).
 KEPT_MAX, KEPT_VALUES = 8, 16
 register_memo("surface colliders' kept values", KEPT.clear)
+
+
+def kept_value(values: dict, key, build):
+    """``values[key]``, else ``build()``, kept there while ``values`` holds fewer than
+    :data:`KEPT_VALUES` (what a collider keeps for the slides that share it)."""
+    hit = values.get(key)
+    if hit is None:
+        hit = build()
+        if len(values) < KEPT_VALUES:
+            values[key] = hit
+    return hit
 
 
 class SurfaceProbe(NamedTuple):
@@ -125,13 +137,7 @@ class SurfaceCollider:
                 KEPT.popitem(last=False)
         else:
             KEPT.move_to_end(ident)
-        values = entry[1]
-        hit = values.get(key)
-        if hit is None:
-            hit = build()
-            if len(values) < KEPT_VALUES:
-                values[key] = hit
-        return hit
+        return kept_value(entry[1], key, build)
 
     def subset(self, nodes: np.ndarray) -> SurfaceCollider:
         """The same collider for the nodes ``nodes`` only (their order), bound alike."""

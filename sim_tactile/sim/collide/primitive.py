@@ -29,7 +29,7 @@ import numpy as np
 from ..._jit import njit
 from ...cache import register_memo
 from ...plates import surface_of
-from .height import report_depth
+from .height import kept_value, report_depth
 from .shapes import cylinder_distance, ridge_distance
 
 _BOX = int(mujoco.mjtGeom.mjGEOM_BOX)
@@ -91,8 +91,6 @@ def grid_buckets(lo, hi, tops, origin, cell: float, shape):
 KEPT: OrderedDict[str, PrimitiveCollider | None] = OrderedDict()
 #: Most colliders :data:`KEPT` holds (the kept scene models' number).
 KEPT_MAX = 8
-#: Most values one collider keeps for the slides that share it (:meth:`PrimitiveCollider.kept`).
-KEPT_VALUES = 16
 register_memo("primitive colliders of kept scene models", KEPT.clear)
 
 
@@ -156,12 +154,7 @@ class PrimitiveCollider:
         geoms alone, never from a pose (a held step's reduced probes: their broad phase and
         column grouping took 0.5-0.9 ms of each L0 slide). ``key`` holds whatever else
         ``build`` reads."""
-        hit = self._kept.get(key)
-        if hit is None:
-            hit = build()
-            if len(self._kept) < KEPT_VALUES:
-                self._kept[key] = hit
-        return hit
+        return kept_value(self._kept, key, build)
 
     @classmethod
     def from_model(

@@ -37,6 +37,7 @@ the taxel loads there. One step, two implementations with the same interface
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Protocol
 
 import numpy as np
@@ -195,12 +196,10 @@ class CompiledHeldStep:
             else contact.ActiveSet(np.zeros((0, 0)))
         )
         self.W = np.ascontiguousarray(W, dtype=np.float64)
-        columns = self.columns
-        probes = lambda: _probes(collider, nodes, columns)  # noqa: E731
+        probes = partial(_probes, collider, nodes, self.columns)
         kept = getattr(collider, "kept", None)  # shared by the slides of one model or surface
-        sub, self.group = (
-            kept(("held probes", columns, nodes.tobytes()), probes) if kept else probes()
-        )
+        key = ("held probes", self.columns, nodes.tobytes())
+        sub, self.group = kept(key, probes) if kept else probes()
         #: the collider of the reduced problem's probes
         self.probes = sub
         self.n_probes = len(sub.radius)
