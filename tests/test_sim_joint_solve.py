@@ -9,7 +9,7 @@ import pytest
 from scipy.optimize import nnls
 
 from sim_tactile.scene.elastic import compliance_matrix
-from sim_tactile.sim.skin.contact import ActiveSet
+from sim_tactile.sim.skin.contact import JOINT_REFRESH, REFRESH, ActiveSet
 from sim_tactile.sim.skin.contact.inverse import NO_K
 from sim_tactile.sim.skin.contact.kernels import force_loop, force_same_set, joint_loop
 from sim_tactile.sim.skin.contact.reference import MAX_ITER, TOL_REL
@@ -55,8 +55,8 @@ class _Joint(ActiveSet):
     """The held step's order (:func:`~sim_tactile.sim.step.held._held_kernel`): the set
     that holds, else the joint loop, else the Newton iteration from where it stopped."""
 
-    def __init__(self, C, max_iter=MAX_ITER):
-        super().__init__(C, np.linalg.inv(C))
+    def __init__(self, C, max_iter=MAX_ITER, refresh=REFRESH):
+        super().__init__(C, np.linalg.inv(C), refresh)
         self.max_iter, self.joined, self.stopped = max_iter, 0, 0
 
     def solve_force(self, pen, total, max_iter=MAX_ITER):
@@ -104,6 +104,46 @@ def test_the_joint_loop_holds_the_force_as_the_newton_iteration_does(kind):
             np.testing.assert_allclose(p, want, rtol=0, atol=1e-7 * want.max())
     assert joint.joined > 40, "the sliding caps must change the set at many steps"
     assert joint.stopped == 0
+
+
+@pytest.mark.parametrize("kind", ["half-space", "layered"])
+def test_the_joint_solves_inverse_is_rebuilt_where_its_drift_check_asks(kind):
+    """``auto``'s joint held solve rebuilds its inverse where the drift check asks, not at
+    the reference's fixed schedule: over a long slide its block updates pass
+    :data:`REFRESH` with fewer rebuilds, and its pressures stay the reference's (whose
+    inverse is rebuilt every REFRESH updates), its inverse the inverse of its set."""
+    xy = _grid()
+    C = _skin(kind, xy)
+    total = _total(C, xy)
+    ref, scheduled = ActiveSet(C, np.linalg.inv(C)), _Joint(C)
+    joint = _Joint(C, refresh=JOINT_REFRESH)
+    updates = 0
+    for k in range(400):
+        pen = _depths(xy, k * 0.13e-3)
+        p_ref, dz_ref = ref.solve_force(pen.copy(), total)
+        scheduled.solve_force(pen.copy(), total)
+        before = joint.updates
+        p, dz = joint.solve_force(pen.copy(), total)
+        updates += max(joint.updates - before, 0)
+        np.testing.assert_allclose(p, p_ref, rtol=0, atol=1e-9 * p_ref.max())
+        assert dz == pytest.approx(dz_ref, rel=0, abs=1e-12)
+    S = joint.S
+    np.testing.assert_allclose(joint.M @ C[np.ix_(S, S)], np.eye(S.size), atol=1e-8)
+    assert updates > 2 * REFRESH, "the slide must pass the reference's schedule"
+    assert joint.rebuilds < scheduled.rebuilds
+
+
+def test_the_held_steps_rebuild_schedule_follows_the_held_solve():
+    """The joint held solve takes :data:`JOINT_REFRESH`; the reference's Newton iteration
+    keeps :data:`REFRESH`, on which the golden slides are bit for bit."""
+    from dataclasses import replace
+
+    from sim_tactile.sim.slide import prepare
+
+    job = replace(_quick_slide("roughness8-v1"), ideal=True)
+    ref = replace(job, options=replace(job.options, path="per-step"))
+    assert prepare(job).runner.hold.solver.refresh == JOINT_REFRESH > REFRESH
+    assert prepare(ref).runner.hold.solver.refresh == REFRESH
 
 
 def test_a_joint_loop_that_stops_leaves_a_state_the_newton_iteration_goes_on_from():

@@ -152,7 +152,10 @@ class CompiledHeldStep:
     ``area * f.sum()`` is the normal force and ``W @ (area * f)`` the taxel loads. ``joint``:
     a contact set that does not hold is solved together with the pad's shift
     (:func:`~sim_tactile.sim.skin.contact.kernels.joint_loop`, ``StepOptions.held_solve =
-    "joint"``), else by the reference's Newton iteration on the shift alone."""
+    "joint"``), its inverse rebuilt where its drift check asks (at most every
+    :data:`~sim_tactile.sim.skin.contact.active_set.JOINT_REFRESH` updates), else by the
+    reference's Newton iteration on the shift alone, rebuilt every
+    :data:`~sim_tactile.sim.skin.contact.active_set.REFRESH` updates."""
 
     def __init__(
         self,
@@ -190,8 +193,9 @@ class CompiledHeldStep:
         self.n = nodes.size
         self.mult = mult
         # the Winkler bed keeps no contact set: an empty solver stands in for it
+        refresh = contact.JOINT_REFRESH if joint else contact.REFRESH
         self.solver = (
-            contact.ActiveSet(C, K, symmetric=skin.symmetric)
+            contact.ActiveSet(C, K, refresh, symmetric=skin.symmetric)
             if coupled
             else contact.ActiveSet(np.zeros((0, 0)))
         )

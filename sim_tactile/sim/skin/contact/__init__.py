@@ -19,7 +19,16 @@ does not touch the undeformed pad cannot be pushed into the plate by its neighbo
 
 from __future__ import annotations
 
-from .active_set import REFRESH, ActiveSet
+from .active_set import JOINT_REFRESH, REFRESH, ActiveSet
 from .reference import MAX_ITER, TOL_REL, halfspace, winkler, winkler_force
 
-__all__ = ["MAX_ITER", "REFRESH", "TOL_REL", "ActiveSet", "halfspace", "winkler", "winkler_force"]
+__all__ = [
+    "JOINT_REFRESH",
+    "MAX_ITER",
+    "REFRESH",
+    "TOL_REL",
+    "ActiveSet",
+    "halfspace",
+    "winkler",
+    "winkler_force",
+]
