@@ -167,6 +167,25 @@ def matcher(specs):
     return namespace["ok"]
 
 
+class LazyMatcher:
+    """:func:`matcher` of ``specs``, written out at its first call: a process loads every
+    signature of the modules it imports and calls few of them, and writing one out (its
+    source compiled) takes some 0.5 ms: 93 of them were 0.05 s of every command's start-up.
+    A spec :func:`matcher` refuses is refused at that call."""
+
+    __slots__ = ("_ok", "specs")
+
+    def __init__(self, specs) -> None:
+        self.specs = specs
+        self._ok = None
+
+    def __call__(self, args) -> bool:
+        ok = self._ok
+        if ok is None:
+            ok = self._ok = matcher(self.specs)
+        return ok(args)
+
+
 def spec_of(ty):
     """The JSON spec of a numba type as an argument (see :func:`matcher`); None for a type no
     extension serves (numba's dispatcher then does)."""
@@ -242,7 +261,7 @@ def load(where: Path | None, cpu: str | None) -> dict[str, list] | None:
         return None
     out: dict[str, list] = {}
     for kernel, entries in doc.get("kernels", {}).items():
-        out[kernel] = [(matcher(e["args"]), getattr(ext, e["export"])) for e in entries]
+        out[kernel] = [(LazyMatcher(e["args"]), getattr(ext, e["export"])) for e in entries]
     return out
 
 

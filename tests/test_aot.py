@@ -114,6 +114,24 @@ def test_a_call_no_signature_serves_says_once_that_numba_serves_it():
         assert plain(3) == 30
 
 
+def test_a_signatures_check_is_written_out_at_its_first_call(monkeypatch):
+    """A loaded signature's check is written out when a call first asks it (a process calls
+    few of the kernels it loads), then kept; it answers as :func:`~sim_tactile._aot.matcher`
+    does, and a spec it does not know is refused at that call."""
+    made = []
+    real = _aot.matcher
+    monkeypatch.setattr(_aot, "matcher", lambda specs: made.append(specs) or real(specs))
+    specs = [["a", np.dtype(np.float64).str, 1, "C", True, True], ["f"]]
+    lazy = _aot.LazyMatcher(specs)
+    assert made == []
+    x = np.zeros(3)
+    assert lazy((x, 1.0)) and not lazy((x, 1)) and not lazy((x[::2], 1.0))
+    assert made == [specs]  # written once
+    bad = _aot.LazyMatcher([["x"]])
+    with pytest.raises(ValueError, match="unknown argument spec"):
+        bad((1.0,))
+
+
 def test_a_spec_it_does_not_know_is_refused():
     with pytest.raises(ValueError, match="unknown argument spec"):
         _aot.matcher([["x"]])
