@@ -53,8 +53,8 @@ REFRESH = 100
 #: rebuilt when its drift check asks (:data:`~.inverse.DRIFT_TOL`, checked at every update),
 #: else after this many updates. :data:`REFRESH` predates that check and stays the
 #: reference's schedule (the golden slides are bit for bit on it). On multilayer3x3x2's
-#: hemispheres (some 850 updates a slide) it rebuilt a 450-node inverse 8.5 times a slide;
-#: the check asked once, and a slide took 8% less CPU (perf/bench_slide_parts.py), its
+#: hemispheres (some 850 updates a slide) it rebuilt a 450-node inverse 8.6 times a slide;
+#: the check asked once, and a slide took 72.2 ms against 78.4 (perf/bench_refresh.py), its
 #: recordings equal in float32.
 JOINT_REFRESH = 1000
 
