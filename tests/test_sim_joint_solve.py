@@ -11,7 +11,13 @@ from scipy.optimize import nnls
 from sim_tactile.scene.elastic import compliance_matrix
 from sim_tactile.sim.skin.contact import JOINT_REFRESH, REFRESH, ActiveSet
 from sim_tactile.sim.skin.contact.inverse import NO_K
-from sim_tactile.sim.skin.contact.kernels import force_loop, force_same_set, joint_loop
+from sim_tactile.sim.skin.contact.kernels import (
+    NOT_TRIED,
+    force_loop,
+    force_same_set,
+    joint_loop,
+    set_trial,
+)
 from sim_tactile.sim.skin.contact.reference import MAX_ITER, TOL_REL
 
 PITCH = 0.5e-3
@@ -55,25 +61,32 @@ class _Joint(ActiveSet):
     """The held step's order (:func:`~sim_tactile.sim.step.held._held_kernel`): the set
     that holds, else the joint loop, else the Newton iteration from where it stopped."""
 
-    def __init__(self, C, max_iter=MAX_ITER, refresh=REFRESH):
+    def __init__(self, C, max_iter=MAX_ITER, refresh=REFRESH, reuse=True):
         super().__init__(C, np.linalg.inv(C), refresh)
-        self.max_iter, self.joined, self.stopped = max_iter, 0, 0
+        self.max_iter, self.joined, self.stopped, self.reuse = max_iter, 0, 0, reuse
 
     def solve_force(self, pen, total, max_iter=MAX_ITER):
         p = np.empty_like(pen)
         if self.S.size:
-            M, S, in_set, C, rowsum = self.same_set_state()
-            dz = force_same_set(M, S, pen, C, in_set, TOL_REL, total, p, rowsum, self.floor)
-            if dz == dz:
+            M, S, in_set, C, _ = self.same_set_state()
+            rowsum = M @ np.ones(S.size)  # as the held kernel forms it after a change
+            tried = set_trial(M, S, pen, C, in_set, TOL_REL, total, rowsum, self.floor)
+            dz, pS, drop, A = tried
+            if dz == dz and not drop.any() and A.size == 0:
+                p[:] = 0.0
+                p[S] = pS
                 return p, dz
-            st, dz, M, S, updates, rb = joint_loop(
+            st, dz, M, S, updates, rb, b = joint_loop(
                 *(self.M, self.S, self._in, self.C, self.K, pen, TOL_REL, float(total)),
                 *(self.updates, self.refresh, self.max_iter, p, self.floor, True, self._cu),
+                (rowsum, *tried) if self.reuse else NOT_TRIED,
             )
             self._take(M, S, updates, rb)
             if st == 1:
+                assert np.array_equal(b, M @ np.ones(S.size))  # M 1 of the M it returns
                 self.joined += 1
                 return p, dz
+            assert b.size == 0
             self.stopped += 1
         return super().solve_force(pen, total, max_iter)
 
@@ -104,6 +117,24 @@ def test_the_joint_loop_holds_the_force_as_the_newton_iteration_does(kind):
             np.testing.assert_allclose(p, want, rtol=0, atol=1e-7 * want.max())
     assert joint.joined > 40, "the sliding caps must change the set at many steps"
     assert joint.stopped == 0
+
+
+@pytest.mark.parametrize("kind", ["half-space", "layered"])
+def test_the_joint_loop_goes_on_from_the_failed_same_set_check_bit_for_bit(kind):
+    """The held step passes the joint loop its failed same-set check (``tried``): the loop's
+    first pass is not made again, and its answers, set and inverse are those it makes when
+    it tries the set itself, bit for bit, at every step of a slide whose set changes."""
+    xy = _grid()
+    C = _skin(kind, xy)
+    total = _total(C, xy)
+    again, reused = _Joint(C, reuse=False), _Joint(C)
+    for k in range(120):
+        pen = _depths(xy, k * 0.13e-3)
+        p_a, dz_a = again.solve_force(pen.copy(), total)
+        p_r, dz_r = reused.solve_force(pen.copy(), total)
+        assert np.array_equal(p_a, p_r) and dz_a == dz_r
+        assert np.array_equal(again.S, reused.S) and np.array_equal(again.M, reused.M)
+    assert reused.joined > 40 and reused.joined == again.joined
 
 
 @pytest.mark.parametrize("kind", ["half-space", "layered"])
@@ -172,7 +203,7 @@ def test_the_joint_loop_refuses_a_set_it_cannot_start_from():
     empty = (np.zeros((0, 0)), np.zeros(0, np.int64))
     common = (np.zeros(len(pen), bool), C, NO_K)
     st, *_ = joint_loop(
-        *empty, *common, pen, TOL_REL, 1.0, 0, 100, 50, p, 0.0, True, np.zeros((0, 2))
+        *empty, *common, pen, TOL_REL, 1.0, 0, 100, 50, p, 0.0, True, np.zeros((0, 2)), NOT_TRIED
     )
     assert st == 0
     S = np.flatnonzero(pen > 0)
@@ -182,7 +213,22 @@ def test_the_joint_loop_refuses_a_set_it_cannot_start_from():
     in_set = np.zeros(len(pen), bool)
     in_set[S] = True
     st, _, M2, S2, *_ = joint_loop(
-        M, S, in_set, C, NO_K, far, TOL_REL, 1.0, 0, 100, 50, p, 0.0, True, np.zeros((0, 2))
+        M,
+        S,
+        in_set,
+        C,
+        NO_K,
+        far,
+        TOL_REL,
+        1.0,
+        0,
+        100,
+        50,
+        p,
+        0.0,
+        True,
+        np.zeros((0, 2)),
+        NOT_TRIED,
     )
     assert st == 0 and M2 is M and S2 is S
 

@@ -51,7 +51,7 @@ from ..collide.height import SurfaceCollider
 from ..collide.primitive import PrimitiveCollider
 from ..skin import contact
 from ..skin.contact.inverse import NO_K
-from ..skin.contact.kernels import force_loop, force_same_set, joint_loop, ordered_product
+from ..skin.contact.kernels import force_loop, joint_loop, ordered_product, set_trial
 from ..skin.models import CoupledSkin, SkinModel, SpectralSkin
 
 #: Collision queries one step may take before it gives up (the pad falling through).
@@ -379,20 +379,26 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
             qpos[jz] -= 0.9 * qs_margin
             continue
         dz = np.nan
+        tried = (np.empty(0), np.nan, np.empty(0), np.zeros(0, np.bool_), np.empty(0, np.int64))
         if winkler_k > 0.0:  # L0: the Winkler bed, in closed form
             dz = _winkler_force(pen, mult, winkler_k, total, f)
             if dz != dz:
                 return 3, 0.0, 0.0, M, S, updates, rebuilds, rowsum
         elif S.size:  # the common case: the set holds at the shift it implies
-            dz = force_same_set(M, S, pen, C, in_set, tol_rel, total, f, rowsum, floor)
-        if dz != dz:  # the set changes: solved with the shift, then M 1 for the new M
-            st, dz, M, S, updates, rb = _changed_set(
+            dz, pS, drop, A = set_trial(M, S, pen, C, in_set, tol_rel, total, rowsum, floor)
+            if dz == dz and not drop.any() and A.size == 0:
+                _spread(pS, S, f)
+            else:
+                tried = (rowsum, dz, pS, drop, A)
+                dz = np.nan
+        if dz != dz:  # the set changes: solved with the shift, with M 1 for the new M
+            st, dz, M, S, updates, rb, rowsum = _changed_set(
                 (M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, f),
                 (floor, sym, cu),
                 joint,
+                tried,
             )
             rebuilds += rb
-            rowsum = M @ np.ones(S.size)  # BLAS, as _force_loop forms it
             if st != 1:
                 return 3 if st == 2 else 2, 0.0, 0.0, M, S, updates, rebuilds, rowsum
         qpos[jz] -= dz
@@ -418,22 +424,32 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
 
 
 @njit
-def _changed_set(problem, how, joint):
+def _changed_set(problem, how, joint, tried):
     """The held solve of a step whose contact set does not hold: ``problem`` is ``(M, S,
     in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p)`` and ``how`` is
     ``(floor, sym, cu)``, as :func:`force_loop` takes them. Where ``joint``, the set and
-    the shift are solved together first (:func:`joint_loop`), and the Newton iteration on
-    the shift goes on from where that stops; else the Newton iteration alone (the
-    reference). Returns force_loop's ``(status, dz, M, S, updates, rebuilds)``."""
+    the shift are solved together first (:func:`joint_loop`, from the failed same-set check
+    ``tried``), and the Newton iteration on the shift goes on from where that stops; else the
+    Newton iteration alone (the reference). Returns force_loop's ``(status, dz, M, S,
+    updates, rebuilds)`` and ``M 1`` of the M returned."""
     M, S, updates = problem[0], problem[1], problem[8]
     rebuilds = 0
     if joint and S.size:
-        st, dz, M, S, updates, rebuilds = joint_loop(*problem, *how)
+        st, dz, M, S, updates, rebuilds, b = joint_loop(*problem, *how, tried)
         if st == 1:
-            return st, dz, M, S, updates, rebuilds
+            return st, dz, M, S, updates, rebuilds, b  # b: M 1, as below forms it
     rest = (M, S) + problem[2:8] + (updates,) + problem[9:]  # from the state it left
     st, dz, M, S, updates, rb = force_loop(*rest, False, *how)
-    return st, dz, M, S, updates, rebuilds + rb
+    return st, dz, M, S, updates, rebuilds + rb, M @ np.ones(S.size)  # BLAS
+
+
+@njit
+def _spread(pS, S, p):
+    """The set's pressures ``pS`` written to the nodes ``S`` of ``p``, zero elsewhere."""
+    for j in range(p.shape[0]):
+        p[j] = 0.0
+    for k in range(S.shape[0]):
+        p[S[k]] = pS[k]
 
 
 @njit

@@ -323,26 +323,38 @@ def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b, floor=0.0) -> flo
     pressures sum to ``total``, and the pressures (into ``p``) if S still solves the contact
     problem at ``pen + dz`` (the checks of :func:`same_set_product`); NaN if it does not. ``b``:
     the row sums of M."""
-    n = pen.shape[0]
-    m = S.shape[0]
-    dz, a, _ = set_shift(M, S, pen, total, b)
-    if dz != dz:
+    dz, pS, drop, A = set_trial(M, S, pen, C, in_set, tol_rel, total, b, floor)
+    if dz != dz or drop.any() or A.size:
         return np.nan
-    for k in range(m):
-        if pen[S[k]] + dz <= floor:
-            return np.nan
-    pS = np.empty(m)
-    for i in range(m):
-        pS[i] = a[i] + dz * b[i]
-        if pS[i] < 0.0:
-            return np.nan
-    if pressed_in(C, S, in_set, pen, dz, pS, floor, tol_rel).size:
-        return np.nan
-    for j in range(n):
+    for j in range(pen.shape[0]):
         p[j] = 0.0
-    for k in range(m):
+    for k in range(S.shape[0]):
         p[S[k]] = pS[k]
     return dz
+
+
+@njit
+def set_trial(M, S, pen, C, in_set, tol_rel, total, b, floor):
+    """The set S tried at the shift it implies (``b = M 1``): ``(dz, pS, drop, A)``, the shift
+    (:func:`set_shift`; NaN where it has none), the set's pressures there, the nodes of S
+    that must leave (tension, or no longer within reach of the plate) and, where none must,
+    the nodes outside it that the shifted plate still presses into (:func:`pressed_in`),
+    else none. S solves the problem at ``pen + dz`` where dz is a number, nothing drops and
+    A is empty. :func:`force_same_set` and each pass of :func:`joint_loop`."""
+    m = S.shape[0]
+    dz, a, pen_S = set_shift(M, S, pen, total, b)
+    pS = np.empty(m)
+    drop = np.zeros(m, np.bool_)
+    if dz != dz:
+        return dz, pS, drop, np.empty(0, np.int64)
+    dropped = False
+    for i in range(m):
+        pS[i] = a[i] + dz * b[i]
+        drop[i] = pS[i] < 0.0 or pen_S[i] + dz <= floor
+        dropped = dropped or drop[i]
+    if dropped:
+        return dz, pS, drop, np.empty(0, np.int64)
+    return dz, pS, drop, pressed_in(C, S, in_set, pen, dz, pS, floor, tol_rel)
 
 
 @njit
@@ -397,9 +409,13 @@ def pressed_in(C, S, in_set, pen, dz, pS, floor, tol_rel):
     return A[:na]
 
 
+#: No trial at hand (:func:`joint_loop`'s ``tried``).
+NOT_TRIED = (np.zeros(0), np.nan, np.zeros(0), np.zeros(0, np.bool_), np.zeros(0, np.int64))
+
+
 @njit
 def joint_loop(
-    M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p, floor, sym, cu
+    M, S, in_set, C, K, pen, tol_rel, total, updates, refresh, max_iter, p, floor, sym, cu, tried
 ):
     """:meth:`ActiveSet.solve_force` from a set S that does not hold, with the set and the
     shift solved together: on each set, the shift ``dz`` at which its pressures sum to
@@ -409,33 +425,35 @@ def joint_loop(
     :func:`force_loop`, whose Newton iteration solves the set to convergence at each trial
     shift: those trial sets are never built here, so a step whose set changes by a few nodes
     takes fewer block updates of the inverse (on multilayer3-v1's hemispheres, 1.1-1.15x the
-    held solves' speed, the pressures equal to 3e-13 of the largest). Returns ``(status, dz,
-    M, S, updates, rebuilds)`` with the pressures in ``p``: status 1 converged, 0 not
-    (an empty set, a node of S out of reach, no convergence within ``max_iter`` set changes;
-    the state returned is valid, for :func:`force_loop` to go on from)."""
+    held solves' speed, the pressures equal to 3e-13 of the largest). ``tried``: ``(b, dz,
+    pS, drop, A)``, the row sums ``M 1`` and :func:`set_trial` of this M, S, ``pen`` and
+    ``total`` where the caller has tried the set (its first pass, not made again), else
+    :data:`NOT_TRIED`. Returns ``(status, dz, M, S, updates, rebuilds, b)`` with the
+    pressures in ``p`` and ``b = M 1`` of the M returned where it converged (else empty):
+    status 1 converged, 0 not (an empty set, a node of S out of reach, no convergence within
+    ``max_iter`` set changes; the state returned is valid, for :func:`force_loop` to go on
+    from)."""
     n = pen.shape[0]
     rebuilds = 0
-    for _ in range(max_iter):
+    for it in range(max_iter):
         m = S.size
         if m == 0:
-            return 0, 0.0, M, S, updates, rebuilds
-        b = M @ np.ones(m)  # BLAS
-        dz, a, pen_S = set_shift(M, S, pen, total, b)
+            return 0, 0.0, M, S, updates, rebuilds, np.empty(0)
+        if it == 0 and tried[0].shape[0] == m:
+            b = tried[0]
+            dz, pS, drop, A = tried[1], tried[2], tried[3], tried[4]
+        else:
+            b = M @ np.ones(m)  # BLAS
+            dz, pS, drop, A = set_trial(M, S, pen, C, in_set, tol_rel, total, b, floor)
         if dz != dz:
-            return 0, 0.0, M, S, updates, rebuilds
-        pS = np.empty(m)
-        drop = np.zeros(m, np.bool_)
-        for i in range(m):
-            pS[i] = a[i] + dz * b[i]
-            drop[i] = pS[i] < 0.0 or pen_S[i] + dz <= floor
+            return 0, 0.0, M, S, updates, rebuilds, np.empty(0)
         if drop.any():
             if drop.all():
-                return 0, dz, M, S, updates, rebuilds
+                return 0, dz, M, S, updates, rebuilds, np.empty(0)
             M, S, updates, rebuilds = _leave(
                 M, S, drop, in_set, C, K, sym, cu, updates, refresh, rebuilds
             )
             continue
-        A = pressed_in(C, S, in_set, pen, dz, pS, floor, tol_rel)
         if A.size:
             M, S, updates, rebuilds = _join(
                 M, S, A, in_set, C, K, sym, cu, updates, refresh, rebuilds
@@ -445,5 +463,5 @@ def joint_loop(
             p[j] = 0.0
         for k in range(m):
             p[S[k]] = pS[k]
-        return 1, dz, M, S, updates, rebuilds
-    return 0, 0.0, M, S, updates, rebuilds
+        return 1, dz, M, S, updates, rebuilds, b
+    return 0, 0.0, M, S, updates, rebuilds, np.empty(0)
