@@ -67,6 +67,7 @@ def test_every_stability_case_ends_as_expected(case):
         assert c["values"]["rtf"] > 0 and "RTF" in c["detail"]
 
 
+@pytest.mark.slow
 def test_bench_stability_cli(cli):
     """The command on two cheap cases: the JSON document, and the named error of one."""
     res = cli(["bench", "stability", "--cases", "empty_spike_trains,neuron_nan_input", "--json"])

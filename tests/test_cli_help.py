@@ -9,6 +9,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 import sim_tactile
 from sim_tactile.cli import build_parser
 from sim_tactile.cli._common import COMPILE_NOTICE
@@ -103,6 +105,7 @@ def test_the_command_line_starts_openblas_on_one_thread_unless_the_environment_s
         assert out == "[2]", name
 
 
+@pytest.mark.slow
 def test_tasks_lists_every_registered_task_one_line_each(cli):
     lines = cli(["tasks"]).stdout.strip().split("\n\n")[0].splitlines()
     assert lines[0].split() == ["id", "paper", "sensor", "classes", "slides", "needs", "quick"]
@@ -112,6 +115,7 @@ def test_tasks_lists_every_registered_task_one_line_each(cli):
     assert " - " in row["finger7-v1"] and "torch" not in row["finger7-v1"]
 
 
+@pytest.mark.slow
 def test_tasks_says_what_each_needs_and_how_long_its_quick_form_takes(cli):
     """Which tasks need torch (a network among their rows) or --data, and each quick
     form's measured wall time (a suite: its parts'), from `sim-tactile tasks --json`."""
@@ -127,6 +131,7 @@ def test_tasks_says_what_each_needs_and_how_long_its_quick_form_takes(cli):
     assert (about(38.3), about(150.0), about(None)) == ("~40 s", "~2 min", "?")
 
 
+@pytest.mark.slow
 def test_tasks_json_gives_id_paper_sensor_classes_and_slides(cli):
     rows = json.loads(cli(["tasks", "--json"]).stdout)
     by_id = {r["id"]: r for r in rows}
@@ -197,6 +202,7 @@ def test_the_compile_notice_comes_with_a_compile_and_once():
     assert said == [COMPILE_NOTICE]
 
 
+@pytest.mark.slow
 def test_a_typo_says_no_compile_notice(tmp_path):
     """With no compiled kernel at all (an empty kernel cache), a mistyped task fails with
     its one line, and no notice: nothing compiled (the notice was printed first, always)."""

@@ -11,6 +11,7 @@ import pytest
 HERTZ_RADIUS_RTOL = 0.05
 
 
+@pytest.mark.slow
 def test_simulate_json_and_npz(cli, tmp_path):
     out = tmp_path / "r.npz"
     res = cli(

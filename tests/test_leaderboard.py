@@ -68,6 +68,7 @@ def _tables(text: str) -> dict[str, list[list[str]]]:
     return out
 
 
+@pytest.mark.slow
 def test_the_page_ranks_one_table_per_task_version_and_track():
     entries = load_entries(BOARD)
     tables = _tables(page(BOARD))
@@ -96,6 +97,7 @@ def test_each_task_page_carries_its_version_history():
     assert "in the suite `core-v1`" in _gen.task_page("finger7-v2")
 
 
+@pytest.mark.slow
 def test_check_exits_0_for_valid_files_and_1_with_a_line_per_refusal(cli, tmp_path):
     p = cli(["check", *ENTRIES[:2]])
     assert p.stdout.splitlines() == [f"{e}: ok" for e in ENTRIES[:2]]

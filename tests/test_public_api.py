@@ -12,6 +12,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import sim_tactile
 
 ROOT = Path(sim_tactile.__file__).parent
@@ -114,6 +116,7 @@ def _rows(text: str) -> dict[str, tuple[str, str]]:
     return {m[2]: (m[1], m[3]) for line in text.splitlines() if (m := _ROW.match(line))}
 
 
+@pytest.mark.slow
 def test_the_reference_lists_exactly_the_public_names():
     """Each entry point's page tables its ``__all__``, no more, no less, each linked where
     it is documented; each public class and function is documented on one page only."""

@@ -73,6 +73,7 @@ def test_a_quick_report_gives_its_own_counts_and_flags_its_rows():
     assert "## Notes\n" in full.markdown()
 
 
+@pytest.mark.slow
 def test_a_run_flags_a_constant_model_and_a_silent_encoder(tones):
     """A model that always answers one class scores 4/12 on every split of 8/4 per class;
     an LIF encoder at a gain of 0.001 barely spikes: both rows are marked, and said why."""
