@@ -131,12 +131,20 @@ def import_statements(source: bytes) -> list[ast.stmt]:
 
 
 @cache
+def _source(name: str) -> bytes:
+    """The source of the package's module ``name``, read once a process: the module as this
+    process imported it, whose code versions (:func:`code_version`) each read it again (a
+    command's kernel modules read some 40 files each, 700 reads)."""
+    return module_file(name).read_bytes()
+
+
+@cache
 def _imports_of(name: str) -> frozenset[str]:
     f = module_file(name)
     if f is None:
         return frozenset()
     out: set[str] = set()
-    for node in import_statements(f.read_bytes()):
+    for node in import_statements(_source(name)):
         if isinstance(node, ast.Import):
             targets = [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -274,7 +282,7 @@ def code_version(*roots: str, libraries: tuple[str, ...] = ()) -> str:
     h = hashlib.sha256()
     for m in import_closure(*roots):
         h.update(m.encode() + b"\0")
-        h.update(module_file(m).read_bytes())
+        h.update(_source(m))
         h.update(b"\0")
     for lib in sorted(libraries):
         h.update(f"{lib}=={_library_version(lib)}\0".encode())

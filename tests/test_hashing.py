@@ -13,6 +13,7 @@ from sim_tactile.hashing import (
     derive_seed,
     import_closure,
     imports_of,
+    module_file,
 )
 
 
@@ -75,6 +76,19 @@ def test_code_version_follows_the_source_and_the_libraries():
     assert v != code_version(f"{PACKAGE}.sim.slide")
     with pytest.raises(ConfigError, match="not a module"):
         code_version(f"{PACKAGE}.no_such_module")
+
+
+def test_a_code_version_hashes_its_closures_files_as_they_are_on_disk():
+    """The sources are read once a process (``_source``) and shared by every code version:
+    a version is the sha256 of its closure's names and files' bytes, read here afresh."""
+    import hashlib
+
+    root = f"{PACKAGE}.sim.step.held"
+    code_version(f"{PACKAGE}.sim.slide")  # reads most of the same files first
+    h = hashlib.sha256()
+    for m in import_closure(root):
+        h.update(m.encode() + b"\0" + module_file(m).read_bytes() + b"\0")
+    assert code_version(root) == h.hexdigest()[:16]
 
 
 _BLAS_PROBE = """
