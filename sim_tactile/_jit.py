@@ -275,6 +275,55 @@ def numba_module():
     return _numba
 
 
+#: The modules through which numba's compiled ``np.linalg`` calls and matrix products find
+#: BLAS and LAPACK.
+BLAS_MODULES = ("scipy.linalg.cython_blas", "scipy.linalg.cython_lapack")
+
+
+def blas_alone() -> None:
+    """Make scipy's BLAS and LAPACK tables (:data:`BLAS_MODULES`) importable without
+    scipy.linalg.
+
+    A compiled kernel that multiplies matrices or calls ``np.linalg`` (``inv``, ``solve``: a
+    dense contact set's inverse) finds its BLAS and LAPACK routines, at its first call, by
+    importing those modules, whether numba or an extension built ahead of time serves it.
+    Imported by name, a module runs its package's ``__init__`` first: all of scipy.linalg,
+    with its array-API layer and numpy's f2py, some 0.1 s of CPU of a command that solves a
+    dense skin, for two tables of function pointers. Here each extension is loaded from its
+    file on its own, under its own name, and the kernels' imports find it; a later ``import
+    scipy.linalg`` runs as ever and takes the same modules (the same loaded libraries).
+    Where scipy.linalg is imported already, or a file is not where a scipy install puts it,
+    nothing more is done and the import goes as it did. Call it before a kernel's first
+    matrix product; once is enough."""
+    import importlib.machinery
+    import importlib.util
+    import sys
+
+    if "scipy.linalg" in sys.modules or all(m in sys.modules for m in BLAS_MODULES):
+        return
+    spec = importlib.util.find_spec("scipy")
+    where = [Path(p) / "linalg" for p in (spec.submodule_search_locations or [])] if spec else []
+    for name in BLAS_MODULES:
+        if name in sys.modules:
+            continue
+        stem = name.rpartition(".")[2]
+        files = [
+            w / f"{stem}{sfx}" for w in where for sfx in importlib.machinery.EXTENSION_SUFFIXES
+        ]
+        for f in files:
+            if not f.is_file():
+                continue
+            loader = importlib.machinery.ExtensionFileLoader(name, str(f))
+            found = importlib.util.spec_from_file_location(name, f, loader=loader)
+            try:
+                module = importlib.util.module_from_spec(found)
+                found.loader.exec_module(module)
+            except ImportError:
+                return
+            sys.modules[name] = module
+            break
+
+
 def _dispatcher(f: Callable, options: dict):
     """numba's dispatcher of ``f``, with the versioned on-disk cache."""
     disp = numba_module().njit(**options)(f)

@@ -47,7 +47,7 @@ import math
 
 import numpy as np
 
-from ..._jit import njit
+from ..._jit import blas_alone, njit
 from ...cache import setup_memo
 from ...errors import PhysicsError
 from ...hashing import array_digest
@@ -221,6 +221,7 @@ class AnchoredLattice:
         ov = np.minimum(hi[None, :], ty1[:, None]) - np.maximum(lo[None, :], ty0[:, None])
         self.oy = np.ascontiguousarray(np.clip(ov, 0.0, None) / self.wy[None, :])
         # the contact set's state (ActiveSet's, numbered in the current window)
+        blas_alone()  # its kernels multiply matrices
         self.window = None
         self.M = np.zeros((0, 0))
         self.S = np.zeros(0, np.int64)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...._jit import blas_alone
 from ....errors import PhysicsError
 from .inverse import NO_K
 from .kernels import NO_P, force_loop, force_same_set, same_set_product, solve_loop
@@ -88,6 +89,8 @@ class ActiveSet:
     ):
         self.C, self.K, self.refresh = C, K, refresh
         self.symmetric = symmetric
+        if C.shape[0]:
+            blas_alone()  # its kernels multiply matrices
         #: the depth above which a node can touch: 0 when no load lifts any node toward the
         #: plate (C >= 0, the half-space), else -inf (a layered skin bulges around a load)
         self.floor = skin_floor(C)
