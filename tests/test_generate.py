@@ -369,6 +369,7 @@ def test_bad_configuration_values_are_named(tmp_path, change, message):
     assert not (tmp_path / "x.zarr").exists()
 
 
+@pytest.mark.slow
 def test_bad_files_and_names(tmp_path, cli_env):
     bad = tmp_path / "bad.toml"
     bad.write_text("plates = [\n")

@@ -108,6 +108,7 @@ def test_builders_give_fresh_clonable_estimators_with_task_params():
         assert make_classifier(name, CTX) is not est
 
 
+@pytest.mark.slow
 def test_snn_and_lstm_run_inside_their_pipelines():
     pytest.importorskip("torch")
     X, y = _textures(n_per_class=4, steps=40)

@@ -73,6 +73,7 @@ def test_a_thin_compressible_layer_is_an_oedometric_bed(cache):
     assert r.contact_radius_m == pytest.approx(a, rel=2 * THIN_RTOL)  # counted in nodes
 
 
+@pytest.mark.slow
 def test_a_layer_of_the_half_spaces_own_material_presses_as_the_half_space(cache):
     """The layered skin's half-space limit through the whole press (collider, held force,
     readout): the same pressures as today's half-space skin, to 1e-6."""

@@ -77,6 +77,7 @@ def _race(folder: Path, trial: int) -> tuple[list, Path]:
     return results, out
 
 
+@pytest.mark.slow
 def test_two_writers_into_one_out_leave_one_whole_store(tmp_path):
     seen = set()
     for trial in range(8):
