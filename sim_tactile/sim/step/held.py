@@ -51,7 +51,13 @@ from ..collide.height import SurfaceCollider
 from ..collide.primitive import PrimitiveCollider
 from ..skin import contact
 from ..skin.contact.inverse import NO_K
-from ..skin.contact.kernels import force_loop, joint_loop, ordered_product, set_trial
+from ..skin.contact.kernels import (
+    force_loop,
+    joint_loop,
+    ordered_product,
+    set_trial,
+    spread,
+)
 from ..skin.models import CoupledSkin, SkinModel, SpectralSkin
 
 #: Collision queries one step may take before it gives up (the pad falling through).
@@ -379,6 +385,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
             qpos[jz] -= 0.9 * qs_margin
             continue
         dz = np.nan
+        # kernels.NOT_TRIED, made here: numba reads a global array as read-only, another type
         tried = (np.empty(0), np.nan, np.empty(0), np.zeros(0, np.bool_), np.empty(0, np.int64))
         if winkler_k > 0.0:  # L0: the Winkler bed, in closed form
             dz = _winkler_force(pen, mult, winkler_k, total, f)
@@ -387,7 +394,7 @@ def _held_kernel(pose, probe, reduced, skin, state, limits, total, out):
         elif S.size:  # the common case: the set holds at the shift it implies
             dz, pS, drop, A = set_trial(M, S, pen, C, in_set, tol_rel, total, rowsum, floor)
             if dz == dz and not drop.any() and A.size == 0:
-                _spread(pS, S, f)
+                spread(pS, S, f)
             else:
                 tried = (rowsum, dz, pS, drop, A)
                 dz = np.nan
@@ -441,15 +448,6 @@ def _changed_set(problem, how, joint, tried):
     rest = (M, S) + problem[2:8] + (updates,) + problem[9:]  # from the state it left
     st, dz, M, S, updates, rb = force_loop(*rest, False, *how)
     return st, dz, M, S, updates, rebuilds + rb, M @ np.ones(S.size)  # BLAS
-
-
-@njit
-def _spread(pS, S, p):
-    """The set's pressures ``pS`` written to the nodes ``S`` of ``p``, zero elsewhere."""
-    for j in range(p.shape[0]):
-        p[j] = 0.0
-    for k in range(S.shape[0]):
-        p[S[k]] = pS[k]
 
 
 @njit

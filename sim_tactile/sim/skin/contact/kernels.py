@@ -49,11 +49,19 @@ def same_set_product(M, S, pen, C, in_set, tol_rel, p, floor):
     for r in range(cnt):
         if pen[rows[r]] - u[r] > tol:
             return False, pS
-    for j in range(n):
-        p[j] = 0.0
-    for k in range(m):
-        p[S[k]] = pS[k]
+    spread(pS, S, p)
     return True, pS
+
+
+@njit
+def spread(pS, S, p):
+    """The set's pressures ``pS`` written to its nodes ``S`` of ``p``, zero elsewhere: the
+    answer of a set that holds (:func:`same_set_product`, :func:`force_same_set`,
+    :func:`joint_loop`, the held step)."""
+    for j in range(p.shape[0]):
+        p[j] = 0.0
+    for k in range(S.shape[0]):
+        p[S[k]] = pS[k]
 
 
 @njit
@@ -326,10 +334,7 @@ def force_same_set(M, S, pen, C, in_set, tol_rel, total, p, b, floor=0.0) -> flo
     dz, pS, drop, A = set_trial(M, S, pen, C, in_set, tol_rel, total, b, floor)
     if dz != dz or drop.any() or A.size:
         return np.nan
-    for j in range(pen.shape[0]):
-        p[j] = 0.0
-    for k in range(S.shape[0]):
-        p[S[k]] = pS[k]
+    spread(pS, S, p)
     return dz
 
 
@@ -433,7 +438,6 @@ def joint_loop(
     status 1 converged, 0 not (an empty set, a node of S out of reach, no convergence within
     ``max_iter`` set changes; the state returned is valid, for :func:`force_loop` to go on
     from)."""
-    n = pen.shape[0]
     rebuilds = 0
     for it in range(max_iter):
         m = S.size
@@ -459,9 +463,6 @@ def joint_loop(
                 M, S, A, in_set, C, K, sym, cu, updates, refresh, rebuilds
             )
             continue
-        for j in range(n):
-            p[j] = 0.0
-        for k in range(m):
-            p[S[k]] = pS[k]
+        spread(pS, S, p)
         return 1, dz, M, S, updates, rebuilds, b
     return 0, 0.0, M, S, updates, rebuilds, np.empty(0)
